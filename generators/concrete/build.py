@@ -1,0 +1,106 @@
+"""Building the concrete model from checked documents; refuses documents with errors."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from rei.catalogue import Catalogue
+from rei.generators.concrete.model import (
+    ConcreteBlock,
+    ConcreteGoal,
+    ConcreteMission,
+    ConcreteObject,
+    ConcreteWorld,
+    Pose2D,
+    TimedPoint,
+    TimedTrajectory,
+)
+from rei.lang.errors import LanguageError
+from rei.lang.mission.document import MissionDocument
+from rei.lang.room.document import RoomDocument
+from rei.lang.room.model import Room, Trajectory
+from rei.lang.workspace import Workspace, load_mission
+
+
+def _xy(cell: tuple[int, int], tile: float) -> tuple[float, float]:
+    return cell[0] * tile, cell[1] * tile
+
+
+def _timed(traj: Trajectory, room: Room, cells: dict[str, tuple[int, int]]) -> TimedTrajectory:
+    pts = [_xy(cells[v.floor.name], room.tile_size) for v in traj.vertices]
+    if traj.total_time is None:
+        times = [float(v.time or 0.0) for v in traj.vertices]
+        if traj.loop:
+            # The way back to the first vertex is walked at the trajectory's mean speed.
+            length = sum(math.dist(a, b) for a, b in zip(pts, pts[1:]))
+            speed = length / (times[-1] - times[0]) if times[-1] > times[0] else 0.0
+            back = math.dist(pts[-1], pts[0])
+            times.append(times[-1] + (back / speed if speed > 0 else times[-1] - times[0]))
+            pts.append(pts[0])
+    else:
+        if traj.loop:
+            pts.append(pts[0])
+        seg = [math.dist(a, b) for a, b in zip(pts, pts[1:])]
+        total_len = sum(seg)
+        times = [0.0]
+        for s in seg:
+            share = s / total_len if total_len > 0 else 1.0 / len(seg)
+            times.append(times[-1] + share * traj.total_time)
+    return TimedTrajectory(tuple(TimedPoint(t, x, y) for t, (x, y) in zip(times, pts)), traj.loop)
+
+
+def concretise_room(doc: RoomDocument) -> ConcreteWorld:
+    if not doc.ok or doc.room is None or doc.layout is None or doc.catalogue is None:
+        raise LanguageError([d for d in doc.diagnostics if d.is_error])
+    room, layout, catalogue = doc.room, doc.layout, doc.catalogue
+    cells = dict(layout.cells)
+    tile = room.tile_size
+
+    def block(name: str, kind: str, type_name: str) -> ConcreteBlock:
+        x, y = _xy(cells[name], tile)
+        return ConcreteBlock(name, kind, _type(catalogue, type_name), cells[name], x, y,  # type: ignore[arg-type]
+                             tile)
+
+    floors = tuple(block(f.name, "floor", f.type) for f in room.floors.values())
+    walls = tuple(block(w.name, "wall", w.type) for w in room.walls.values())
+    objects: list[ConcreteObject] = []
+    robot: ConcreteObject | None = None
+    for obj in room.objects:
+        x, y = _xy(cells[obj.floor.name], tile)
+        pose = Pose2D(x, y, math.radians(obj.heading_deg or 0.0))
+        trajectory = _timed(obj.trajectory, room, cells) if obj.trajectory is not None else None
+        concrete = ConcreteObject(obj.name, obj.role, _type(catalogue, obj.type), obj.floor.name,
+                                  pose, trajectory)
+        if obj.role == "robot":
+            robot = concrete
+        else:
+            objects.append(concrete)
+    assert robot is not None  # a valid room has exactly one robot
+    return ConcreteWorld(room.name, room.path, tile, floors, walls, tuple(objects), robot)
+
+
+def _type(catalogue: Catalogue, name: str):  # type: ignore[no-untyped-def]
+    otype = catalogue.get(name)
+    assert otype is not None  # checked by the room's CATALOGUE-TYPE rule
+    return otype
+
+
+def concretise_mission(doc: MissionDocument) -> ConcreteMission:
+    if not doc.ok or doc.mission is None or doc.room is None:
+        raise LanguageError([d for d in doc.diagnostics if d.is_error])
+    world = concretise_room(doc.room)
+    mission = doc.mission
+    goals = []
+    for goal in mission.goals:
+        floor = world.floor(goal.floor.name)
+        yaw = math.radians(goal.heading_deg) if goal.heading_deg is not None else None
+        goals.append(ConcreteGoal(goal.name, floor.name, floor.x, floor.y, yaw, goal.tolerance,
+                                  goal.timeout))
+    return ConcreteMission(mission.name, mission.path, world, tuple(goals), mission.cycles,
+                           mission.effective_time_limit(), mission.max_speed)
+
+
+def load_concrete_mission(path: str | Path, workspace: Workspace | None = None) -> ConcreteMission:
+    """Check a .mission file (and its room) and map it to metres; LanguageError if invalid."""
+    return concretise_mission(load_mission(path, workspace))

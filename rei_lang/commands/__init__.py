@@ -1,0 +1,1 @@
+"""`rei-gen` sub-commands: each module here defines ``register(subparsers)``."""

@@ -1,0 +1,155 @@
+"""From a parsed .mission to the typed Mission, checked against its room.
+
+Rules: the imported room exists and is valid, each goal names a floor of that room that
+the robot can reach, at least two goals (thesis 4.1.2: start and final place), unique goal
+names, options given once, and every number finite and in range.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from rei.lang.errors import Diagnostic, Span
+from rei.lang.mission.model import DEFAULT_TIMEOUT, DEFAULT_TOLERANCE, Goal, Mission
+from rei.lang.numbers import read_number
+from rei.lang.parsing import span_of
+from rei.lang.room.checks import passable_floors
+from rei.lang.room.document import RoomDocument
+from rei.lang.room.linker import MAX_TIME
+from rei.lang.room.model import NameRef
+from rei.lang.source import SourceText
+from rei.lang.suggest import did_you_mean
+
+MAX_CYCLES = 10_000
+
+
+def room_path_of(textx_mission: Any, source: SourceText) -> str:
+    return str(Path(source.path).parent / textx_mission.room.path)
+
+
+def link_mission(textx_mission: Any, source: SourceText, room_doc: RoomDocument
+                 ) -> tuple[Mission, list[Diagnostic]]:
+    diagnostics: list[Diagnostic] = []
+
+    def span(obj: Any) -> Span:
+        return span_of(obj, source)
+
+    def number(text: str, obj: Any, what: str, **bounds: Any) -> float | None:
+        return read_number(text, span(obj), what, diagnostics, **bounds)
+
+    cycles: float | None = None
+    time_limit: float | None = None
+    max_speed: float | None = None
+    seen: set[str] = set()
+    goals: list[Goal] = []
+    goal_names: dict[str, Span] = {}
+    for item in textx_mission.items:
+        kind = type(item).__name__
+        if kind != "Goal":
+            if kind in seen:
+                diagnostics.append(Diagnostic(span(item), "OPTION-REPEAT",
+                                              f"expected one '{kind.lower()}' setting, found "
+                                              f"another"))
+                continue
+            seen.add(kind)
+        if kind == "Cycles":
+            cycles = number(item.count, item, "cycles", low=1, high=MAX_CYCLES, integer=True)
+        elif kind == "TimeLimit":
+            time_limit = number(item.seconds, item, "time_limit (seconds)", low=0.0,
+                                high=MAX_TIME, low_open=True)
+        elif kind == "MaxSpeed":
+            max_speed = number(item.value, item, "max_speed (m/s)", low=0.0, high=100.0,
+                               low_open=True)
+        else:
+            goals.append(_goal(item, len(goals) + 1, span, number, diagnostics, goal_names))
+
+    mission = Mission(
+        name=textx_mission.name,
+        path=source.path,
+        span=span(textx_mission),
+        room_path=room_path_of(textx_mission, source),
+        room_span=span(textx_mission.room),
+        cycles=int(cycles) if cycles is not None else 1,
+        time_limit=time_limit,
+        max_speed=max_speed,
+        goals=tuple(goals),
+    )
+    if len(goals) < 2:
+        diagnostics.append(Diagnostic(mission.span, "MISSION-GOALS",
+                                      f"mission '{mission.name}': expected at least two goals "
+                                      f"(start and final place), found {len(goals)}"))
+    diagnostics.extend(_check_against_room(mission, room_doc))
+    return mission, diagnostics
+
+
+def _goal(item: Any, index: int, span: Any, number: Any, diagnostics: list[Diagnostic],
+          names: dict[str, Span]) -> Goal:
+    name = item.name or f"goal_{index}"
+    goal_span = span(item)
+    if name in names:
+        diagnostics.append(Diagnostic(goal_span, "NAME-UNIQUE",
+                                      f"expected a unique goal name, found '{name}' again (first "
+                                      f"at line {names[name].line})"))
+    names.setdefault(name, goal_span)
+    tolerance = heading = timeout = None
+    given: set[str] = set()
+    for option in item.options:
+        kind = type(option).__name__
+        if kind in given:
+            diagnostics.append(Diagnostic(span(option), "OPTION-REPEAT",
+                                          f"goal '{name}': expected one '{kind.lower()}', found "
+                                          f"another"))
+            continue
+        given.add(kind)
+        if kind == "Tolerance":
+            tolerance = number(option.metres, option, f"tolerance of goal '{name}' (metres)",
+                               low=0.0, high=100.0, low_open=True)
+        elif kind == "GoalHeading":
+            heading = number(option.degrees, option, f"heading of goal '{name}' (degrees)",
+                             low=-360.0, high=360.0)
+        else:
+            timeout = number(option.seconds, option, f"timeout of goal '{name}' (seconds)",
+                             low=0.0, high=MAX_TIME, low_open=True)
+    return Goal(name, NameRef(item.floor.name, span(item.floor)),
+                tolerance if tolerance is not None else DEFAULT_TOLERANCE, heading,
+                timeout if timeout is not None else DEFAULT_TIMEOUT, goal_span)
+
+
+def _check_against_room(mission: Mission, room_doc: RoomDocument) -> list[Diagnostic]:
+    out: list[Diagnostic] = []
+    if room_doc.room is None or not room_doc.ok:
+        errors = [d for d in room_doc.diagnostics if d.is_error]
+        first = errors[0] if errors else None
+        if first is not None and first.rule == "INPUT-READ":
+            message = f"expected a room file at '{mission.room_path}', found {first.message}"
+        else:
+            message = (f"expected a valid room, found {len(errors)} problem(s) in "
+                       f"'{mission.room_path}'" + (f"; first: {first}" if first else ""))
+        out.append(Diagnostic(mission.room_span, "MISSION-ROOM", message))
+        if room_doc.room is None:
+            return out
+    room = room_doc.room
+    reachable = (passable_floors(room, room_doc.layout) if room_doc.layout is not None
+                 else set())
+    for goal in mission.goals:
+        name = goal.floor.name
+        if name in room.floors:
+            if room_doc.ok and name not in reachable:
+                blockers = [o.name for o in room.objects_on(name)
+                            if o.role in ("static", "dynamic")]
+                why = (f"'{blockers[0]}' stands on it" if blockers
+                       else "no free path from the robot's floor leads there")
+                out.append(Diagnostic(goal.floor.span, "GOAL-UNREACHABLE",
+                                      f"goal '{goal.name}': expected a floor the robot can "
+                                      f"reach, found '{name}': {why}"))
+        elif name in room.walls:
+            out.append(Diagnostic(goal.floor.span, "REF-KIND",
+                                  f"goal '{goal.name}': expected a floor, found the wall "
+                                  f"'{name}'"))
+        else:
+            out.append(Diagnostic(goal.floor.span, "REF-UNRESOLVED",
+                                  f"goal '{goal.name}': expected a floor of room "
+                                  f"'{room.name}', found '{name}'"
+                                  + did_you_mean(name, room.floors)))
+    return out

@@ -1,0 +1,1 @@
+"""The .room language: typed model, linker (names → objects), layout (floors → cells), checks."""

@@ -1,0 +1,143 @@
+"""Typed, immutable abstract model of a room (thesis Figure 10), built by the linker.
+
+Names stay names here (a floor's neighbour is the *name* of a building block); the linker
+has checked that every name resolves, and the layout gives each block its cell.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import Enum
+from typing import Literal, Mapping
+
+from rei.lang.errors import Span
+
+DEFAULT_TILE_SIZE = 1.0
+Role = Literal["static", "dynamic", "human", "robot"]
+
+
+class Side(Enum):
+    """A floor's sides; +x is RIGHT and +y is TOP (a grid's first row is its top)."""
+
+    TOP = (0, 1)
+    RIGHT = (1, 0)
+    BOTTOM = (0, -1)
+    LEFT = (-1, 0)
+
+    @property
+    def delta(self) -> tuple[int, int]:
+        return self.value
+
+    @property
+    def opposite(self) -> Side:
+        return {Side.TOP: Side.BOTTOM, Side.BOTTOM: Side.TOP,
+                Side.LEFT: Side.RIGHT, Side.RIGHT: Side.LEFT}[self]
+
+    @property
+    def keyword(self) -> str:
+        return self.name.lower()
+
+
+@dataclass(frozen=True)
+class NameRef:
+    """A name written in a file, where it was written."""
+
+    name: str
+    span: Span
+
+
+@dataclass(frozen=True)
+class GridCell:
+    grid: str
+    row: int
+    col: int
+
+
+@dataclass(frozen=True)
+class FloorDecl:
+    name: str
+    type: str
+    span: Span
+    links: tuple[tuple[Side, NameRef], ...]
+    cell_of_grid: GridCell | None = None
+
+
+@dataclass(frozen=True)
+class WallDecl:
+    name: str
+    type: str
+    span: Span
+    cell_of_grid: GridCell | None = None
+
+
+@dataclass(frozen=True)
+class Vertex:
+    floor: NameRef
+    time: float | None
+    span: Span
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    vertices: tuple[Vertex, ...]
+    total_time: float | None
+    loop: bool
+    span: Span
+
+
+@dataclass(frozen=True)
+class PlacedObject:
+    """A static object, dynamic object, human or robot standing on a floor's centre."""
+
+    name: str
+    role: Role
+    type: str
+    type_span: Span
+    floor: NameRef
+    heading_deg: float | None
+    trajectory: Trajectory | None
+    span: Span
+
+
+@dataclass(frozen=True)
+class GridDecl:
+    name: str
+    span: Span
+    rows: tuple[str, ...]
+    row_spans: tuple[Span, ...]
+    cells: Mapping[tuple[int, int], str]
+    """(row, col) → the name of the floor or wall in that cell."""
+
+
+@dataclass(frozen=True)
+class Room:
+    name: str
+    path: str
+    span: Span
+    tile_size: float
+    catalogue_path: str | None
+    catalogue_span: Span | None
+    floors: Mapping[str, FloorDecl]
+    walls: Mapping[str, WallDecl]
+    objects: tuple[PlacedObject, ...]
+    grids: tuple[GridDecl, ...]
+    neighbours: Mapping[str, Mapping[Side, str]]
+    """Every floor's effective neighbours: links as written, completed by their reverse."""
+
+    @property
+    def robot(self) -> PlacedObject | None:
+        robots = [o for o in self.objects if o.role == "robot"]
+        return robots[0] if robots else None
+
+    def objects_on(self, floor: str) -> list[PlacedObject]:
+        return [o for o in self.objects if o.floor.name == floor]
+
+    def declaration_span(self, name: str) -> Span | None:
+        if name in self.floors:
+            return self.floors[name].span
+        if name in self.walls:
+            return self.walls[name].span
+        for obj in self.objects:
+            if obj.name == name:
+                return obj.span
+        return None

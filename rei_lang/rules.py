@@ -1,0 +1,80 @@
+"""Every rule REI checks in its languages, by id: the one list the docs and tests read.
+
+The checks themselves live with the language stage that can decide them (linker, layout,
+catalogue checks); this table documents them and a test keeps it complete both ways.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Rule:
+    id: str
+    languages: str
+    summary: str
+    source: str = ""
+    """Where the rule comes from: a thesis section, or why a user wants it caught."""
+
+
+RULES: tuple[Rule, ...] = (
+    Rule("INPUT-READ", "all", "the file exists and can be read"),
+    Rule("INPUT-KIND", "all", "the file ends in a known suffix"),
+    Rule("INPUT-EMPTY", "all", "the file is not empty"),
+    Rule("INPUT-SIZE", "all", "the file is at most 32 MiB"),
+    Rule("INPUT-ENCODING", "all", "the file is UTF-8 text (no NUL bytes)"),
+    Rule("SYNTAX", "all", "the text follows the grammar (the parser stops at the first error)"),
+    Rule("SYNTAX-DEPTH", "all", "the text does not nest deeper than the parser can follow"),
+    Rule("NUM-FINITE", "all", "every number is finite (no inf, nan, or overflow like 1e999)"),
+    Rule("NUM-RANGE", "all", "every number lies in its field's range (tile 0.05..100 m, times "
+         ">= 0, headings within +-360 degrees, ...)"),
+    Rule("OPTION-REPEAT", "all", "a setting or option is given at most once"),
+    Rule("NAME-UNIQUE", "room, mission", "every name is unique", "thesis 4.1.2"),
+    Rule("NAME-PATH", "room", "names are safe as file names (no device names, at most 100 "
+         "characters); the grammar already admits only letters, digits and '_'",
+         "names become file names of generated artifacts"),
+    Rule("REF-UNRESOLVED", "room, mission", "every referenced name is declared (with 'did you "
+         "mean')"),
+    Rule("REF-KIND", "room, mission", "a reference names the right kind of element (neighbours "
+         "are floors or walls; objects, trajectory vertices and goals are on floors)",
+         "thesis 4.1.2"),
+    Rule("LINK-SELF", "room", "a floor is not its own neighbour"),
+    Rule("LINK-REPEAT", "room", "a floor names at most one neighbour per side"),
+    Rule("LINK-ASYMMETRIC", "room", "neighbour links agree: A.right = B means B.left is A "
+         "(or unset)"),
+    Rule("LINK-GEOMETRY", "room", "links agree with the traversal's placement of floors",
+         "thesis 6.2.1"),
+    Rule("FLOOR-OVERLAP", "room", "no two building blocks land in one cell"),
+    Rule("FLOOR-DISCONNECTED", "room", "every floor is connected to the robot's floor"),
+    Rule("WALL-ORPHAN", "room", "every wall is the neighbour of a floor", "thesis 4.1.2"),
+    Rule("WALL-PLACEMENT", "room", "a wall named by several floors lands in one cell"),
+    Rule("GRID-SYMBOL", "room", "grid cells use legend symbols; a named cell appears once"),
+    Rule("GRID-LEGEND", "room", "legend symbols are single characters; empty cells have no "
+         "name"),
+    Rule("ROBOT-COUNT", "room", "exactly one robot, on a floor", "thesis 4.1.2"),
+    Rule("ROBOT-FIT", "room", "the robot can turn in place on one tile"),
+    Rule("OBJECT-FIT", "room", "an object's footprint fits its tile (objects stand at a floor's "
+         "centre)", "thesis 4.1.2"),
+    Rule("OBJECT-OVERLAP", "room", "at most one object on a floor at the start"),
+    Rule("CATALOGUE-TYPE", "room", "every type is in the catalogue (with 'did you mean')"),
+    Rule("CATALOGUE-KIND", "room", "a type's kind matches its use (a table is not a robot)"),
+    Rule("CATALOGUE-FILE", "room", "the room's own catalogue file is valid"),
+    Rule("CATALOGUE-SYNTAX", "catalogue", "the catalogue is valid TOML"),
+    Rule("CATALOGUE-FIELD", "catalogue", "every field of a type is known, of the right type, "
+         "finite and in range"),
+    Rule("TRAJ-VERTICES", "room", "a trajectory has at least two control vertices"),
+    Rule("TRAJ-TIMES", "room", "a trajectory has a time on every vertex (increasing) or a "
+         "total time", "thesis 4.2.1"),
+    Rule("TRAJ-START", "room", "a trajectory starts on its object's floor"),
+    Rule("TRAJ-BLOCKED", "room", "no trajectory vertex lies on a floor with a standing object",
+         "thesis 4.1.2"),
+    Rule("TRAJ-UNREACHABLE", "room", "trajectory vertices lie where the robot can reach"),
+    Rule("MISSION-ROOM", "mission", "the imported room exists and is valid"),
+    Rule("MISSION-GOALS", "mission", "a mission has at least two goals (start and final place)",
+         "thesis 4.1.2, 4.3.1"),
+    Rule("GOAL-UNREACHABLE", "mission", "the robot's footprint can reach every goal from its "
+         "start (path search on the floor graph without blocked floors)"),
+)
+
+RULE_IDS = frozenset(r.id for r in RULES)

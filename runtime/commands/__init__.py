@@ -1,0 +1,1 @@
+"""`rei` sub-commands: each module here defines ``register(subparsers)``."""

@@ -1,0 +1,123 @@
+"""The shared message types of a run: the typed, versioned sample stream (thesis 5.1.4, 9.1).
+
+The data collector produces a ``StreamHeader`` once and then one ``Sample`` per collection
+tick; the event automata and the evaluator consume them, live or replayed from a trace.
+Per-object state travels as numpy arrays aligned with ``StreamHeader.objects`` so the monitor
+can compute geometry for thousands of objects vectorised. This module must never import
+pybullet or anything of the simulator.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import Literal
+
+import numpy as np
+
+from rei.catalogue import Footprint
+
+SCHEMA_VERSION = 1
+"""Bumped whenever a field changes meaning; readers refuse other versions."""
+
+
+class NavState(str, Enum):
+    """The navigation action's state (thesis Figure 22, the ROS actionlib states)."""
+
+    IDLE = "idle"
+    PENDING = "pending"
+    ACTIVE = "active"
+    SUCCEEDED = "succeeded"
+    ABORTED = "aborted"
+    PREEMPTED = "preempted"
+
+
+MissionEventKind = Literal["begin", "task_start", "task_success", "task_fail", "end"]
+
+
+@dataclass(frozen=True)
+class MissionEvent:
+    """Something the mission executor did (thesis 6.1.4): SIG_MISSION_* come from these."""
+
+    kind: MissionEventKind
+    time: float
+    task: str | None = None
+    """The goal's name, for task events."""
+    index: int | None = None
+    """Position of the task in the sent sequence (cycles expanded), from 0."""
+    reason: str = ""
+    """Why a task failed: 'aborted', 'timeout', 'outside tolerance', ..."""
+
+
+@dataclass(frozen=True)
+class ObservedObject:
+    """A body the monitor watches, with what the geometry queries need about it."""
+
+    name: str
+    role: Literal["wall", "static", "dynamic", "human"]
+    type: str
+    footprint: Footprint
+    """In the object's own frame; walls carry a Box of the tile size."""
+    height: float
+
+
+@dataclass(frozen=True)
+class StreamHeader:
+    version: int
+    world: str
+    mission: str
+    seed: int
+    rate: float
+    """Samples per second of simulation time."""
+    robot: ObservedObject
+    objects: tuple[ObservedObject, ...]
+    tile_size: float
+    floors: tuple[tuple[str, float, float], ...] = ()
+    """(name, x, y) of every floor centre: the abstract model's inverse mapping."""
+
+
+@dataclass(frozen=True)
+class LaserScan:
+    angle_min: float
+    angle_increment: float
+    range_min: float
+    range_max: float
+    ranges: np.ndarray = field(compare=False)
+    """float64 array, one range per beam; max_range where nothing was hit."""
+
+
+@dataclass(frozen=True)
+class RobotBelief:
+    """What the robot believes (thesis 5.1.5.1 robot description model)."""
+
+    odom: tuple[float, float, float]
+    """(x, y, yaw) from odometry, possibly drifted."""
+    odom_twist: tuple[float, float]
+    """(linear, angular) velocity from odometry."""
+    laser_min: float
+    """Minimum of the latest scan's ranges (max_range when it saw nothing)."""
+    scan: LaserScan | None
+    nav_state: NavState
+    task: str | None
+    """Name of the goal being executed, if any."""
+
+
+@dataclass(frozen=True, eq=False)
+class Sample:
+    """One observation of the whole run at simulation time ``time``."""
+
+    seq: int
+    """0, 1, 2, ... per run; a gap means a lost sample."""
+    time: float
+    """Simulation time in seconds."""
+    robot_pose: tuple[float, float, float]
+    """Ground truth (x, y, yaw)."""
+    robot_twist: tuple[float, float, float]
+    """Ground truth (vx, vy, wz) in the world frame."""
+    poses: np.ndarray
+    """(N, 3) float64 ground-truth (x, y, yaw) of StreamHeader.objects, in that order."""
+    twists: np.ndarray
+    """(N, 3) float64 ground-truth (vx, vy, wz)."""
+    belief: RobotBelief
+    events: tuple[MissionEvent, ...] = ()
+    """Mission events since the previous sample."""
