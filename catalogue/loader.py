@@ -44,7 +44,7 @@ class _Reader:
         self.diagnostics: list[Diagnostic] = []
 
     def _line_of(self, type_name: str) -> int:
-        match = re.search(rf"^\s*\[types\.{re.escape(type_name)}[\].]", self.text, re.MULTILINE)
+        match = re.search(rf"^[ \t]*\[types\.{re.escape(type_name)}[\].]", self.text, re.MULTILINE)
         return self.text.count("\n", 0, match.start()) + 1 if match else 1
 
     def error(self, type_name: str, field: str, expected: str, found: Any) -> None:

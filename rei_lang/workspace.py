@@ -66,12 +66,25 @@ class Workspace:
             return list(self.room(path).diagnostics)
         if suffix == ".mission":
             return list(self.mission(path).diagnostics)
+        if suffix == ".toml":
+            return self.check_catalogue(path)
         checker = _extra_checkers().get(suffix)
         if checker is not None:
             return checker(self, path)
         return [Diagnostic(Span.point(str(path)), "INPUT-KIND",
                            f"expected a file ending in {', '.join(sorted(known_suffixes()))}, "
                            f"found '{suffix or Path(path).name}'")]
+
+
+    def check_catalogue(self, path: str | Path) -> list[Diagnostic]:
+        """Problems of a catalogue file (TOML) given on its own."""
+        from rei.catalogue import CatalogueError, load_catalogue
+
+        try:
+            load_catalogue(path)
+        except CatalogueError as exc:
+            return list(exc.diagnostics)
+        return []
 
 
 Checker = Callable[[Workspace, "str | Path"], list[Diagnostic]]
@@ -89,7 +102,7 @@ def _extra_checkers() -> dict[str, Checker]:
 
 
 def known_suffixes() -> set[str]:
-    return {".room", ".mission", *_extra_checkers()}
+    return {".room", ".mission", ".toml", *_extra_checkers()}
 
 
 def load_room(path: str | Path, workspace: Workspace | None = None) -> RoomDocument:

@@ -28,7 +28,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def expand(paths: list[Path]) -> list[Path]:
-    suffixes = known_suffixes()
+    # Folders are searched for the languages only; a catalogue (.toml) is checked when named.
+    suffixes = known_suffixes() - {".toml"}
     out: list[Path] = []
     for path in paths:
         if path.is_dir():

@@ -73,8 +73,8 @@ def check_types(room: Room, catalogue: Catalogue) -> list[Diagnostic]:
             need = 2 * otype.footprint.circumradius()
             if need > room.tile_size + _FIT_SLACK:
                 out.append(Diagnostic(obj.span, "ROBOT-FIT",
-                                      f"robot '{obj.name}' ({obj.type}) needs tiles of at least "
-                                      f"{need:.3f} m to turn in place, found tile size "
+                                      f"robot '{obj.name}' ({obj.type}): expected tiles of at "
+                                      f"least {need:.3f} m to turn in place, found tile size "
                                       f"{room.tile_size:g} m"))
             continue
         hx, hy = rotated_half_extents(otype, obj.heading_deg)

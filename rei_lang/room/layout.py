@@ -60,9 +60,8 @@ def compute_layout(room: Room) -> tuple[Layout, list[Diagnostic]]:
 
     cells[origin] = (0, 0)
     for parent, child in nx.bfs_edges(graph, origin):
-        side = next(s for s, t in room.neighbours[parent].items() if t == child)
+        di, dj = _direction(room, parent, child)
         pi, pj = cells[parent]
-        di, dj = side.delta
         cells[child] = (pi + di, pj + dj)
 
     occupant: dict[Cell, str] = {}
@@ -157,3 +156,14 @@ def _place_grid_walls(room: Room, cells: dict[str, Cell], occupant: dict[Cell, s
                 if cell not in occupant:
                     cells[name] = cell
                     occupant[cell] = name
+
+
+def _direction(room: Room, parent: str, child: str) -> Cell:
+    """The cell offset from parent to child: the parent's link, else the child's reversed."""
+    for side, target in room.neighbours[parent].items():
+        if target == child:
+            return side.delta
+    for side, target in room.neighbours[child].items():
+        if target == parent:
+            return side.opposite.delta
+    raise AssertionError(f"no link between {parent} and {child}")  # edges come from links

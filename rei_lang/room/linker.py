@@ -303,7 +303,7 @@ def _resolve_links(linker: _Linker, floors: dict[str, FloorDecl], walls: dict[st
             if ref.name == floor.name:
                 linker.error(ref.span, "LINK-SELF",
                              f"floor '{floor.name}': expected a neighbour other than itself on "
-                             f"its {side.keyword} side")
+                             f"its {side.keyword} side, found '{ref.name}'")
                 continue
             if ref.name not in blocks:
                 if any(o for o in linker.declared if o == ref.name):
@@ -343,14 +343,14 @@ def _resolve_placements(linker: _Linker, floors: dict[str, FloorDecl],
         for ref in refs:
             if ref.name in floors:
                 continue
-            what = "placed on" if ref is obj.floor else "a trajectory vertex of"
+            what = "to stand on" if ref is obj.floor else "as a trajectory vertex"
             if ref.name in walls:
                 linker.error(ref.span, "REF-KIND",
-                             f"'{obj.name}': expected a floor for {what} it, found the wall "
+                             f"'{obj.name}': expected a floor {what}, found the wall "
                              f"'{ref.name}'")
             elif ref.name in linker.declared:
                 linker.error(ref.span, "REF-KIND",
-                             f"'{obj.name}': expected a floor for {what} it, found the object "
+                             f"'{obj.name}': expected a floor {what}, found the object "
                              f"'{ref.name}'")
             else:
                 linker.error(ref.span, "REF-UNRESOLVED",
