@@ -100,12 +100,6 @@ def span_of(obj: Any, source: SourceText) -> Span:
 
 def span_at(source: SourceText, start: int, end: int) -> Span:
     """The source region between two character offsets."""
-    line, col = _line_col(source.text, start)
-    end_line, end_col = _line_col(source.text, end)
+    line, col = source.line_col(start)
+    end_line, end_col = source.line_col(end)
     return Span(source.path, line, col, end_line, end_col)
-
-
-def _line_col(text: str, offset: int) -> tuple[int, int]:
-    line = text.count("\n", 0, offset) + 1
-    col = offset - (text.rfind("\n", 0, offset) + 1) + 1
-    return line, col

@@ -69,6 +69,8 @@ RULES: tuple[Rule, ...] = (
     Rule("TRAJ-START", "room", "a trajectory starts on its object's floor"),
     Rule("TRAJ-BLOCKED", "room", "no trajectory vertex lies on a floor with a standing object",
          "thesis 4.1.2"),
+    Rule("TRAJ-CROSSES", "room", "the straight way between consecutive trajectory vertices "
+         "stays on floors free of walls and standing objects"),
     Rule("TRAJ-UNREACHABLE", "room", "trajectory vertices lie where the robot can reach"),
     Rule("MISSION-ROOM", "mission", "the imported room exists and is valid"),
     Rule("MISSION-GOALS", "mission", "a mission has at least two goals (start and final place)",

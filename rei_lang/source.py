@@ -6,7 +6,9 @@ here, so the parsers only ever receive reasonable text.
 
 from __future__ import annotations
 
+import bisect
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 from rei.lang.errors import Diagnostic, Span
@@ -19,6 +21,21 @@ MAX_SOURCE_BYTES = 32 * 1024 * 1024
 class SourceText:
     path: str
     text: str
+
+    @cached_property
+    def _line_starts(self) -> list[int]:
+        starts = [0]
+        find = self.text.find
+        pos = find("\n")
+        while pos >= 0:
+            starts.append(pos + 1)
+            pos = find("\n", pos + 1)
+        return starts
+
+    def line_col(self, offset: int) -> tuple[int, int]:
+        """1-based line and column of a character offset (O(log lines))."""
+        index = bisect.bisect_right(self._line_starts, offset) - 1
+        return index + 1, offset - self._line_starts[index] + 1
 
 
 def line_col(text: str, offset: int) -> tuple[int, int]:

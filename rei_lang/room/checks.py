@@ -104,6 +104,7 @@ def check_placement(room: Room, layout: Layout) -> list[Diagnostic]:
                                   f"found '{other.name}' already on '{floor}'"))
         else:
             first_on[floor] = obj
+    out.extend(_check_trajectory_ways(room, layout))
     reachable = passable_floors(room, layout)
     blocked = {o.floor.name: o for o in blocking_objects(room)}
     if room.robot is None or not reachable:
@@ -124,3 +125,55 @@ def check_placement(room: Room, layout: Layout) -> list[Diagnostic]:
                                       f"trajectory of '{obj.name}': expected a vertex the robot "
                                       f"can reach, found '{name}' cut off from the robot's floor"))
     return out
+
+
+_WAY_STEP = 0.1
+"""Sampling step along a trajectory's way between vertices, in tiles."""
+
+
+def _check_trajectory_ways(room: Room, layout: Layout) -> list[Diagnostic]:
+    """The straight way between consecutive vertices stays on floors free of standing objects.
+
+    The animator's spline bends a little around the vertices; the straight way is the check
+    a person would make on a floor plan, and it catches walking through walls and furniture.
+    """
+    out: list[Diagnostic] = []
+    at_cell = layout.block_at()
+    blocked = {o.floor.name: o.name for o in blocking_objects(room)}
+    for obj in room.objects:
+        traj = obj.trajectory
+        if traj is None or len(traj.vertices) < 2:
+            continue
+        vertices = list(traj.vertices)
+        if any(v.floor.name not in layout.cells or v.floor.name not in room.floors
+               for v in vertices):
+            continue  # unresolved vertices are reported by the linker
+        pairs = list(zip(vertices, vertices[1:]))
+        if traj.loop:
+            pairs.append((vertices[-1], vertices[0]))
+        for start, end in pairs:
+            problem = _first_obstacle(layout.cells[start.floor.name], layout.cells[end.floor.name],
+                                      at_cell, room, blocked)
+            if problem is not None:
+                out.append(Diagnostic(start.span, "TRAJ-CROSSES",
+                                      f"trajectory of '{obj.name}': expected the way from "
+                                      f"'{start.floor.name}' to '{end.floor.name}' to stay on "
+                                      f"free floors, found it crosses {problem}"))
+    return out
+
+
+def _first_obstacle(a: tuple[int, int], b: tuple[int, int], at_cell: dict[tuple[int, int], str],
+                    room: Room, blocked: dict[str, str]) -> str | None:
+    steps = max(1, int(math.hypot(b[0] - a[0], b[1] - a[1]) / _WAY_STEP))
+    for k in range(steps + 1):
+        t = k / steps
+        cell = (math.floor(a[0] + (b[0] - a[0]) * t + 0.5),
+                math.floor(a[1] + (b[1] - a[1]) * t + 0.5))
+        name = at_cell.get(cell)
+        if name is None:
+            return f"cell {cell}, where there is no floor"
+        if name in room.walls:
+            return f"the wall '{name}'"
+        if name in blocked:
+            return f"'{blocked[name]}' standing on '{name}'"
+    return None
