@@ -66,10 +66,10 @@ def main() -> None:
                 text = room_text(floors, form)
                 path = Path(tmp) / f"{form}_{floors}.room"
                 path.write_text(text)
-                parse_s = best_of(args.repeats, lambda: bare.model_from_str(text))
+                parse_s = best_of(args.repeats, lambda text=text: bare.model_from_str(text))
                 diagnostics = Workspace().check(path)
                 assert not diagnostics, diagnostics[:3]
-                check_s = best_of(args.repeats, lambda: Workspace().check(path))
+                check_s = best_of(args.repeats, lambda path=path: Workspace().check(path))
                 lines = text.count("\n")
                 print(f"{floors:>7} {form:>8} {lines:>7} {parse_s:>8.3f} {check_s:>8.3f} "
                       f"{lines / check_s:>9.0f} {floors / check_s:>9.0f} "

@@ -1,4 +1,4 @@
-"""The object catalogue: what an abstract object type means in the simulator (thesis 4.1.3, Figure 11).
+"""The object catalogue: what an abstract type means in simulation (thesis 4.1.3, Figure 11).
 
 Each type has a footprint (box, cylinder or polygon, or the room's tile for floors and
 walls), a height, a mass, an inertia, a colour and an optional mesh; robot types add their
@@ -6,6 +6,7 @@ drive limits and laser. The default catalogue ships as ``default.toml`` beside t
 a room may name its own TOML file, whose types are added to the default or replace it by name.
 """
 
+from rei.catalogue.loader import default_catalogue, load_catalogue
 from rei.catalogue.model import (
     Box,
     Catalogue,
@@ -18,7 +19,6 @@ from rei.catalogue.model import (
     Polygon,
     Tile,
 )
-from rei.catalogue.loader import default_catalogue, load_catalogue
 
 __all__ = [
     "Box",

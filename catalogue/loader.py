@@ -87,7 +87,8 @@ class _Reader:
         if shape == "tile":
             return Tile()
         if shape == "box":
-            sx, sy = self.vector(tname, "footprint.size", value.get("size"), 2, 1e-3, _MAX_DIMENSION)
+            sx, sy = self.vector(tname, "footprint.size", value.get("size"), 2, 1e-3,
+                                 _MAX_DIMENSION)
             return Box(sx, sy)
         if shape == "cylinder":
             r = self.number(tname, "footprint.radius", value.get("radius"), low=1e-3,

@@ -45,7 +45,8 @@ def write_tree(tree: OutputTree, out_dir: str | Path) -> list[Path]:
         out.mkdir(parents=True, exist_ok=True)
         staging = Path(tempfile.mkdtemp(prefix=".rei-gen-", dir=out))
     except OSError as exc:
-        raise GenerationError(f"cannot write to the output folder '{out}': {exc.strerror}") from None
+        raise GenerationError(
+            f"cannot write to the output folder '{out}': {exc.strerror}") from None
     written: list[Path] = []
     try:
         for rel, data in sorted(tree.files.items()):

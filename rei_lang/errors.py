@@ -14,10 +14,10 @@ exceptions: a checker collects all of them and the caller decides what to do.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from enum import Enum
+from enum import StrEnum
 
 
-class Severity(str, Enum):
+class Severity(StrEnum):
     ERROR = "error"
     WARNING = "warning"
 
@@ -48,7 +48,8 @@ class Diagnostic:
 
     def __str__(self) -> str:
         prefix = "" if self.severity is Severity.ERROR else "warning: "
-        return f"{self.span.file}:{self.span.line}:{self.span.col}: {self.rule}: {prefix}{self.message}"
+        where = f"{self.span.file}:{self.span.line}:{self.span.col}"
+        return f"{where}: {self.rule}: {prefix}{self.message}"
 
     @property
     def is_error(self) -> bool:

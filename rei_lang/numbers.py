@@ -22,7 +22,8 @@ def read_number(
     try:
         value = float(text)
     except ValueError:  # the grammar only admits number literals; defensive
-        diagnostics.append(Diagnostic(span, "NUM-FINITE", f"{what}: expected a number, found '{text}'"))
+        diagnostics.append(
+            Diagnostic(span, "NUM-FINITE", f"{what}: expected a number, found '{text}'"))
         return None
     if not math.isfinite(value):
         diagnostics.append(

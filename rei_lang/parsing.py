@@ -61,7 +61,8 @@ def _expected(err: TextXSyntaxError) -> str:
         rule_name = getattr(rule, "rule_name", "") or ""
         to_match = getattr(rule, "to_match", None)
         if isinstance(to_match, str) and to_match and not rule_name.startswith("__"):
-            shown = f"'{to_match}'" if re.fullmatch(r"[\w{}():=,;\[\]<>.-]+", to_match) else rule_name
+            plain = re.fullmatch(r"[\w{}():=,;\[\]<>.-]+", to_match)
+            shown = f"'{to_match}'" if plain else rule_name
         else:
             shown = rule_name or str(rule)
         shown = {"ID": "a name", "STRING": "a quoted string", "Number": "a number",

@@ -21,7 +21,9 @@ def _semantic_processor(model: Any, metamodel: Any) -> None:
     errors = [d for d in Workspace().check(path) if d.is_error]
     if errors:
         first = errors[0]
-        more = f" (and {len(errors) - 1} more; run `rei-gen check` for all)" if len(errors) > 1 else ""
+        more = ""
+        if len(errors) > 1:
+            more = f" (and {len(errors) - 1} more; run `rei-gen check` for all)"
         raise TextXSemanticError(f"{first.rule}: {first.message}{more}", line=first.span.line,
                                  col=first.span.col, filename=first.span.file)
 

@@ -7,9 +7,9 @@ not saved yet (an editor's buffers); otherwise it reads the disk.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
 
 from rei.lang.errors import Diagnostic, LanguageError, Span
 from rei.lang.mission.document import MissionDocument, analyse_mission

@@ -10,7 +10,7 @@ pybullet or anything of the simulator.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from enum import Enum
+from enum import StrEnum
 from typing import Literal
 
 import numpy as np
@@ -21,7 +21,7 @@ SCHEMA_VERSION = 1
 """Bumped whenever a field changes meaning; readers refuse other versions."""
 
 
-class NavState(str, Enum):
+class NavState(StrEnum):
     """The navigation action's state (thesis Figure 22, the ROS actionlib states)."""
 
     IDLE = "idle"

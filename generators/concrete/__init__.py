@@ -7,6 +7,7 @@ each object its geometry, mass and inertia. Everything downstream (generators, t
 simulator, the monitor) reads this model, never the textX one.
 """
 
+from rei.generators.concrete.build import concretise_mission, concretise_room, load_concrete_mission
 from rei.generators.concrete.model import (
     ConcreteBlock,
     ConcreteGoal,
@@ -17,7 +18,6 @@ from rei.generators.concrete.model import (
     TimedPoint,
     TimedTrajectory,
 )
-from rei.generators.concrete.build import concretise_mission, concretise_room, load_concrete_mission
 
 __all__ = [
     "ConcreteBlock",

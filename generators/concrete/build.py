@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from itertools import pairwise
 from pathlib import Path
 
 from rei.catalogue import Catalogue
@@ -33,7 +34,7 @@ def _timed(traj: Trajectory, room: Room, cells: dict[str, tuple[int, int]]) -> T
         times = [float(v.time or 0.0) for v in traj.vertices]
         if traj.loop:
             # The way back to the first vertex is walked at the trajectory's mean speed.
-            length = sum(math.dist(a, b) for a, b in zip(pts, pts[1:]))
+            length = sum(math.dist(a, b) for a, b in pairwise(pts))
             speed = length / (times[-1] - times[0]) if times[-1] > times[0] else 0.0
             back = math.dist(pts[-1], pts[0])
             times.append(times[-1] + (back / speed if speed > 0 else times[-1] - times[0]))
@@ -41,13 +42,14 @@ def _timed(traj: Trajectory, room: Room, cells: dict[str, tuple[int, int]]) -> T
     else:
         if traj.loop:
             pts.append(pts[0])
-        seg = [math.dist(a, b) for a, b in zip(pts, pts[1:])]
+        seg = [math.dist(a, b) for a, b in pairwise(pts)]
         total_len = sum(seg)
         times = [0.0]
         for s in seg:
             share = s / total_len if total_len > 0 else 1.0 / len(seg)
             times.append(times[-1] + share * traj.total_time)
-    return TimedTrajectory(tuple(TimedPoint(t, x, y) for t, (x, y) in zip(times, pts)), traj.loop)
+    points = tuple(TimedPoint(t, x, y) for t, (x, y) in zip(times, pts, strict=True))
+    return TimedTrajectory(points, traj.loop)
 
 
 def concretise_room(doc: RoomDocument) -> ConcreteWorld:

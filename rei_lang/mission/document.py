@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 from rei.lang.errors import Diagnostic, sorted_diagnostics
 from rei.lang.mission.linker import link_mission, room_path_of

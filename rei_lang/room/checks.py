@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from itertools import pairwise
 
 import networkx as nx
 
@@ -148,7 +149,7 @@ def _check_trajectory_ways(room: Room, layout: Layout) -> list[Diagnostic]:
         if any(v.floor.name not in layout.cells or v.floor.name not in room.floors
                for v in vertices):
             continue  # unresolved vertices are reported by the linker
-        pairs = list(zip(vertices, vertices[1:]))
+        pairs = list(pairwise(vertices))
         if traj.loop:
             pairs.append((vertices[-1], vertices[0]))
         for start, end in pairs:

@@ -10,9 +10,9 @@ places, walls no floor names, and floors the traversal cannot reach.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
-from typing import Mapping
 
 import networkx as nx
 

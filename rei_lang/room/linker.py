@@ -9,6 +9,7 @@ reachability) is checked afterwards by rei.lang.room.layout.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from itertools import pairwise
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any
@@ -205,7 +206,7 @@ def _trajectory(linker: _Linker, raw: Any, owner: str) -> Trajectory | None:
                      f"trajectory of '{owner}': expected vertex times ('FLOOR at SECONDS') or "
                      f"'total SECONDS', found neither")
     elif timed:
-        for prev, cur in zip(vertices, vertices[1:]):
+        for prev, cur in pairwise(vertices):
             if prev.time is not None and cur.time is not None and cur.time <= prev.time:
                 linker.error(cur.span, "TRAJ-TIMES",
                              f"trajectory of '{owner}': expected times to increase, found "
@@ -309,7 +310,8 @@ def _resolve_links(linker: _Linker, floors: dict[str, FloorDecl], walls: dict[st
                 if any(o for o in linker.declared if o == ref.name):
                     linker.error(ref.span, "REF-KIND",
                                  f"floor '{floor.name}': expected a floor or wall as its "
-                                 f"{side.keyword} neighbour, found '{ref.name}', which is an object")
+                                 f"{side.keyword} neighbour, found '{ref.name}', which is an "
+                                 f"object")
                 else:
                     linker.error(ref.span, "REF-UNRESOLVED",
                                  f"expected the name of a floor or wall, found '{ref.name}'"

@@ -6,9 +6,10 @@ has checked that every name resolves, and the layout gives each block its cell.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from enum import Enum
-from typing import Literal, Mapping
+from typing import Literal
 
 from rei.lang.errors import Span
 

@@ -73,7 +73,8 @@ mass = 3.0
 
 
 @pytest.mark.parametrize("body,needle", [
-    ('kind = "robotic"', "types.t.kind: expected one of floor, wall, static, dynamic, human, robot"),
+    ('kind = "robotic"',
+     "types.t.kind: expected one of floor, wall, static, dynamic, human, robot"),
     ('kind = "static"\nfootprint = { shape = "box", size = [0.5] }\nheight = 1\nmass = 1',
      "types.t.footprint.size: expected a list of 2 numbers"),
     ('kind = "static"\nfootprint = { shape = "box", size = [0.5, 0.5] }\nheight = nan\nmass = 1',

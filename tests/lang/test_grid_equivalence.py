@@ -77,7 +77,8 @@ rows_strategy = st.lists(st.text(alphabet=".# ", min_size=1, max_size=7), min_si
                          max_size=6).filter(lambda rows: any("." in r for r in rows))
 
 
-@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=60, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(rows=rows_strategy)
 def test_random_grids_equal_their_long_form(tmp_path: Path, rows: list[str]) -> None:
     gdoc, edoc = models(tmp_path, rows)
