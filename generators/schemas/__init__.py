@@ -1,0 +1,1 @@
+"""Package data: schemas (jinja2 templates / XML schemas); no code."""

@@ -1,0 +1,1 @@
+"""Package data: templates (jinja2 templates / XML schemas); no code."""

@@ -1,0 +1,1 @@
+"""Package data: gazebo (jinja2 templates / XML schemas); no code."""

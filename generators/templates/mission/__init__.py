@@ -1,0 +1,1 @@
+"""Package data: mission (jinja2 templates / XML schemas); no code."""

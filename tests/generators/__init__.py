@@ -1,0 +1,1 @@
+"""Tests of the generators: concrete model, targets, `rei-gen generate` and `rei-gen show`."""
