@@ -1,0 +1,163 @@
+"""Completion candidates from the text before the cursor and the last model that parsed.
+
+While a file is being typed it usually does not parse, so the names offered come from the
+last version that did (the server keeps it); the *context* (after ``on``, after ``:``,
+inside a trajectory) is read from the raw text before the cursor with a small tokenizer.
+Keywords come from the grammars themselves, so they cannot drift from the language. This
+module must never check a rule.
+"""
+
+from __future__ import annotations
+
+import functools
+import re
+from dataclasses import dataclass
+from importlib import resources
+from typing import Iterable
+
+from rei.catalogue import Catalogue, default_catalogue
+from rei.lang.room.model import Room
+
+_TOKEN = re.compile(r"//[^\n]*|/\*.*?(?:\*/|$)|\"[^\"\n]*\"?|'[^'\n]*'?|[A-Za-z_]\w*|"
+                    r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|\S", re.DOTALL)
+_WORD_END = re.compile(r"[A-Za-z_]\w*\Z")
+LOOKBEHIND_CHARS = 4000
+"""Context is read from at most this many characters before the cursor: completion stays
+instant in a 2 MB file, and no REI statement is longer."""
+
+SIDES = ("top", "right", "bottom", "left")
+ROLE_OF_KEYWORD = {"object": "static", "dynamic": "dynamic", "human": "human",
+                   "robot": "robot", "floor": "floor", "wall": "wall"}
+BLOCK_OPENERS = ("room", "grid", "legend", "floor", "trajectory", "mission")
+
+
+@functools.cache
+def grammar_keywords(language: str) -> tuple[str, ...]:
+    """Every keyword of a language's grammar (and the grammars it imports)."""
+    words: set[str] = set()
+    pending = [language]
+    seen: set[str] = set()
+    while pending:
+        name = pending.pop()
+        if name in seen:
+            continue
+        seen.add(name)
+        try:
+            text = resources.files("rei.grammars").joinpath(f"{name}.tx").read_text("utf-8")
+        except (OSError, ValueError):
+            continue
+        text = re.sub(r"/\*.*?\*/|//[^\n]*", "", text, flags=re.DOTALL)
+        words.update(re.findall(r"'([A-Za-z_]\w*)'", text))
+        pending.extend(re.findall(r"^\s*import\s+(\w+)", text, re.MULTILINE))
+    return tuple(sorted(words))
+
+
+@dataclass(frozen=True)
+class Candidate:
+    label: str
+    kind: str
+    """keyword | floor | wall | type | query | file"""
+    detail: str = ""
+
+
+@dataclass(frozen=True)
+class Context:
+    previous: tuple[str, ...]
+    """The tokens before the cursor, nearest last (a partly typed word excluded)."""
+    blocks: tuple[str, ...]
+    """The keywords that opened the blocks the cursor is in, innermost last."""
+
+
+def context_at(text_before: str) -> Context:
+    text = text_before[-LOOKBEHIND_CHARS:]
+    partial = _WORD_END.search(text)
+    if partial is not None:
+        text = text[:partial.start()]
+    tokens = [t for t in _TOKEN.findall(text) if not t.startswith(("//", "/*"))]
+    blocks: list[str] = []
+    for i, token in enumerate(tokens):
+        if token == "{":
+            opener = next((t for t in reversed(tokens[max(0, i - 12):i]) if t in BLOCK_OPENERS
+                           or t == "{" or t == "}"), "")
+            blocks.append(opener if opener in BLOCK_OPENERS else "")
+        elif token == "}" and blocks:
+            blocks.pop()
+    return Context(tuple(tokens[-12:]), tuple(blocks))
+
+
+def _floors(room: Room | None) -> list[Candidate]:
+    if room is None:
+        return []
+    out: list[Candidate] = []
+    for name, floor in room.floors.items():
+        where = (f"grid {floor.cell_of_grid.grid} row {floor.cell_of_grid.row} col "
+                 f"{floor.cell_of_grid.col}" if floor.cell_of_grid else "floor")
+        out.append(Candidate(name, "floor", where))
+    return out
+
+
+def _walls(room: Room | None) -> list[Candidate]:
+    return [Candidate(name, "wall", "wall") for name in (room.walls if room else {})]
+
+
+def _types(catalogue: Catalogue | None, role: str | None) -> list[Candidate]:
+    catalogue = catalogue or default_catalogue()
+    names = catalogue.names(role) if role else catalogue.names()  # type: ignore[arg-type]
+    if not names:
+        names = catalogue.names()
+    out = []
+    for name in names:
+        object_type = catalogue.get(name)
+        out.append(Candidate(name, "type", object_type.kind if object_type else ""))
+    return out
+
+
+def _keywords(words: Iterable[str]) -> list[Candidate]:
+    return [Candidate(word, "keyword") for word in words]
+
+
+def room_completions(text_before: str, room: Room | None, catalogue: Catalogue | None
+                     ) -> list[Candidate]:
+    ctx = context_at(text_before)
+    prev = ctx.previous[-1] if ctx.previous else ""
+    block = ctx.blocks[-1] if ctx.blocks else ""
+    if prev == ":":
+        keyword = next((t for t in reversed(ctx.previous) if t in ROLE_OF_KEYWORD), None)
+        return _types(catalogue, ROLE_OF_KEYWORD.get(keyword or ""))
+    if prev == "on":
+        return _floors(room)
+    if prev in SIDES:
+        return _floors(room) + _walls(room)
+    if prev == "at" or prev in ("tile", "heading", "total", "catalogue"):
+        return []  # a number or a path follows
+    if block == "trajectory":
+        return _floors(room)
+    if block == "floor":
+        return _keywords(SIDES)
+    if block == "legend":
+        if prev == "=":
+            return _keywords(("floor", "wall", "empty"))
+        return []
+    if block == "grid":
+        return _keywords(("legend",))
+    if block == "room":
+        return _keywords(w for w in grammar_keywords("room")
+                         if w not in ("room", "legend", "empty") and w not in SIDES)
+    return _keywords(("room",))
+
+
+def mission_completions(text_before: str, room: Room | None) -> list[Candidate]:
+    ctx = context_at(text_before)
+    prev = ctx.previous[-1] if ctx.previous else ""
+    if prev == "at":
+        return _floors(room)
+    if prev in ("cycles", "time_limit", "max_speed", "tolerance", "heading", "timeout", "in"):
+        return []
+    if ctx.blocks:
+        return _keywords(w for w in grammar_keywords("mission") if w not in ("mission", "in"))
+    return _keywords(("mission", "in"))
+
+
+def vepl_completions(query_names: Iterable[str]) -> list[Candidate]:
+    return _keywords(grammar_keywords("vepl")) + [Candidate(n, "query", "query")
+                                                  for n in query_names]

@@ -1,0 +1,494 @@
+"""``rei-lsp``: the REI language server over stdio, for .room, .mission and .vepl files.
+
+Built on pygls 2 (rather than textX-LS 0.3, which is pre-alpha, pins pygls 1.3, reports one
+error per file across a whole line and answers no navigation request). Diagnostics are
+``Workspace.check`` — the very code ``rei-gen check`` runs — with each span converted to
+the client's code units; the rule id is the diagnostic's ``code``.
+
+Concurrency: all use of the (not thread-safe) ``Workspace`` happens on one worker thread,
+in submission order, so the event loop keeps answering requests while a big file is being
+checked; edits that arrive during a check coalesce into one more check of the newest
+text. Requests read the last finished analysis, an immutable snapshot. A handler must never
+let an exception escape: it logs it and answers empty.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import functools
+import logging
+import sys
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Iterable, TypeVar
+
+from lsprotocol import types
+from pygls.lsp.server import LanguageServer
+from pygls.uris import from_fs_path, to_fs_path
+
+from rei.lang.errors import Diagnostic, Severity
+from rei.lang.lsp import completion as completing
+from rei.lang.lsp.navigation import Found, Place, find_in_mission, find_in_room
+from rei.lang.lsp.outline import Symbol, mission_outline, room_outline
+from rei.lang.lsp.positions import LineIndex, Units, units_for
+from rei.lang.mission.document import MissionDocument
+from rei.lang.room.document import RoomDocument
+from rei.lang.workspace import Workspace, known_suffixes
+
+__all__ = ["ReiLanguageServer", "build_server", "main"]
+
+SERVER_NAME = "rei-lsp"
+SERVER_VERSION = "0.1.0"
+log = logging.getLogger("rei.lsp")
+R = TypeVar("R")
+
+
+@dataclass(frozen=True)
+class Analysis:
+    """One checked version of an open document: an immutable snapshot requests read."""
+
+    uri: str
+    path: str
+    version: int | None
+    text: str
+    diagnostics: tuple[Diagnostic, ...]
+    room: RoomDocument | None = None
+    mission: MissionDocument | None = None
+    vepl: Any = None
+    imports_room: str | None = None
+    """Resolved path of the room a mission imports (for re-checking it when the room changes)."""
+
+
+def _resolved(path: str) -> str:
+    try:
+        return str(Path(path).resolve())
+    except (OSError, RuntimeError, ValueError):
+        return path
+
+
+def uri_to_path(uri: str) -> str:
+    """The file path of a document URI; an editor's unsaved ``untitled:`` buffer keeps its
+    name so that its suffix still selects the language."""
+    path = to_fs_path(uri)
+    if path:
+        return path
+    return "/" + uri.split(":", 1)[-1].lstrip("/")
+
+
+def path_to_uri(path: str) -> str:
+    return from_fs_path(_resolved(path)) or Path(_resolved(path)).as_uri()
+
+
+class ReiLanguageServer(LanguageServer):
+    """The server's state lives on this object (nothing at module level)."""
+
+    def __init__(self) -> None:
+        super().__init__(SERVER_NAME, SERVER_VERSION,
+                         text_document_sync_kind=types.TextDocumentSyncKind.Incremental)
+        self.rei = Workspace()
+        self.checker = ThreadPoolExecutor(max_workers=1, thread_name_prefix="rei-check")
+        self.analyses: dict[str, Analysis] = {}
+        self.last_parsed: dict[str, Analysis] = {}
+        """Per URI, the newest analysis whose file parsed: names for completion while typing."""
+        self.running: set[str] = set()
+        self.dirty: set[str] = set()
+        self.foreign: dict[str, set[str]] = {}
+        """Per URI, the other files (a catalogue) it published diagnostics to."""
+
+    # --- analysis -------------------------------------------------------------------------
+
+    def units(self) -> Units:
+        try:
+            return units_for(self.workspace.position_encoding)
+        except Exception:  # before initialisation there is no workspace yet
+            return units_for(None)
+
+    def submit(self, fn: Callable[..., R], *args: Any) -> asyncio.Future[R]:
+        return asyncio.get_running_loop().run_in_executor(self.checker, fn, *args)
+
+    def buffer_changed(self, uri: str) -> None:
+        """An open buffer has new text: hand it to the workspace, then check it again."""
+        document = self.workspace.text_documents.get(uri)
+        if document is None:
+            return
+        self.submit(self.rei.set_text, uri_to_path(uri), document.source)
+        self.schedule(uri)
+
+    def schedule(self, uri: str) -> None:
+        if uri in self.running:
+            self.dirty.add(uri)
+            return
+        self.running.add(uri)
+        asyncio.get_running_loop().create_task(self._check_until_current(uri))
+
+    async def _check_until_current(self, uri: str) -> None:
+        try:
+            while True:
+                self.dirty.discard(uri)
+                document = self.workspace.text_documents.get(uri)
+                if document is None:
+                    return
+                analysis = await self.submit(_analyse, self.rei, uri, uri_to_path(uri),
+                                             document.source, document.version)
+                if uri in self.dirty:
+                    continue  # newer text arrived while checking: its check supersedes this one
+                if uri not in self.workspace.text_documents:
+                    return
+                self._store(analysis)
+                self.publish(analysis)
+                if analysis.room is not None:
+                    key = _resolved(analysis.path)
+                    for other in list(self.analyses.values()):
+                        if other.imports_room == key:
+                            self.schedule(other.uri)
+                return
+        except Exception:
+            log.exception("checking %s failed", uri)
+        finally:
+            self.running.discard(uri)
+
+    def _store(self, analysis: Analysis) -> None:
+        self.analyses[analysis.uri] = analysis
+        parsed = ((analysis.room is not None and analysis.room.room is not None)
+                  or (analysis.mission is not None and analysis.mission.mission is not None)
+                  or analysis.vepl is not None)
+        if parsed:
+            self.last_parsed[analysis.uri] = analysis
+
+    def publish(self, analysis: Analysis) -> None:
+        own = _resolved(analysis.path)
+        units = self.units()
+        index = LineIndex.of(analysis.text, units)
+        mine: list[types.Diagnostic] = []
+        others: dict[str, list[Diagnostic]] = {}
+        for diagnostic in analysis.diagnostics:
+            if diagnostic.span.file == analysis.path or _resolved(diagnostic.span.file) == own:
+                mine.append(to_lsp(diagnostic, index))
+            elif not diagnostic.span.file.startswith("<"):
+                others.setdefault(diagnostic.span.file, []).append(diagnostic)
+        self.text_document_publish_diagnostics(types.PublishDiagnosticsParams(
+            uri=analysis.uri, diagnostics=mine, version=analysis.version))
+        published: set[str] = set()
+        for file, diagnostics in others.items():
+            other_index = LineIndex.of(_read_text(file), units)
+            uri = path_to_uri(file)
+            published.add(uri)
+            self.text_document_publish_diagnostics(types.PublishDiagnosticsParams(
+                uri=uri, diagnostics=[to_lsp(d, other_index) for d in diagnostics]))
+        for uri in self.foreign.get(analysis.uri, set()) - published:
+            self.clear(uri)
+        self.foreign[analysis.uri] = published
+
+    def clear(self, uri: str) -> None:
+        self.text_document_publish_diagnostics(types.PublishDiagnosticsParams(uri=uri,
+                                                                              diagnostics=[]))
+
+    def closed(self, uri: str) -> None:
+        path = uri_to_path(uri)
+        self.submit(self.rei.forget_text, path)
+        gone = self.analyses.pop(uri, None)
+        self.last_parsed.pop(uri, None)
+        self.clear(uri)
+        for other in self.foreign.pop(uri, set()):
+            self.clear(other)
+        if gone is not None and gone.room is not None:
+            # Missions that import this room now read it from the disk.
+            key = _resolved(path)
+            for other_analysis in list(self.analyses.values()):
+                if other_analysis.imports_room == key:
+                    self.schedule(other_analysis.uri)
+
+    def files_changed_on_disk(self) -> None:
+        self.submit(self.rei.invalidate)
+        for uri in list(self.workspace.text_documents):
+            self.schedule(uri)
+
+    # --- requests -------------------------------------------------------------------------
+
+    def found_at(self, uri: str, position: types.Position) -> tuple[Found, Analysis] | None:
+        analysis = self.analyses.get(uri)
+        if analysis is None:
+            return None
+        index = LineIndex.of(analysis.text, self.units())
+        line, col = index.rei_position(position)
+        found: Found | None = None
+        if analysis.room is not None:
+            found = find_in_room(analysis.room, index, line, col)
+        elif analysis.mission is not None:
+            found = find_in_mission(analysis.mission, index, line, col)
+        return (found, analysis) if found is not None else None
+
+    def location(self, place: Place) -> types.Location:
+        text = place.text
+        if text is None:
+            text = self._open_text(place.path) or _read_text(place.path)
+        index = LineIndex.of(text, self.units())
+        return types.Location(uri=path_to_uri(place.path), range=index.range(place.span))
+
+    def _open_text(self, path: str) -> str | None:
+        uri = path_to_uri(path)
+        document = self.workspace.text_documents.get(uri)
+        return document.source if document is not None else None
+
+
+def _read_text(path: str) -> str:
+    try:
+        return Path(path).read_text(encoding="utf-8", errors="replace")
+    except OSError:
+        return ""
+
+
+def _analyse(workspace: Workspace, uri: str, path: str, text: str, version: int | None
+             ) -> Analysis:
+    """Runs on the checker thread: the workspace's diagnostics and models of one file."""
+    workspace.set_text(path, text)
+    suffix = Path(path).suffix
+    if suffix not in known_suffixes():
+        # A language whose checker is not installed (yet): say nothing rather than
+        # 'expected a .room or .mission'.
+        return Analysis(uri, path, version, text, ())
+    diagnostics = tuple(workspace.check(path))
+    if suffix == ".room":
+        return Analysis(uri, path, version, text, diagnostics, room=workspace.room(path))
+    if suffix == ".mission":
+        mission = workspace.mission(path)
+        imported = (_resolved(mission.mission.room_path) if mission.mission is not None
+                    else None)
+        return Analysis(uri, path, version, text, diagnostics, mission=mission,
+                        imports_room=imported)
+    return Analysis(uri, path, version, text, diagnostics, vepl=_vepl_model(workspace, path))
+
+
+def _vepl_model(workspace: Workspace, path: str) -> Any:
+    """The .vepl model when the VEPL language is installed (it is optional here)."""
+    try:
+        from rei.lang.vepl import document as vepl_document
+    except ImportError:
+        return None
+    loader = getattr(vepl_document, "analyse_vepl", None)
+    if loader is None:
+        return None
+    try:
+        return loader(workspace.source(path))
+    except Exception:
+        log.exception("reading the .vepl model of %s failed", path)
+        return None
+
+
+def to_lsp(diagnostic: Diagnostic, index: LineIndex) -> types.Diagnostic:
+    return types.Diagnostic(
+        range=index.range(diagnostic.span),
+        message=diagnostic.message,
+        severity=(types.DiagnosticSeverity.Error if diagnostic.severity is Severity.ERROR
+                  else types.DiagnosticSeverity.Warning),
+        code=diagnostic.rule,
+        source="rei",
+    )
+
+
+def guarded(default: Callable[[], R]) -> Callable[[Callable[..., R]], Callable[..., R]]:
+    """Log any exception of a handler and answer ``default()`` instead: one broken request
+    must never take the server down."""
+
+    def decorate(fn: Callable[..., R]) -> Callable[..., R]:
+        @functools.wraps(fn)
+        def wrapper(*args: Any, **kwargs: Any) -> R:
+            try:
+                return fn(*args, **kwargs)
+            except Exception:
+                log.exception("%s failed", fn.__name__)
+                return default()
+
+        return wrapper
+
+    return decorate
+
+
+_SYMBOL_KINDS = {
+    "room": types.SymbolKind.Module, "mission": types.SymbolKind.Module,
+    "grid": types.SymbolKind.Array, "floor": types.SymbolKind.Field,
+    "wall": types.SymbolKind.Constant, "object": types.SymbolKind.Object,
+    "human": types.SymbolKind.Object, "robot": types.SymbolKind.Class,
+    "goal": types.SymbolKind.Event, "declaration": types.SymbolKind.Function,
+}
+_COMPLETION_KINDS = {
+    "keyword": types.CompletionItemKind.Keyword, "floor": types.CompletionItemKind.Field,
+    "wall": types.CompletionItemKind.Constant, "type": types.CompletionItemKind.Class,
+    "query": types.CompletionItemKind.Function, "file": types.CompletionItemKind.File,
+}
+
+
+def _document_symbol(symbol: Symbol, index: LineIndex) -> types.DocumentSymbol:
+    full = index.range(symbol.span)
+    selection = index.range(symbol.selection)
+    if not (_before(full.start, selection.start) and _before(selection.end, full.end)):
+        selection = types.Range(start=full.start, end=full.start)
+    return types.DocumentSymbol(
+        name=symbol.name or "?", detail=symbol.detail,
+        kind=_SYMBOL_KINDS.get(symbol.kind, types.SymbolKind.Variable),
+        range=full, selection_range=selection,
+        children=[_document_symbol(c, index) for c in symbol.children])
+
+
+def _before(a: types.Position, b: types.Position) -> bool:
+    return (a.line, a.character) <= (b.line, b.character)
+
+
+def _vepl_outline(model: Any) -> Iterable[Symbol]:
+    """Top-level declarations of a .vepl model, if its module exposes them."""
+    declarations = getattr(model, "declarations", None)
+    if not declarations:
+        return ()
+    out = []
+    for decl in declarations:
+        span = getattr(decl, "span", None)
+        name = getattr(decl, "name", None)
+        if span is None or not isinstance(name, str):
+            continue
+        out.append(Symbol(name, "declaration", type(decl).__name__.lower(), span, span))
+    return out
+
+
+def _vepl_query_names(model: Any) -> list[str]:
+    names: list[str] = []
+    for attribute in ("queries", "patterns", "declarations"):
+        for decl in getattr(model, attribute, None) or ():
+            name = getattr(decl, "name", None)
+            if isinstance(name, str) and name not in names:
+                names.append(name)
+    return names
+
+
+def build_server() -> ReiLanguageServer:
+    server = ReiLanguageServer()
+
+    @server.feature(types.TEXT_DOCUMENT_DID_OPEN)
+    @guarded(lambda: None)
+    def did_open(ls: ReiLanguageServer, params: types.DidOpenTextDocumentParams) -> None:
+        ls.buffer_changed(params.text_document.uri)
+
+    @server.feature(types.TEXT_DOCUMENT_DID_CHANGE)
+    @guarded(lambda: None)
+    def did_change(ls: ReiLanguageServer, params: types.DidChangeTextDocumentParams) -> None:
+        ls.buffer_changed(params.text_document.uri)
+
+    @server.feature(types.TEXT_DOCUMENT_DID_SAVE)
+    @guarded(lambda: None)
+    def did_save(ls: ReiLanguageServer, params: types.DidSaveTextDocumentParams) -> None:
+        ls.buffer_changed(params.text_document.uri)
+
+    @server.feature(types.TEXT_DOCUMENT_DID_CLOSE)
+    @guarded(lambda: None)
+    def did_close(ls: ReiLanguageServer, params: types.DidCloseTextDocumentParams) -> None:
+        ls.closed(params.text_document.uri)
+
+    @server.feature(types.WORKSPACE_DID_CHANGE_WATCHED_FILES)
+    @guarded(lambda: None)
+    def watched_files(ls: ReiLanguageServer, params: types.DidChangeWatchedFilesParams) -> None:
+        ls.files_changed_on_disk()
+
+    @server.feature(types.TEXT_DOCUMENT_COMPLETION,
+                    types.CompletionOptions(trigger_characters=[":"]))
+    @guarded(lambda: None)
+    def completion(ls: ReiLanguageServer, params: types.CompletionParams
+                   ) -> types.CompletionList | None:
+        uri = params.text_document.uri
+        document = ls.workspace.text_documents.get(uri)
+        if document is None:
+            return None
+        index = LineIndex.of(document.source, ls.units())
+        line, col = index.rei_position(params.position)
+        before = "\n".join(index.lines[max(0, line - 200):line - 1]
+                           + (index.line_text(line)[:col - 1],))
+        parsed = ls.last_parsed.get(uri)
+        suffix = Path(uri_to_path(uri)).suffix
+        candidates: list[completing.Candidate]
+        if suffix == ".room":
+            room_doc = parsed.room if parsed is not None else None
+            candidates = completing.room_completions(
+                before, room_doc.room if room_doc else None,
+                room_doc.catalogue if room_doc else None)
+        elif suffix == ".mission":
+            mission_doc = parsed.mission if parsed is not None else None
+            room = (mission_doc.room.room if mission_doc is not None
+                    and mission_doc.room is not None else None)
+            candidates = completing.mission_completions(before, room)
+        elif suffix == ".vepl":
+            model = parsed.vepl if parsed is not None else None
+            candidates = completing.vepl_completions(_vepl_query_names(model))
+        else:
+            candidates = []
+        items = [types.CompletionItem(label=c.label, detail=c.detail or None,
+                                      kind=_COMPLETION_KINDS.get(c.kind))
+                 for c in candidates]
+        return types.CompletionList(is_incomplete=False, items=items)
+
+    @server.feature(types.TEXT_DOCUMENT_DEFINITION)
+    @guarded(lambda: None)
+    def definition(ls: ReiLanguageServer, params: types.DefinitionParams
+                   ) -> list[types.Location] | None:
+        hit = ls.found_at(params.text_document.uri, params.position)
+        if hit is None or hit[0].declaration is None:
+            return None
+        return [ls.location(hit[0].declaration)]
+
+    @server.feature(types.TEXT_DOCUMENT_HOVER)
+    @guarded(lambda: None)
+    def hover(ls: ReiLanguageServer, params: types.HoverParams) -> types.Hover | None:
+        hit = ls.found_at(params.text_document.uri, params.position)
+        if hit is None:
+            return None
+        found, analysis = hit
+        index = LineIndex.of(analysis.text, ls.units())
+        return types.Hover(
+            contents=types.MarkupContent(kind=types.MarkupKind.Markdown, value=found.hover),
+            range=index.range(found.written.span))
+
+    @server.feature(types.TEXT_DOCUMENT_DOCUMENT_SYMBOL)
+    @guarded(lambda: None)
+    def document_symbol(ls: ReiLanguageServer, params: types.DocumentSymbolParams
+                        ) -> list[types.DocumentSymbol] | None:
+        analysis = ls.last_parsed.get(params.text_document.uri)
+        if analysis is None:
+            return []
+        index = LineIndex.of(analysis.text, ls.units())
+        symbols: Iterable[Symbol] = ()
+        if analysis.room is not None and analysis.room.room is not None:
+            symbols = [room_outline(analysis.room.room, index)]
+        elif analysis.mission is not None and analysis.mission.mission is not None:
+            symbols = [mission_outline(analysis.mission.mission, index)]
+        elif analysis.vepl is not None:
+            symbols = _vepl_outline(analysis.vepl)
+        return [_document_symbol(s, index) for s in symbols]
+
+    return server
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Serve the Language Server Protocol on stdin/stdout until the client says exit."""
+    import argparse
+
+    parser = argparse.ArgumentParser(
+        prog="rei-lsp",
+        description="The REI language server (Language Server Protocol over stdio) for "
+                    ".room, .mission and .vepl files. Point your editor at this command.")
+    parser.add_argument("--stdio", action="store_true",
+                        help="serve over stdin/stdout (the default; accepted because many "
+                             "editors pass it)")
+    parser.add_argument("--log-level", default="WARNING",
+                        choices=("DEBUG", "INFO", "WARNING", "ERROR"),
+                        help="what the server logs to stderr")
+    args = parser.parse_args(argv)
+    logging.basicConfig(stream=sys.stderr, level=args.log_level,
+                        format="rei-lsp %(levelname)s %(name)s: %(message)s")
+    server = build_server()
+    try:
+        server.start_io()
+    finally:
+        server.checker.shutdown(wait=False, cancel_futures=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
