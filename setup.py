@@ -36,8 +36,9 @@ def _packages() -> tuple[list[str], dict[str, str]]:
 
 PACKAGES, PACKAGE_DIR = _packages()
 
-setup(
-    packages=PACKAGES,
-    package_dir=PACKAGE_DIR,
-    package_data={pkg: DATA for pkg in PACKAGES},
-)
+if __name__ == "__main__":  # setuptools runs this file as __main__; tests import the lists
+    setup(
+        packages=PACKAGES,
+        package_dir=PACKAGE_DIR,
+        package_data={pkg: DATA for pkg in PACKAGES},
+    )
