@@ -1,4 +1,4 @@
-"""Shared plumbing of the template-based targets: jinja2 environments, number formatting, XML checks.
+"""Shared plumbing of template-based targets: jinja2 environments, number formatting, XML checks.
 
 Each target renders files from its own template folder (``generators/templates/<target>/``)
 with undefined names as errors, formats every number through ``fmt`` (fixed precision, no
@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import json
 import math
-from functools import lru_cache
+from functools import cache
 from importlib import resources
 from typing import Any
 
@@ -114,7 +114,7 @@ def _template_line(exc: BaseException, name: str) -> int | None:
     return line
 
 
-@lru_cache(maxsize=None)
+@cache
 def _schema(name: str) -> etree.XMLSchema:
     with resources.files("rei.generators.schemas").joinpath(name).open("rb") as handle:
         return etree.XMLSchema(etree.parse(handle))

@@ -20,8 +20,13 @@ from rei.generators.concrete import ConcreteObject, ConcreteWorld
 from rei.generators.errors import GenerationError
 from rei.generators.output import OutputTree
 from rei.generators.targets import GenerationRequest
-from rei.generators.templating import check_xml, make_environment, normalise_angle, render, \
-    template_loader
+from rei.generators.templating import (
+    check_xml,
+    make_environment,
+    normalise_angle,
+    render,
+    template_loader,
+)
 
 OUTPUT = "world.sdf"
 ROBOT_MODES = ("placeholder", "none")
@@ -114,7 +119,10 @@ class GazeboTarget:
         assert world is not None
         min_x, min_y, max_x, max_y = world.bounds()
         margin = 2 * world.tile_size
-        ground = (max(abs(min_x), abs(max_x)) * 2 + margin, max(abs(min_y), abs(max_y)) * 2 + margin)
+        # The plane is centred on the origin (the robot's floor), so it spans twice the farthest
+        # block in each direction.
+        ground = (max(abs(min_x), abs(max_x)) * 2 + margin,
+                  max(abs(min_y), abs(max_y)) * 2 + margin)
         robot_comment = "" if robot == "placeholder" else (
             f"robot '{world.robot.name}' ({world.robot.type.name}) is spawned by the launch file "
             f"at x={world.robot.pose.x:g} y={world.robot.pose.y:g}")

@@ -1,4 +1,4 @@
-"""The `mission` target: the mission description as XML for the mission executor (thesis 4.3.1, 6.2.3).
+"""The `mission` target: the mission as XML for the mission executor (thesis 4.3.1, 6.2.3).
 
 Goals are written in the world frame (the concrete model's metres, yaw in radians in
 (-pi, pi]) with their tolerance and timeout, followed by the task order (the goal sequence

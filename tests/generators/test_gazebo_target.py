@@ -14,6 +14,7 @@ from rei.generators.errors import GenerationError
 from rei.generators.targets import GenerationRequest, check_target
 from rei.generators.targets.gazebo import TARGET
 from tests.conftest import example_files, require_tool
+from tests.generators.conftest import RequestFor, Write
 
 POLYGON_ROOM = """room shapes {
     catalogue "types.toml"
@@ -59,12 +60,16 @@ def test_target_conforms() -> None:
 @pytest.mark.slow
 @pytest.mark.parametrize("path", example_files(".room") + example_files(".mission"),
                          ids=lambda p: p.name)
-def test_every_example_passes_ign_sdf_check(path: Path, request_for, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+def test_every_example_passes_ign_sdf_check(
+    path: Path, request_for: RequestFor, tmp_path: Path,
+) -> None:
     ign_check(tmp_path, sdf_of(request_for(path)))
 
 
 @pytest.mark.slow
-def test_polygons_humans_dynamic_objects_pass_ign_sdf_check(write, request_for, tmp_path) -> None:  # type: ignore[no-untyped-def]
+def test_polygons_humans_dynamic_objects_pass_ign_sdf_check(
+    write: Write, request_for: RequestFor, tmp_path: Path,
+) -> None:
     write("types.toml", TYPES)
     request = request_for(write("shapes.room", POLYGON_ROOM))
     data = sdf_of(request)
@@ -84,7 +89,7 @@ def test_polygons_humans_dynamic_objects_pass_ign_sdf_check(write, request_for, 
     assert models["bot"].findtext("pose") == "0 0 0 0 0 -1.570796"
 
 
-def test_every_block_and_object_is_a_model(request_for) -> None:  # type: ignore[no-untyped-def]
+def test_every_block_and_object_is_a_model(request_for: RequestFor) -> None:
     request = request_for(example_files(".room")[0])
     world = request.world
     root = etree.fromstring(sdf_of(request))
@@ -98,7 +103,7 @@ def test_every_block_and_object_is_a_model(request_for) -> None:  # type: ignore
     assert root.get("version") == "1.9"
 
 
-def test_robot_option_none_leaves_the_robot_to_the_launch_file(request_for) -> None:  # type: ignore[no-untyped-def]
+def test_robot_option_none_leaves_the_robot_to_the_launch_file(request_for: RequestFor) -> None:
     path = example_files(".room")[0]
     request = request_for(path, robot="none")
     names = [m.get("name") for m in etree.fromstring(sdf_of(request)).iter("model")]
@@ -107,7 +112,7 @@ def test_robot_option_none_leaves_the_robot_to_the_launch_file(request_for) -> N
         sdf_of(request_for(path, robot="tb3"))
 
 
-def test_a_catalogue_type_without_geometry_is_a_clear_error(request_for) -> None:  # type: ignore[no-untyped-def]
+def test_a_catalogue_type_without_geometry_is_a_clear_error(request_for: RequestFor) -> None:
     request = request_for(example_files(".room")[0])
     world = request.world
     broken = replace(world.objects[0], type=replace(world.objects[0].type, footprint=Tile()))
@@ -117,6 +122,6 @@ def test_a_catalogue_type_without_geometry_is_a_clear_error(request_for) -> None
         sdf_of(request)
 
 
-def test_same_input_gives_the_same_bytes(request_for) -> None:  # type: ignore[no-untyped-def]
+def test_same_input_gives_the_same_bytes(request_for: RequestFor) -> None:
     path = example_files(".mission")[0]
     assert sdf_of(request_for(path)) == sdf_of(request_for(path))

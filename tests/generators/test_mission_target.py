@@ -13,6 +13,7 @@ from rei.generators.errors import GenerationError
 from rei.generators.targets import check_target
 from rei.generators.targets.mission import TARGET, MissionTarget
 from tests.conftest import example_files
+from tests.generators.conftest import RequestFor, Write
 
 NS = {"m": "urn:rei:mission:1"}
 
@@ -22,7 +23,7 @@ def schema() -> etree.XMLSchema:
         return etree.XMLSchema(etree.parse(f))
 
 
-def mission_xml(request) -> etree._Element:  # type: ignore[no-untyped-def]
+def mission_xml(request) -> etree._Element:
     return etree.fromstring(TARGET.generate(request).files["mission.xml"])
 
 
@@ -31,13 +32,15 @@ def test_target_conforms() -> None:
 
 
 @pytest.mark.parametrize("path", example_files(".mission"), ids=lambda p: p.name)
-def test_every_example_validates_against_the_schema(path: Path, request_for) -> None:  # type: ignore[no-untyped-def]
+def test_every_example_validates_against_the_schema(path: Path, request_for: RequestFor) -> None:
     document = mission_xml(request_for(path))
     validator = schema()
     assert validator.validate(document), validator.error_log
 
 
-def test_goals_are_in_the_world_frame_and_tasks_repeat_per_cycle(write, request_for) -> None:  # type: ignore[no-untyped-def]
+def test_goals_are_in_the_world_frame_and_tasks_repeat_per_cycle(
+    write: Write, request_for: RequestFor,
+) -> None:
     write("r.room", """room r {
         tile 0.5
         grid g { legend { "S" = floor s } "#####" "#S..#" "#...#" "#####" }
@@ -74,13 +77,13 @@ def test_the_schema_rejects_what_the_executor_could_not_use() -> None:
     assert "tolerance" in messages and "x" in messages and "Duplicate" in messages
 
 
-def test_a_template_that_breaks_the_schema_is_refused(request_for) -> None:  # type: ignore[no-untyped-def]
+def test_a_template_that_breaks_the_schema_is_refused(request_for: RequestFor) -> None:
     broken = MissionTarget(loader=jinja2.DictLoader({
         "mission.xml.j2": '<mission xmlns="urn:rei:mission:1" name="{{ mission.name }}"/>\n'}))
     with pytest.raises(GenerationError, match="does not follow mission.xsd"):
         broken.generate(request_for(example_files(".mission")[0]))
 
 
-def test_a_room_is_not_a_mission(request_for) -> None:  # type: ignore[no-untyped-def]
+def test_a_room_is_not_a_mission(request_for: RequestFor) -> None:
     with pytest.raises(GenerationError, match="expected a .mission file"):
         TARGET.generate(request_for(example_files(".room")[0]))

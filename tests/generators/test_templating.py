@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import jinja2
 import pytest
@@ -55,7 +56,7 @@ def test_comments_never_close_early() -> None:
     assert "--" not in text and not text.endswith("-")
 
 
-def test_relative_paths_never_absolute(tmp_path) -> None:  # type: ignore[no-untyped-def]
+def test_relative_paths_never_absolute(tmp_path: Path) -> None:
     assert relative_to(str(tmp_path / "rooms" / "a.room"), str(tmp_path / "m" / "x.mission")) \
         == "../rooms/a.room"
 

@@ -12,9 +12,10 @@ import pytest
 
 from rei.generators.concrete import ConcreteWorld, concretise_room
 from rei.lang.workspace import Workspace
+from tests.generators.conftest import Write
 
 
-def world_of(write, text: str, name: str = "t.room") -> ConcreteWorld:  # type: ignore[no-untyped-def]
+def world_of(write: Write, text: str, name: str = "t.room") -> ConcreteWorld:
     path: Path = write(name, text)
     doc = Workspace().room(path)
     assert [str(d) for d in doc.diagnostics if d.is_error] == []
@@ -25,7 +26,7 @@ def coordinates(world: ConcreteWorld) -> dict[str, tuple[float, float]]:
     return {b.name: (b.x, b.y) for b in world.floors + world.walls}
 
 
-def test_straight_corridor_of_explicit_floors(write) -> None:  # type: ignore[no-untyped-def]
+def test_straight_corridor_of_explicit_floors(write: Write) -> None:
     world = world_of(write, """room straight {
         tile 0.5
         floor a { right b }
@@ -40,7 +41,7 @@ def test_straight_corridor_of_explicit_floors(write) -> None:  # type: ignore[no
     assert world.robot.pose.x == 0.0 and world.robot.pose.y == 0.0
 
 
-def test_l_shaped_room_from_a_grid(write) -> None:  # type: ignore[no-untyped-def]
+def test_l_shaped_room_from_a_grid(write: Write) -> None:
     world = world_of(write, """room ell {
         grid g {
             "#####"
@@ -64,7 +65,7 @@ def test_l_shaped_room_from_a_grid(write) -> None:  # type: ignore[no-untyped-de
     assert world.floor_at(3.0, 0.0) is None  # empty cells of the grid are outside the room
 
 
-def test_room_with_an_inner_wall_block_and_an_empty_cell(write) -> None:  # type: ignore[no-untyped-def]
+def test_room_with_an_inner_wall_block_and_an_empty_cell(write: Write) -> None:
     world = world_of(write, """room holes {
         grid g {
             legend { "S" = floor start }
@@ -87,7 +88,7 @@ def test_room_with_an_inner_wall_block_and_an_empty_cell(write) -> None:  # type
     assert world.floor_at(1.4, -1.6) == "g_3_2"  # inside a tile, not only at its centre
 
 
-def test_explicit_floors_attached_to_a_grid(write) -> None:  # type: ignore[no-untyped-def]
+def test_explicit_floors_attached_to_a_grid(write: Write) -> None:
     world = world_of(write, """room mixed {
         tile 2.0
         grid lab {
@@ -112,7 +113,7 @@ def test_explicit_floors_attached_to_a_grid(write) -> None:  # type: ignore[no-u
 
 
 @pytest.mark.parametrize("heading,expected_yaw", [(0, 0.0), (90, 1.5707963267948966)])
-def test_robot_heading_becomes_yaw(write, heading: int, expected_yaw: float) -> None:  # type: ignore[no-untyped-def]
+def test_robot_heading_becomes_yaw(write: Write, heading: int, expected_yaw: float) -> None:
     world = world_of(write, f"""room h {{
         floor a {{ right b }}
         floor b

@@ -1,0 +1,1 @@
+"""Package data: launch (jinja2 templates / XML schemas); no code."""

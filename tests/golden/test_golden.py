@@ -1,0 +1,48 @@
+"""Every target's output on every example equals its golden files, byte for byte."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from tests.conftest import REPO
+from tests.golden.regen import GOLDEN, REGEN_COMMAND, case_dir, cases, generated, stored
+
+CASES = cases()
+
+
+@pytest.mark.parametrize("path,target", CASES, ids=[f"{p.name}-{t}" for p, t in CASES])
+def test_output_matches_golden_files(path: Path, target: str) -> None:
+    folder = case_dir(path, target)
+    if not folder.is_dir():
+        pytest.fail(f"no golden files for target '{target}' on {path.name} in {folder}; "
+                    f"run `{REGEN_COMMAND}` and review the new files")
+    expected = stored(folder)
+    actual = generated(path, target)
+    assert sorted(actual) == sorted(expected), (
+        f"target '{target}' on {path.name} writes other files than its goldens; "
+        f"if intended, run `{REGEN_COMMAND}`")
+    for rel in sorted(actual):
+        assert actual[rel] == expected[rel], (
+            f"{folder / rel} differs from what target '{target}' generates now; "
+            f"if intended, run `{REGEN_COMMAND}` and review the diff")
+
+
+def test_every_golden_folder_belongs_to_a_case() -> None:
+    known = {case_dir(p, t) for p, t in CASES}
+    folders = {f for f in GOLDEN.glob("*/*/*") if f.is_dir()}
+    assert sorted(folders - known) == [], f"stale golden folders; run `{REGEN_COMMAND}`"
+
+
+def test_the_examples_cover_every_target() -> None:
+    from rei.generators.targets import available_targets
+
+    covered = {t for _, t in CASES}
+    assert covered == set(available_targets())
+
+
+def test_golden_files_hold_no_absolute_paths() -> None:
+    offenders = [p for p in GOLDEN.rglob("*") if p.is_file() and p.suffix != ".py"
+                 and (str(REPO).encode() in p.read_bytes() or b"/tmp/" in p.read_bytes())]
+    assert offenders == []
