@@ -1,0 +1,12 @@
+"""The error of the campaign stage: a campaign could not be planned, resumed or stored.
+
+A failed, crashed or hung *run* is never an error here: it is a recorded outcome.
+"""
+
+from __future__ import annotations
+
+from rei.lang.errors import ReiError
+
+
+class CampaignError(ReiError):
+    """The campaign's input or results folder is unusable (named, with what was expected)."""

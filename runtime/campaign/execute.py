@@ -1,0 +1,150 @@
+"""Running one planned run in isolation: `rei run` in its own process, under a watchdog.
+
+Both engines call ``execute_run``: the local engine in a thread of the campaign process, the
+Dask engine on a cluster worker. The run's process may crash, hang or be killed; whatever
+happens becomes a ``RunResult`` (never an exception), so one bad run never stops a campaign.
+This module must never write outside the work folder it is given, and never touch the store.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+from rei.runtime.campaign.plan import RunSpec
+from rei.runtime.results import RunSummary
+
+RunStatus = Literal["ran", "crashed", "hung", "interrupted"]
+"""ran: `rei run` wrote a summary; crashed: it ended without one (or with a broken one);
+hung: the watchdog killed it; interrupted: stopped by the user (not recorded, runs again)."""
+
+DEFAULT_RUNNER: tuple[str, ...] = (sys.executable, "-m", "rei.runtime.cli")
+"""The program that runs one mission; `run MISSION -o DIR ...` is appended."""
+
+EXIT_INTERRUPTED = 130
+
+
+@dataclass(frozen=True)
+class RunResult:
+    """What one attempt of a run produced, before the store records it."""
+
+    run_id: str
+    status: RunStatus
+    exit_code: int | None
+    wall_time: float
+    summary: dict[str, Any] | None
+    """summary.json as written by `rei run` (a RunSummary), when there is one."""
+    message: str = ""
+    """Why a run crashed or hung: the watchdog's note or the last lines of its error output."""
+    files: dict[str, bytes] = field(default_factory=dict)
+    """The run folder's files, when the run happened on another machine (Dask engine)."""
+
+
+def default_timeout(spec: RunSpec) -> float:
+    """Wall-clock seconds before the watchdog kills a run that has not ended."""
+    if spec.duration is not None:
+        return max(60.0, 10.0 * spec.duration + 30.0)
+    return 1800.0
+
+
+def _tail(path: Path, lines: int = 8) -> str:
+    try:
+        text = path.read_text(encoding="utf-8", errors="replace")
+    except OSError:
+        return ""
+    return "\n".join(text.strip().splitlines()[-lines:])
+
+
+def _read_summary(path: Path) -> tuple[dict[str, Any] | None, str]:
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+        RunSummary.from_json(data)  # the shape is checked here, not when the report is built
+    except FileNotFoundError:
+        return None, "no summary.json"
+    except (OSError, ValueError, TypeError, KeyError) as exc:
+        return None, f"summary.json is unreadable: {exc}"
+    if not isinstance(data, dict):
+        return None, "summary.json is not an object"
+    return data, ""
+
+
+def execute_run(spec: RunSpec, work_dir: Path, *, timeout: float | None = None,
+                runner: Sequence[str] = DEFAULT_RUNNER,
+                stop: threading.Event | None = None) -> RunResult:
+    """Run ``spec`` with its output in ``work_dir`` (created); kill it after ``timeout`` s.
+
+    Setting ``stop`` kills the run at once and reports it interrupted (the campaign is ending).
+    """
+    work_dir.mkdir(parents=True, exist_ok=True)
+    limit = default_timeout(spec) if timeout is None else timeout
+    argv = [*runner, *spec.run_argv(str(work_dir))]
+    started = time.monotonic()
+    with open(work_dir / "campaign-stdout.txt", "wb") as out, \
+            open(work_dir / "campaign-stderr.txt", "wb") as err:
+        # The run stays in the campaign's process group on purpose: Ctrl-C, or kill -9 of the
+        # whole command's group, stops the runs too instead of leaving orphans computing.
+        process = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=out, stderr=err,
+                                   env={**os.environ, "PYTHONHASHSEED": "0"})
+        try:
+            code: int | None = None
+            while code is None:
+                if stop is not None and stop.is_set():
+                    _kill(process)
+                    return RunResult(spec.run_id, "interrupted", None,
+                                     time.monotonic() - started, None, "interrupted")
+                if time.monotonic() - started > limit:
+                    _kill(process)
+                    return RunResult(spec.run_id, "hung", None, time.monotonic() - started,
+                                     None, f"watchdog: no result after {limit:g} s wall-clock; "
+                                           f"killed")
+                try:
+                    code = process.wait(timeout=0.1)
+                except subprocess.TimeoutExpired:
+                    pass
+        except BaseException:
+            _kill(process)  # the campaign is stopping: never leave a run behind
+            raise
+    wall = time.monotonic() - started
+    if code in (EXIT_INTERRUPTED, -signal.SIGINT):
+        return RunResult(spec.run_id, "interrupted", code, wall, None, "interrupted")
+    summary, problem = _read_summary(work_dir / "summary.json")
+    if summary is None:
+        detail = _tail(work_dir / "campaign-stderr.txt")
+        what = f"killed by signal {-code}" if code is not None and code < 0 else \
+            f"exit status {code}"
+        return RunResult(spec.run_id, "crashed", code, wall, None,
+                         f"{what}, {problem}" + (f": {detail}" if detail else ""))
+    return RunResult(spec.run_id, "ran", code, wall, summary, "")
+
+
+def _kill(process: subprocess.Popen[bytes]) -> None:
+    process.kill()
+    process.wait()
+
+
+def execute_run_remote(spec: RunSpec, timeout: float | None = None,
+                       runner: Sequence[str] | None = None) -> RunResult:
+    """The Dask task: run in a private temporary folder and bring the files back.
+
+    The campaign's folder may not exist on the worker's machine, so the result carries the
+    run folder's files and the campaign process stays the only writer of the store.
+    """
+    import tempfile  # noqa: PLC0415
+
+    with tempfile.TemporaryDirectory(prefix="rei-run-") as tmp:
+        work = Path(tmp) / spec.run_id
+        result = execute_run(spec, work, timeout=timeout,
+                             runner=runner if runner is not None else DEFAULT_RUNNER)
+        files = {p.relative_to(work).as_posix(): p.read_bytes()
+                 for p in sorted(work.rglob("*")) if p.is_file()}
+    return RunResult(result.run_id, result.status, result.exit_code, result.wall_time,
+                     result.summary, result.message, files)

@@ -1,0 +1,61 @@
+"""Running a campaign: open (or resume) the store, run the missing runs, record each at once.
+
+Every finished run is recorded the moment its result arrives, so an interrupted campaign loses
+at most the runs that were in flight; running the same command again runs exactly those that
+are missing. This module must never decide what a run's verdict is (that is `rei run`'s).
+"""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, TextIO
+
+from rei.runtime.campaign.engines import CampaignEngine
+from rei.runtime.campaign.plan import CampaignPlan
+from rei.runtime.campaign.progress import Progress
+from rei.runtime.campaign.store import CampaignStore, RunRecord
+
+
+@dataclass(frozen=True)
+class CampaignResult:
+    root: Path
+    plan: CampaignPlan
+    records: tuple[RunRecord, ...]
+    ran_now: int
+    """Runs executed in this session (the rest were recorded by earlier sessions)."""
+
+    @property
+    def complete(self) -> bool:
+        return len(self.records) == len(self.plan.runs)
+
+    @property
+    def all_passed(self) -> bool:
+        return self.complete and all(r.passed for r in self.records)
+
+
+def run_campaign(plan: CampaignPlan, root: Path, engine: CampaignEngine,
+                 provenance: dict[str, Any], *, stream: TextIO | None = None) -> CampaignResult:
+    """Run what is missing of ``plan`` in ``root``; write results.csv / results.parquet."""
+    out = stream if stream is not None else sys.stderr
+    with CampaignStore.open(root, plan, provenance) as store:
+        missing = store.missing()
+        already = len(plan.runs) - len(missing)
+        if already:
+            print(f"resuming {root}: {already} of {len(plan.runs)} runs already recorded",
+                  file=out)
+        progress = Progress(len(plan.runs), already, out)
+        ran = 0
+        try:
+            work_dir = lambda s: store.new_work_dir(s.run_id)  # noqa: E731
+            for spec, work, result in engine.execute(missing, work_dir):
+                record = store.record(spec, result, work)
+                if record is not None:
+                    ran += 1
+                    progress.update(record.passed)
+        finally:
+            progress.finish()
+            # Tables always match the records, also after Ctrl-C (they are rebuilt on resume).
+            store.write_tables()
+        return CampaignResult(root, plan, tuple(store.records()), ran)

@@ -1,0 +1,23 @@
+"""`rei report DIR`: rebuild report.html, junit.xml and the results tables of a campaign folder."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    parser = sub.add_parser(
+        "report", help="rebuild report.html and junit.xml of a campaign folder",
+        description="Rebuild the results tables, report.html and junit.xml of a campaign folder "
+                    "written by `rei campaign`. Exit status 0 when every recorded run passed, "
+                    "1 otherwise, 2 when DIR is not a campaign folder.")
+    parser.add_argument("folder", type=Path, metavar="DIR", help="the -o folder of a campaign")
+    parser.add_argument("--no-html", action="store_true", help="only the tables and junit.xml")
+    parser.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from rei.runtime.commands.campaign import finish  # noqa: PLC0415
+
+    return finish(args.folder, no_report=args.no_html)

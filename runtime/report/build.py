@@ -1,0 +1,62 @@
+"""Building everything a campaign folder reports: results tables, junit.xml and report.html.
+
+``build_report`` reads the store only; it can run while no campaign runs (`rei report DIR`),
+and gives the same bytes for the same records. This module must never run a mission.
+"""
+
+from __future__ import annotations
+
+import shlex
+from dataclasses import dataclass
+from pathlib import Path
+
+from rei.runtime.campaign.plan import RunSpec
+from rei.runtime.campaign.store import RunRecord, write_atomic, write_tables
+from rei.runtime.report.data import load_campaign
+from rei.runtime.report.junit import junit_xml
+
+
+@dataclass(frozen=True)
+class ReportOutcome:
+    root: Path
+    planned: int
+    records: tuple[RunRecord, ...]
+    html: Path | None
+    junit: Path
+
+    @property
+    def failed(self) -> tuple[RunRecord, ...]:
+        return tuple(r for r in self.records if not r.passed)
+
+    @property
+    def all_passed(self) -> bool:
+        return not self.failed and len(self.records) == self.planned
+
+    def describe(self) -> str:
+        lines = [f"{len(self.records)} of {self.planned} runs recorded, "
+                 f"{len(self.records) - len(self.failed)} passed, {len(self.failed)} failed"]
+        lines.append(f"results: {self.root / 'results.parquet'} (and results.csv)")
+        lines.append(f"junit:   {self.junit}")
+        if self.html is not None:
+            lines.append(f"report:  {self.html}")
+        return "\n".join(lines)
+
+
+def rerun_command(spec: RunSpec) -> str:
+    """The one command that repeats a run exactly (same mission, seed and options)."""
+    return shlex.join(["rei", *spec.run_argv(f"rerun/{spec.run_id}")])
+
+
+def build_report(root: Path, *, html: bool = True) -> ReportOutcome:
+    data = load_campaign(root)
+    write_tables(root, list(data.records))
+    rerun = {r.spec.run_id: rerun_command(r.spec) for r in data.records}
+    junit = root / "junit.xml"
+    write_atomic(junit, junit_xml(data.records, rerun))
+    page = None
+    if html:
+        from rei.runtime.report.html import render_html  # noqa: PLC0415  (matplotlib is slow)
+
+        page = root / "report.html"
+        write_atomic(page, render_html(data, rerun).encode("utf-8"))
+    return ReportOutcome(root, len(data.plan.runs), data.records, page, junit)

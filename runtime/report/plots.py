@@ -1,0 +1,181 @@
+"""The campaign's plots: utility over time per mission (thesis Figures 33/36), distribution of
+signals (Figure 37), success rate by difficulty descriptor, and top-down maps of failed runs.
+
+Each function returns embeddable text (inline SVG or a PNG data URI) or None when there is
+nothing to draw. This module must never write files or choose a global backend.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from rei.runtime.campaign.stats import by_mission, wilson_interval
+from rei.runtime.campaign.store import RunRecord
+from rei.runtime.report.data import CampaignData, Paths, SignalEvent, read_events, read_paths
+from rei.runtime.report.figures import inline_svg, new_figure, png_data_uri
+from rei.runtime.report.tables import SIGNAL_ORDER
+
+MAX_LEGEND = 12
+
+
+def utility_over_time(data: CampaignData) -> str | None:
+    """Running total utility against simulation time, one line per run, a colour per mission."""
+    lines: list[tuple[str, list[SignalEvent]]] = []
+    for record in data.records:
+        events = read_events(data.run_dir(record))
+        if events:
+            lines.append((by_mission(record), events))
+    if not lines:
+        return None
+    fig = new_figure(9, 4.2)
+    ax = fig.add_subplot()
+    missions = sorted({m for m, _ in lines})
+    colours = {m: f"C{i % 10}" for i, m in enumerate(missions)}
+    labelled: set[str] = set()
+    for mission, events in lines:
+        t = [0.0] + [e.time for e in events]
+        u = [0.0] + [e.total for e in events]
+        label = mission if mission not in labelled and len(labelled) < MAX_LEGEND else None
+        labelled.add(mission)
+        ax.step(t, u, where="post", color=colours[mission], alpha=0.75, linewidth=1.2,
+                label=label)
+    ax.axhline(0, color="#888", linewidth=0.6)
+    ax.set_xlabel("simulation time [s]")
+    ax.set_ylabel("total utility")
+    ax.set_title("Utility over time (one line per run)")
+    if missions:
+        ax.legend(fontsize=7, ncols=2, loc="best",
+                  title=None if len(missions) <= MAX_LEGEND else
+                  f"first {MAX_LEGEND} of {len(missions)} missions")
+    return inline_svg(fig)
+
+
+def signal_distribution(records: Sequence[RunRecord]) -> str | None:
+    """Total count of each signal over the campaign (thesis Figure 37)."""
+    totals: dict[str, int] = {}
+    for record in records:
+        if record.summary is not None:
+            for signal, count in record.summary.signal_counts.items():
+                totals[signal] = totals.get(signal, 0) + count
+    if not totals:
+        return None
+    order = [s for s in SIGNAL_ORDER if s in totals] + sorted(set(totals) - set(SIGNAL_ORDER))
+    fig = new_figure(9, 0.9 + 0.32 * len(order))
+    ax = fig.add_subplot()
+    y = np.arange(len(order))
+    ax.barh(y, [totals[s] for s in order], color="#4263eb")
+    ax.set_yticks(y, [s.removeprefix("SIG_") for s in order], fontsize=8)
+    ax.invert_yaxis()
+    for i, s in enumerate(order):
+        ax.annotate(str(totals[s]), (totals[s], i), xytext=(3, 0), textcoords="offset points",
+                    va="center", fontsize=7)
+    ax.set_xlabel("occurrences over all runs")
+    ax.set_title("Distribution of signals")
+    return inline_svg(fig)
+
+
+def descriptors(records: Sequence[RunRecord]) -> list[str]:
+    """Numeric parameter/descriptor columns that vary across the campaign."""
+    names: dict[str, set[float]] = {}
+    for record in records:
+        for key, value in record.spec.parameters.items():
+            if isinstance(value, (int, float)) and not isinstance(value, bool) and \
+                    math.isfinite(value):
+                names.setdefault(key, set()).add(float(value))
+    skip = {"seed", "index"}
+    return sorted(k for k, v in names.items() if len(v) > 1 and k not in skip)
+
+
+def success_by_descriptor(records: Sequence[RunRecord], bins: int = 4) -> str | None:
+    """Success rate with Wilson intervals against each numeric difficulty descriptor."""
+    names = descriptors(records)
+    if not names:
+        return None
+    columns = min(3, len(names))
+    rows = math.ceil(len(names) / columns)
+    fig = new_figure(3.3 * columns, 2.6 * rows)
+    for index, name in enumerate(names):
+        ax = fig.add_subplot(rows, columns, index + 1)
+        pairs = [(float(r.spec.parameters[name]), r.passed) for r in records
+                 if isinstance(r.spec.parameters.get(name), (int, float))]
+        values = sorted({v for v, _ in pairs})
+        if len(values) <= bins:
+            edges = None
+            groups = [[p for v, p in pairs if v == x] for x in values]
+            centres = values
+        else:
+            edges = np.quantile([v for v, _ in pairs], np.linspace(0, 1, bins + 1))
+            edges = np.unique(edges)
+            idx = np.clip(np.searchsorted(edges, [v for v, _ in pairs], side="right") - 1,
+                          0, len(edges) - 2)
+            groups = [[p for (_, p), i in zip(pairs, idx, strict=True) if i == b]
+                      for b in range(len(edges) - 1)]
+            centres = list((edges[:-1] + edges[1:]) / 2)
+        xs, rates, lows, highs = [], [], [], []
+        for centre, group in zip(centres, groups, strict=True):
+            if not group:
+                continue
+            low, high = wilson_interval(sum(group), len(group))
+            rate = sum(group) / len(group)
+            xs.append(centre)
+            rates.append(rate)
+            lows.append(rate - low)
+            highs.append(high - rate)
+        ax.errorbar(xs, rates, yerr=[lows, highs], fmt="o-", capsize=3, color="#2b8a3e")
+        ax.set_ylim(-0.05, 1.05)
+        ax.set_xlabel(name + (" (quantile bins)" if edges is not None else ""), fontsize=8)
+        ax.set_ylabel("success rate", fontsize=8)
+        ax.tick_params(labelsize=7)
+    fig.suptitle("Success rate by difficulty descriptor (95 % Wilson intervals)", fontsize=10)
+    return inline_svg(fig)
+
+
+def failure_map(data: CampaignData, record: RunRecord) -> str | None:
+    """Top-down map of a failed run: room, robot path, humans' paths, where signals fired."""
+    try:
+        from rei.generators.concrete import load_concrete_mission  # noqa: PLC0415
+        from rei.generators.picture import draw_world  # noqa: PLC0415
+        from rei.lang.errors import ReiError  # noqa: PLC0415
+    except ImportError:
+        return None
+    try:
+        mission = load_concrete_mission(Path(record.spec.mission_file))
+    except (ReiError, OSError):
+        return None
+    run_dir = data.run_dir(record)
+    paths = read_paths(run_dir) if run_dir.is_dir() else None
+    events = read_events(run_dir) if run_dir.is_dir() else []
+    min_x, min_y, max_x, max_y = mission.world.bounds()
+    scale = 6.5 / max(max_x - min_x, max_y - min_y, 1e-9)
+    fig = new_figure(max(3.5, (max_x - min_x) * scale + 2.6), max(3.0, (max_y - min_y) * scale
+                                                                    + 0.8))
+    ax = fig.add_subplot()
+    draw_world(ax, mission.world, mission, compact=True, title=record.spec.run_id)
+    if paths is not None:
+        _draw_paths(ax, paths, events)
+    else:
+        ax.text(0.5, 0.01, "no trace: path not drawn", transform=ax.transAxes, ha="center",
+                fontsize=7, color="#c92a2a")
+    return png_data_uri(fig)
+
+
+def _draw_paths(ax, paths: Paths, events: list[SignalEvent]) -> None:  # type: ignore[no-untyped-def]
+    for name, path in paths.humans.items():
+        ax.plot(path[:, 1], path[:, 2], color="#e8590c", linewidth=1.0, alpha=0.8,
+                linestyle="--", label=f"human {name}" if len(paths.humans) < 4 else None)
+    robot = paths.robot
+    ax.plot(robot[:, 1], robot[:, 2], color="#1c7ed6", linewidth=1.6, label="robot path")
+    geometric = [e for e in events if not e.signal.startswith("SIG_MISSION_")]
+    if geometric:
+        xs = np.interp([e.time for e in geometric], robot[:, 0], robot[:, 1])
+        ys = np.interp([e.time for e in geometric], robot[:, 0], robot[:, 2])
+        bad = np.array([e.utility < 0 for e in geometric])
+        ax.scatter(xs[bad], ys[bad], marker="x", color="#c92a2a", s=22, zorder=5,
+                   label="signal (negative utility)")
+        ax.scatter(xs[~bad], ys[~bad], marker="o", facecolors="none", edgecolors="#2b8a3e",
+                   s=18, zorder=5, label="signal (positive utility)")
+    ax.legend(fontsize=6, loc="upper right")
