@@ -81,6 +81,13 @@ async def wait_published(client: RecordingClient, uri: str, *, after: int = 0,
     return await asyncio.wait_for(wait(), WAIT_SECONDS)
 
 
+def publish_index(client: RecordingClient, uri: str, version: int) -> int:
+    """Where in the record the diagnostics of one version of a document were last published
+    (versions restart when a document is opened again)."""
+    return max(i for i, p in enumerate(client.published)
+               if p.uri == uri and p.version == version)
+
+
 class Editor:
     """Opens, edits, saves and closes documents through the client, like an editor does."""
 

@@ -13,7 +13,7 @@ from lsprotocol import types
 
 from rei.lang.workspace import Workspace
 from tests.lsp.conftest import CONFIG, Editor, RecordingClient, initialize_params, position_of
-from tests.lsp.conftest import wait_published
+from tests.lsp.conftest import publish_index, wait_published
 from tests.lsp.rooms import MISSION, ROOM
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
@@ -290,19 +290,20 @@ async def test_a_mission_rechecks_when_its_room_changes(client: RecordingClient,
     # Opening the room re-checks the mission that imports it (now against the buffer).
     assert await wait_published(client, uri(mission_path), after=mark) == []
     # Rename the floor 'yard' in the (unsaved) room: the mission's goal no longer resolves.
-    mark = len(client.published)
+    # (Each wait is for the mission's re-check after the room's check of the new version.)
     await editor.change(room_path, ROOM.replace("yard", "garden"))
+    mark = publish_index(client, uri(room_path), editor.versions[uri(room_path)])
     mission_diagnostics = await wait_published(client, uri(mission_path), after=mark)
     assert codes(mission_diagnostics) == ["REF-UNRESOLVED"]
     assert as_tuple(mission_diagnostics[0].range)[:2] == (2, MISSION.split("\n")[2].index("yard"))
     # Saving and editing back: the mission is clean again.
     editor.save(room_path)
-    mark = len(client.published)
     await editor.change(room_path, ROOM)
+    mark = publish_index(client, uri(room_path), editor.versions[uri(room_path)])
     assert await wait_published(client, uri(mission_path), after=mark) == []
     # Break the room: the mission reports the room's problem at its import.
-    mark = len(client.published)
     await editor.change(room_path, ROOM.replace("on start", "on nowhere"))
+    mark = publish_index(client, uri(room_path), editor.versions[uri(room_path)])
     mission_diagnostics = await wait_published(client, uri(mission_path), after=mark)
     assert codes(mission_diagnostics) == ["MISSION-ROOM"]
     # Closing the unsaved room: the mission reads the room from the disk again (valid).
