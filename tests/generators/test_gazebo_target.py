@@ -125,3 +125,13 @@ def test_a_catalogue_type_without_geometry_is_a_clear_error(request_for: Request
 def test_same_input_gives_the_same_bytes(request_for: RequestFor) -> None:
     path = example_files(".mission")[0]
     assert sdf_of(request_for(path)) == sdf_of(request_for(path))
+
+
+@pytest.mark.slow
+def test_the_launch_targets_robot_less_world_passes_ign_sdf_check(
+    request_for: RequestFor, tmp_path: Path,
+) -> None:
+    from rei.generators.targets.launch import TARGET as LAUNCH
+
+    files = LAUNCH.generate(request_for(example_files(".mission")[0])).files
+    ign_check(tmp_path, files["world.sdf"])
