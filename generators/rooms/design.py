@@ -1,0 +1,114 @@
+"""Which rows (one level per factor) a suite uses: the full grid, a pairwise covering array,
+or seeded random picks — two strategies over one parameter space.
+
+The pairwise array is built by IPOG (Lei & Tai's In-Parameter-Order): start from every pair
+of the first two factors, then add one factor at a time, first choosing its level in each
+existing row to cover the most new pairs (horizontal growth), then adding rows for the pairs
+still missing (vertical growth). Ties are broken by level order, so the array is a pure
+function of the space. This module never draws from a global random generator.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import random
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Literal
+
+from rei.generators.rooms.space import ParameterSpace
+
+Strategy = Literal["systematic", "random"]
+Design = Literal["full", "pairwise", "random"]
+
+
+def derived_seed(seed: int, *parts: object) -> int:
+    """A 64-bit seed from (seed, parts...), independent of PYTHONHASHSEED and of platform."""
+    text = ":".join(str(p) for p in (seed, *parts))
+    return int.from_bytes(hashlib.sha256(text.encode("utf-8")).digest()[:8], "big")
+
+
+@dataclass(frozen=True)
+class SuiteDesign:
+    design: Design
+    rows: tuple[tuple[int, ...], ...]
+    """Level indices per factor, one tuple per design row."""
+
+
+def full_grid(sizes: Sequence[int]) -> list[tuple[int, ...]]:
+    return list(itertools.product(*(range(n) for n in sizes)))
+
+
+def pairwise(sizes: Sequence[int]) -> list[tuple[int, ...]]:
+    """A covering array of strength 2: every pair of levels of every two factors appears."""
+    k = len(sizes)
+    if k == 0:
+        return [()]
+    if k == 1:
+        return [(a,) for a in range(sizes[0])]
+    # IPOG works best with the factors with most levels first; map back at the end.
+    order = sorted(range(k), key=lambda f: (-sizes[f], f))
+    s = [sizes[f] for f in order]
+    rows: list[list[int | None]] = [[a, b] for a in range(s[0]) for b in range(s[1])]
+    for f in range(2, k):
+        uncovered: set[tuple[int, int, int]] = {(j, a, b) for j in range(f)
+                                                for a in range(s[j]) for b in range(s[f])}
+        # Horizontal growth.
+        for row in rows:
+            best, best_gain = 0, -1
+            for b in range(s[f]):
+                gain = sum(1 for j in range(f)
+                           if row[j] is not None and (j, row[j], b) in uncovered)
+                if gain > best_gain:
+                    best, best_gain = b, gain
+            row.append(best)
+            for j in range(f):
+                if row[j] is not None:
+                    uncovered.discard((j, row[j], best))  # type: ignore[arg-type]
+        # Vertical growth, in a fixed order.
+        extra: list[list[int | None]] = []
+        for j, a, b in sorted(uncovered):
+            for row in extra:
+                if row[f] == b and row[j] is None:
+                    row[j] = a
+                    break
+            else:
+                new: list[int | None] = [None] * (f + 1)
+                new[j], new[f] = a, b
+                extra.append(new)
+        rows.extend(extra)
+    out: list[tuple[int, ...]] = []
+    for row in rows:
+        filled = [0 if v is None else v for v in row]
+        original = [0] * k
+        for pos, factor in enumerate(order):
+            original[factor] = filled[pos]
+        out.append(tuple(original))
+    return out
+
+
+def uncovered_pairs(sizes: Sequence[int], rows: Sequence[Sequence[int]]
+                    ) -> list[tuple[int, int, int, int]]:
+    """(factor i, level a, factor j, level b) pairs that no row holds; empty when covering."""
+    seen = {(i, r[i], j, r[j]) for r in rows for i in range(len(sizes))
+            for j in range(i + 1, len(sizes))}
+    return [(i, a, j, b) for i in range(len(sizes)) for j in range(i + 1, len(sizes))
+            for a in range(sizes[i]) for b in range(sizes[j]) if (i, a, j, b) not in seen]
+
+
+def design_suite(space: ParameterSpace, strategy: Strategy, count: int | None, seed: int,
+                 max_grid: int, design: str = "auto") -> tuple[SuiteDesign, int]:
+    """The design rows and the number of rooms to generate (``count`` or the design's size)."""
+    sizes = [len(f.levels) for f in space.factors]
+    if strategy == "random":
+        n = count if count is not None else 10
+        rows = []
+        for index in range(n):
+            rng = random.Random(derived_seed(seed, "row", index))
+            rows.append(tuple(rng.randrange(size) for size in sizes))
+        return SuiteDesign("random", tuple(rows)), n
+    use_full = design == "full" or (design == "auto" and space.grid_size <= max_grid)
+    chosen: list[tuple[int, ...]] = full_grid(sizes) if use_full else pairwise(sizes)
+    return (SuiteDesign("full" if use_full else "pairwise", tuple(chosen)),
+            count if count is not None else len(chosen))

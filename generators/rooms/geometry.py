@@ -1,0 +1,223 @@
+"""Plane geometry of generated rooms: spline sampling, clearance of a moving disc, paths.
+
+Cells are integer (i, j) in the layout frame of rei.lang.room.layout (+i right, +j top); a
+cell's centre is at (i, j) times the tile size. Humans walk a Catmull-Rom spline through
+their control vertices (the thesis's animator, 6.2.3); we check the spline *and* the
+straight control polygon, so a runtime that interpolates either way stays clear.
+Pure functions only: no files, no random state.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+
+import networkx as nx
+import numpy as np
+
+Cell = tuple[int, int]
+
+HUMAN_CLEARANCE = 0.35
+"""Metres (in tiles of 1 m) a human's centre keeps from any blocked tile: its 0.25 m radius
+plus a margin, so a neighbouring object that fills its tile up to the border is not touched."""
+
+SAMPLE_STEP = 0.1
+
+
+def catmull_rom(points: Sequence[tuple[float, float]], loop: bool,
+                step: float = SAMPLE_STEP) -> np.ndarray:
+    """Points along a uniform Catmull-Rom spline through ``points`` (closed when ``loop``)."""
+    p = np.asarray(points, dtype=float)
+    n = len(p)
+    if n < 2:
+        return p.copy()
+    if loop:
+        segments = [(p[(k - 1) % n], p[k], p[(k + 1) % n], p[(k + 2) % n]) for k in range(n)]
+    else:
+        ext = np.vstack([p[0], p, p[-1]])
+        segments = [(ext[k], ext[k + 1], ext[k + 2], ext[k + 3]) for k in range(n - 1)]
+    out = []
+    for p0, p1, p2, p3 in segments:
+        count = max(2, int(math.ceil(float(np.hypot(*(p2 - p1))) / step)) + 1)
+        t = np.linspace(0.0, 1.0, count)[:, None]
+        seg = 0.5 * (2 * p1 + (p2 - p0) * t + (2 * p0 - 5 * p1 + 4 * p2 - p3) * t ** 2
+                     + (-p0 + 3 * p1 - 3 * p2 + p3) * t ** 3)
+        out.append(seg[:-1])
+    out.append((p[0] if loop else p[-1])[None, :])
+    return np.vstack(out)
+
+
+def polyline(points: Sequence[tuple[float, float]], loop: bool,
+             step: float = SAMPLE_STEP) -> np.ndarray:
+    p = np.asarray(list(points) + ([points[0]] if loop else []), dtype=float)
+    out = []
+    for a, b in zip(p[:-1], p[1:], strict=False):
+        count = max(2, int(math.ceil(float(np.hypot(*(b - a))) / step)) + 1)
+        out.append(a + (b - a) * np.linspace(0.0, 1.0, count)[:, None])
+    return np.vstack(out) if out else p
+
+
+class CellMask:
+    """A set of unit cells as a boolean image, for vectorised look-ups (outside = False)."""
+
+    def __init__(self, cells: Iterable[Cell]) -> None:
+        cell_list = list(cells)
+        if not cell_list:
+            cell_list = [(0, 0)]
+            empty = True
+        else:
+            empty = False
+        ii = np.array([c[0] for c in cell_list])
+        jj = np.array([c[1] for c in cell_list])
+        self.i0, self.j0 = int(ii.min()), int(jj.min())
+        self.mask = np.zeros((int(ii.max()) - self.i0 + 1, int(jj.max()) - self.j0 + 1),
+                             dtype=bool)
+        if not empty:
+            self.mask[ii - self.i0, jj - self.j0] = True
+
+    def contains(self, ci: np.ndarray, cj: np.ndarray) -> np.ndarray:
+        a, b = ci - self.i0, cj - self.j0
+        ok = (a >= 0) & (a < self.mask.shape[0]) & (b >= 0) & (b < self.mask.shape[1])
+        out = np.zeros(ci.shape, dtype=bool)
+        out[ok] = self.mask[a[ok], b[ok]]
+        return out
+
+
+_OFFSETS = np.array([(di, dj) for di in (-1, 0, 1) for dj in (-1, 0, 1)])
+
+
+def _near_cells(samples: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
+    """Unit cells (as two index arrays) within ``radius`` of some sample."""
+    cells = np.floor(samples + 0.5).astype(int)[:, None, :] + _OFFSETS[None, :, :]
+    gap = np.maximum(0.0, np.abs(samples[:, None, :] - cells) - 0.5)
+    near = (gap ** 2).sum(axis=2) < radius * radius
+    hits = cells[near]
+    return hits[:, 0], hits[:, 1]
+
+
+def disc_touches(samples: np.ndarray, blocked: CellMask,
+                 radius: float = HUMAN_CLEARANCE) -> bool:
+    """True when a disc of ``radius`` centred on any sample overlaps a blocked unit cell."""
+    ci, cj = _near_cells(samples, radius)
+    return bool(blocked.contains(ci, cj).any())
+
+
+def swept_cells(samples: np.ndarray, radius: float = HUMAN_CLEARANCE) -> set[Cell]:
+    """Unit cells a disc of ``radius`` moving through ``samples`` overlaps."""
+    ci, cj = _near_cells(samples, radius)
+    return set(zip(ci.tolist(), cj.tolist(), strict=False))
+
+
+def path_graph(free: Iterable[Cell]) -> nx.Graph:
+    """The inflated floor graph: free tiles, 4-neighbours, and diagonals whose two corner
+    tiles are free too (the robot fits a tile, so it may cut a corner but not squeeze
+    between two blocked tiles)."""
+    free_set = set(free)
+    graph: nx.Graph = nx.Graph()
+    ordered = sorted(free_set)
+    graph.add_nodes_from(ordered)
+    diag = math.sqrt(2.0)
+    edges: list[tuple[Cell, Cell, float]] = []
+    for i, j in ordered:
+        for di, dj in ((1, 0), (0, 1)):
+            if (i + di, j + dj) in free_set:
+                edges.append(((i, j), (i + di, j + dj), 1.0))
+        for di, dj in ((1, 1), (1, -1)):
+            other = (i + di, j + dj)
+            if other in free_set and (i + di, j) in free_set and (i, j + dj) in free_set:
+                edges.append(((i, j), other, diag))
+    graph.add_weighted_edges_from(edges)
+    return graph
+
+
+def _octile(a: Cell, b: Cell) -> float:
+    dx, dy = abs(a[0] - b[0]), abs(a[1] - b[1])
+    return max(dx, dy) + (math.sqrt(2.0) - 1.0) * min(dx, dy)
+
+
+def route(graph: nx.Graph, stops: Sequence[Cell]) -> list[Cell] | None:
+    """Shortest path visiting ``stops`` in order, or None when one leg has no path."""
+    cells: list[Cell] = [stops[0]]
+    for a, b in zip(stops[:-1], stops[1:], strict=False):
+        if a == b:
+            continue
+        try:
+            leg = nx.astar_path(graph, a, b, heuristic=_octile, weight="weight")
+        except (nx.NetworkXNoPath, nx.NodeNotFound):
+            return None
+        cells.extend(leg[1:])
+    return cells
+
+
+def bfs_route(free: set[Cell], stops: Sequence[Cell]) -> list[Cell] | None:
+    """A shortest 4-connected route through ``stops`` in order (a cheap first guess)."""
+    cells: list[Cell] = [stops[0]]
+    for a, b in zip(stops[:-1], stops[1:], strict=False):
+        parent: dict[Cell, Cell | None] = {a: None}
+        frontier = [a]
+        while frontier and b not in parent:
+            nxt = []
+            for i, j in frontier:
+                for n in ((i + 1, j), (i - 1, j), (i, j + 1), (i, j - 1)):
+                    if n in free and n not in parent:
+                        parent[n] = (i, j)
+                        nxt.append(n)
+            frontier = nxt
+        if b not in parent:
+            return None
+        leg = [b]
+        while parent[leg[-1]] is not None:
+            leg.append(parent[leg[-1]])  # type: ignore[arg-type]
+        cells.extend(reversed(leg[:-1]))
+    return cells
+
+
+def bfs_distances(free: set[Cell], start: Cell) -> dict[Cell, int]:
+    dist = {start: 0}
+    frontier = [start]
+    while frontier:
+        nxt = []
+        for i, j in frontier:
+            d = dist[(i, j)] + 1
+            for n in ((i + 1, j), (i - 1, j), (i, j + 1), (i, j - 1)):
+                if n in free and n not in dist:
+                    dist[n] = d
+                    nxt.append(n)
+        frontier = nxt
+    return dist
+
+
+def stays_connected(free: set[Cell], cell: Cell) -> bool:
+    """Whether removing ``cell`` from the 4-connected set ``free`` keeps its free neighbours
+    connected to each other (so the whole free set stays one component)."""
+    i, j = cell
+    neighbours = [n for n in ((i + 1, j), (i - 1, j), (i, j + 1), (i, j - 1)) if n in free]
+    if len(neighbours) <= 1:
+        return True
+    targets = set(neighbours[1:])
+    seen = {cell, neighbours[0]}
+    frontier = [neighbours[0]]
+    while frontier and targets:
+        nxt = []
+        for a, b in frontier:
+            for n in ((a + 1, b), (a - 1, b), (a, b + 1), (a, b - 1)):
+                if n in free and n not in seen:
+                    seen.add(n)
+                    targets.discard(n)
+                    nxt.append(n)
+        frontier = nxt
+    return not targets
+
+
+def entries(samples: np.ndarray, corridor: set[Cell], loop: bool) -> int:
+    """How often a sampled trajectory enters the set of unit cells ``corridor``."""
+    cells = np.floor(samples + 0.5).astype(int)
+    inside = [(int(i), int(j)) in corridor for i, j in cells.tolist()]
+    if not inside:
+        return 0
+    if all(inside):
+        return 1
+    count = sum(1 for prev, cur in zip(inside[:-1], inside[1:], strict=False) if cur and not prev)
+    if inside[0] and (not loop or not inside[-1]):
+        count += 1
+    return count

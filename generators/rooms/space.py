@@ -1,0 +1,261 @@
+"""The parameter space of generated rooms: factors, their levels, presets, and validation.
+
+A *factor* is one knob of the generator (room shape, size, object count, ...); its *levels*
+are the values a suite may use. Both strategies (systematic and random) pick one level per
+factor for each room, so a suite is a list of rows over one space. Levels are written as
+short strings (``14x9``, ``25%``, ``yes``) because they appear verbatim on the command line,
+in the index CSV and in the room's metadata comment.
+
+This module must never touch files or random state: it only describes and validates.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, fields
+
+from rei.generators.errors import GenerationError
+
+FACTOR_NAMES: tuple[str, ...] = (
+    "shape", "size", "objects", "mix", "humans", "vertices", "speed", "loop", "crossing",
+    "goals", "spacing", "cycles",
+)
+
+SHAPES = ("rect", "L", "joined")
+CROSSINGS = ("cross", "any")
+YES_NO = ("yes", "no")
+
+# Named mixes of the default catalogue's static types; a level may also list types
+# joined by '+' ("table+box"), checked against the catalogue.
+MIXES: Mapping[str, tuple[str, ...]] = {
+    "mixed": ("table", "chair", "shelf", "box", "pillar"),
+    "furniture": ("table", "chair", "shelf"),
+    "clutter": ("box", "pillar", "chair"),
+}
+
+MAX_SIDE = 200
+MAX_HUMANS = 20
+MAX_VERTICES = 20
+MAX_GOALS = 50
+MAX_CYCLES = 100
+MAX_SPEED = 3.0
+
+
+class ParameterError(GenerationError):
+    """A command-line level or a combination of levels cannot be generated."""
+
+    def __init__(self, option: str, expected: str, found: str) -> None:
+        self.option = option
+        super().__init__(f"--{option}: expected {expected}, found {found}")
+
+
+@dataclass(frozen=True)
+class Factor:
+    name: str
+    levels: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class ParameterSpace:
+    """One list of levels per factor, in FACTOR_NAMES order."""
+
+    factors: tuple[Factor, ...]
+
+    def levels(self, name: str) -> tuple[str, ...]:
+        for factor in self.factors:
+            if factor.name == name:
+                return factor.levels
+        raise KeyError(name)
+
+    @property
+    def grid_size(self) -> int:
+        return math.prod(len(f.levels) for f in self.factors)
+
+    def replaced(self, overrides: Mapping[str, tuple[str, ...]]) -> ParameterSpace:
+        return ParameterSpace(tuple(Factor(f.name, overrides.get(f.name, f.levels))
+                                    for f in self.factors))
+
+
+PRESETS: Mapping[str, Mapping[str, tuple[str, ...]]] = {
+    # Thesis 7.4.4: a small room, densely furnished (about 10 objects), no moving objects;
+    # the robot crosses from one side to the other.
+    "small": {
+        "shape": ("rect",), "size": ("6x5", "7x5", "7x6"), "objects": ("9", "10", "11"),
+        "mix": ("mixed", "furniture"), "humans": ("0",), "vertices": ("3",),
+        "speed": ("0.8",), "loop": ("yes",), "crossing": ("any",), "goals": ("2",),
+        "spacing": ("4",), "cycles": ("1", "2"),
+    },
+    # Thesis 7.4.5: a medium room, sparsely furnished, with one moving human.
+    "medium": {
+        "shape": ("rect", "L", "joined"), "size": ("12x8", "14x9", "16x10"),
+        "objects": ("3", "5", "7"), "mix": ("mixed", "furniture", "clutter"),
+        "humans": ("1",), "vertices": ("3", "4", "5"), "speed": ("0.6", "1.0"),
+        "loop": ("yes", "no"), "crossing": ("cross", "any"), "goals": ("3", "4"),
+        "spacing": ("5", "8"), "cycles": ("1", "2"),
+    },
+    # Thesis 7.4.6: a fairly large room.
+    "large": {
+        "shape": ("rect", "L", "joined"), "size": ("24x16", "30x20"),
+        "objects": ("15", "30"), "mix": ("mixed", "furniture"), "humans": ("0", "1", "2"),
+        "vertices": ("4", "6"), "speed": ("0.8", "1.2"), "loop": ("yes",),
+        "crossing": ("cross", "any"), "goals": ("3", "5"), "spacing": ("10", "16"),
+        "cycles": ("1",),
+    },
+}
+
+
+def preset_space(name: str) -> ParameterSpace:
+    if name not in PRESETS:
+        raise ParameterError("preset", f"one of {', '.join(PRESETS)}", f"'{name}'")
+    return ParameterSpace(tuple(Factor(n, PRESETS[name][n]) for n in FACTOR_NAMES))
+
+
+@dataclass(frozen=True)
+class RoomParameters:
+    """One row of a suite: a level of every factor, parsed and range-checked."""
+
+    shape: str
+    width: int
+    height: int
+    objects: int | None
+    """An object count, or None when ``density`` gives it as a share of the floors."""
+    density: float | None
+    mix: tuple[str, ...]
+    humans: int
+    vertices: int
+    speed: float
+    loop: bool
+    crossing: str
+    goals: int
+    spacing: float
+    cycles: int
+    levels: tuple[tuple[str, str], ...]
+    """The levels as written, factor by factor (for the index and the metadata)."""
+
+    def level(self, name: str) -> str:
+        return dict(self.levels)[name]
+
+    def object_count(self, floors: int) -> int:
+        if self.objects is not None:
+            return self.objects
+        assert self.density is not None
+        return int(math.floor(self.density * floors + 0.5))
+
+
+def _int(option: str, text: str, low: int, high: int) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise ParameterError(option, f"a whole number from {low} to {high}", f"'{text}'") from None
+    if not low <= value <= high:
+        raise ParameterError(option, f"a whole number from {low} to {high}", f"{value}")
+    return value
+
+
+def _float(option: str, text: str, low: float, high: float, low_open: bool = True) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    bad_low = value <= low if low_open else value < low
+    if not math.isfinite(value) or bad_low or value > high:
+        bracket = "(" if low_open else "["
+        raise ParameterError(option, f"a finite number in {bracket}{low:g}, {high:g}]",
+                             f"'{text}'")
+    return value
+
+
+def static_types(catalogue_names: tuple[str, ...]) -> tuple[str, ...]:
+    return catalogue_names
+
+
+def parse_row(levels: Mapping[str, str], static_names: tuple[str, ...]) -> RoomParameters:
+    """Parse one level per factor; ParameterError names the option when a level is bad."""
+    size = levels["size"].lower().split("x")
+    if len(size) != 2:
+        raise ParameterError("size", "WIDTHxHEIGHT in tiles, e.g. 14x9", f"'{levels['size']}'")
+    width = _int("size", size[0], 3, MAX_SIDE)
+    height = _int("size", size[1], 3, MAX_SIDE)
+    shape = levels["shape"]
+    if shape not in SHAPES:
+        raise ParameterError("shape", f"one of {', '.join(SHAPES)}", f"'{shape}'")
+    if shape != "rect" and min(width, height) < 4:
+        raise ParameterError("size", f"at least 4x4 tiles for the '{shape}' shape",
+                             f"'{levels['size']}'")
+    objects_text = levels["objects"]
+    objects: int | None = None
+    density: float | None = None
+    if objects_text.endswith("%"):
+        density = _float("objects", objects_text[:-1], 0.0, 100.0, low_open=False) / 100.0
+    else:
+        objects = _int("objects", objects_text, 0, MAX_SIDE * MAX_SIDE)
+    mix_text = levels["mix"]
+    mix = MIXES.get(mix_text) or tuple(t for t in mix_text.split("+") if t)
+    for type_name in mix:
+        if type_name not in static_names:
+            raise ParameterError("mix", f"a named mix ({', '.join(MIXES)}) or static catalogue "
+                                        f"types joined by '+' ({', '.join(static_names)})",
+                                 f"'{type_name}' in '{mix_text}'")
+    if not mix:
+        raise ParameterError("mix", "at least one object type", f"'{mix_text}'")
+    loop_text = levels["loop"]
+    if loop_text not in YES_NO:
+        raise ParameterError("loop", "yes or no", f"'{loop_text}'")
+    crossing = levels["crossing"]
+    if crossing not in CROSSINGS:
+        raise ParameterError("crossing", f"one of {', '.join(CROSSINGS)}", f"'{crossing}'")
+    return RoomParameters(
+        shape=shape, width=width, height=height, objects=objects, density=density, mix=mix,
+        humans=_int("humans", levels["humans"], 0, MAX_HUMANS),
+        vertices=_int("vertices", levels["vertices"], 2, MAX_VERTICES),
+        speed=_float("speed", levels["speed"], 0.0, MAX_SPEED),
+        loop=loop_text == "yes", crossing=crossing,
+        goals=_int("goals", levels["goals"], 2, MAX_GOALS),
+        spacing=_float("spacing", levels["spacing"], 0.0, float(2 * MAX_SIDE)),
+        cycles=_int("cycles", levels["cycles"], 1, MAX_CYCLES),
+        levels=tuple((n, levels[n]) for n in FACTOR_NAMES),
+    )
+
+
+def floor_count(params: RoomParameters) -> int:
+    """Floors of the shape; the shapes are sized deterministically so this is exact."""
+    w, h = params.width, params.height
+    if params.shape == "L":
+        return w * h - (w // 2) * (h // 2)
+    if params.shape == "joined":
+        across = h if w >= h else w  # the dividing wall runs across the shorter side
+        return w * h - across + door_width(across)
+    return w * h
+
+
+def door_width(across: int) -> int:
+    return 2 if across >= 6 else 1
+
+
+def refuse_impossible(params: RoomParameters) -> None:
+    """Raise ParameterError for a row no construction can satisfy (checked before any work)."""
+    w, h = params.width, params.height
+    # The longest straight distance between two floor centres in the bounding box.
+    reach = math.hypot(w - 1, h - 1)
+    if params.spacing > reach:
+        raise ParameterError("spacing", f"at most {reach:.1f} m between goals in a {w}x{h} room "
+                                        f"(its diagonal)", f"{params.spacing:g} m")
+    floors = floor_count(params)
+    objects = params.object_count(floors)
+    reserved = params.goals + params.humans * params.vertices
+    path = (params.goals - 1) * max(0, math.ceil(params.spacing) - 1)
+    room_for = floors - reserved - path
+    if objects > room_for:
+        option = "objects"
+        raise ParameterError(option, f"at most {max(room_for, 0)} objects in a {params.shape} "
+                                     f"{w}x{h} room ({floors} floors, {reserved} kept for goals "
+                                     f"and trajectory vertices, about {path} for the robot's "
+                                     f"path)", f"{objects}")
+    if params.humans and floors - params.goals < params.humans * 2:
+        raise ParameterError("humans", f"at most {(floors - params.goals) // 2} humans in a "
+                                       f"{w}x{h} room", f"{params.humans}")
+
+
+def parameter_names() -> tuple[str, ...]:
+    return tuple(f.name for f in fields(RoomParameters) if f.name != "levels")

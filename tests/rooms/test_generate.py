@@ -1,0 +1,201 @@
+"""Generated suites: every pair checks clean, goals are reachable in order, humans keep clear
+of walls and objects, the same seed gives the same bytes, descriptors ignore names."""
+
+from __future__ import annotations
+
+import csv
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import networkx as nx
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from rei.generators.rooms import (
+    SuiteRequest,
+    coverage_report,
+    describe,
+    generate,
+    index_csv,
+    preset_space,
+    read_metadata,
+    scene_of_documents,
+    write_suite,
+)
+from rei.generators.rooms.geometry import CellMask, catmull_rom, disc_touches, polyline
+from rei.lang.cli import main as rei_gen
+from rei.lang.room.checks import blocking_objects, passable_floors
+from rei.lang.workspace import Workspace, load_mission
+
+
+def _suite(preset: str, seed: int, count: int, strategy: str = "random", **levels: str):
+    space = preset_space(preset).replaced({k: (v,) for k, v in levels.items()})
+    return SuiteRequest(space, strategy, count, seed)  # type: ignore[arg-type]
+
+
+def _assert_valid_pair(room_path: Path, mission_path: Path) -> None:
+    workspace = Workspace()
+    problems = workspace.check(room_path) + workspace.check(mission_path)
+    assert [str(d) for d in problems] == []
+    mission_doc = load_mission(mission_path, workspace)
+    room_doc = mission_doc.room
+    assert room_doc is not None and room_doc.room is not None and room_doc.layout is not None
+    room, layout = room_doc.room, room_doc.layout
+    # Goals reachable in order on the inflated floor graph (tiles free of standing objects).
+    free = passable_floors(room, layout)
+    graph = layout.floor_graph.subgraph(free)
+    goals = [g.floor.name for g in mission_doc.mission.goals]  # type: ignore[union-attr]
+    assert goals[0] == room.robot.floor.name  # type: ignore[union-attr]
+    for a, b in zip(goals, goals[1:], strict=False):
+        assert nx.has_path(graph, a, b)
+    # Humans: spline and control polygon keep clear of walls, outside cells and objects.
+    cells = layout.cells
+    floor_cells = {cells[n] for n in room.floors}
+    standing = {cells[o.floor.name] for o in blocking_objects(room)}
+    xs = [c[0] for c in floor_cells]
+    ys = [c[1] for c in floor_cells]
+    box = {(i, j) for i in range(min(xs) - 2, max(xs) + 3) for j in range(min(ys) - 2, max(ys) + 3)}
+    blocked = CellMask((box - floor_cells) | standing)
+    for obj in room.objects:
+        if obj.trajectory is None:
+            continue
+        pts = [(float(cells[v.floor.name][0]), float(cells[v.floor.name][1]))
+               for v in obj.trajectory.vertices]
+        assert not disc_touches(catmull_rom(pts, obj.trajectory.loop), blocked, 0.25)
+        assert not disc_touches(polyline(pts, obj.trajectory.loop), blocked, 0.25)
+    # Nothing overlaps at the start: one thing per floor.
+    floors = [o.floor.name for o in room.objects]
+    assert len(floors) == len(set(floors))
+
+
+@settings(max_examples=12, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(preset=st.sampled_from(["small", "medium", "large"]),
+       seed=st.integers(min_value=0, max_value=2**31),
+       shape=st.sampled_from(["rect", "L", "joined"]))
+def test_every_generated_pair_checks_clean_and_its_goals_are_reachable(
+        tmp_path_factory: pytest.TempPathFactory, preset: str, seed: int, shape: str) -> None:
+    out = tmp_path_factory.mktemp("suite")
+    levels = {"shape": shape} if preset != "small" else {}
+    if preset == "large":
+        levels["size"] = "24x16"
+    suite = generate(_suite(preset, seed, 2, **levels), out)
+    write_suite(suite, out, coverage_report(suite))
+    for pair in suite.pairs:
+        _assert_valid_pair(out / pair.room_file, out / pair.mission_file)
+        # The descriptors the generator wrote are those of the files as parsed.
+        workspace = Workspace()
+        mission_doc = load_mission(out / pair.mission_file, workspace)
+        described = describe(scene_of_documents(mission_doc.room, mission_doc))
+        assert described.as_row() == pair.plan.descriptors.as_row()
+
+
+def test_crossing_humans_cross_the_robots_route(tmp_path: Path) -> None:
+    suite = generate(_suite("medium", 11, 6, crossing="cross"), tmp_path)
+    assert all(p.plan.descriptors.crossings >= 1 for p in suite.pairs)
+
+
+def test_same_seed_same_bytes_in_process(tmp_path: Path) -> None:
+    a = generate(_suite("medium", 42, 4), tmp_path / "a")
+    b = generate(_suite("medium", 42, 4), tmp_path / "b")
+    c = generate(_suite("medium", 43, 4), tmp_path / "c")
+    texts = [(p.room_text, p.mission_text) for p in a.pairs]
+    assert texts == [(p.room_text, p.mission_text) for p in b.pairs]
+    assert index_csv(a) == index_csv(b)
+    assert texts != [(p.room_text, p.mission_text) for p in c.pairs]
+
+
+@pytest.mark.slow
+def test_same_seed_same_bytes_across_processes(tmp_path: Path) -> None:
+    outputs = []
+    for hash_seed, folder in (("1", "one"), ("987", "two")):
+        env = dict(os.environ, PYTHONHASHSEED=hash_seed)
+        subprocess.run([sys.executable, "-m", "rei.lang.cli", "rooms", "-o",
+                        str(tmp_path / folder), "--preset", "medium", "--count", "3", "--seed",
+                        "5", "--quiet"], check=True, env=env, capture_output=True)
+        outputs.append({p.name: p.read_bytes() for p in sorted((tmp_path / folder).iterdir())})
+    assert outputs[0] == outputs[1]
+    assert len(outputs[0]) == 3 * 2 + 2
+
+
+def test_descriptors_do_not_change_when_objects_are_renamed(tmp_path: Path) -> None:
+    suite = generate(_suite("small", 3, 2), tmp_path)
+    write_suite(suite, tmp_path, coverage_report(suite))
+    for pair in suite.pairs:
+        room_path = tmp_path / pair.room_file
+        original = describe(scene_of_documents(*_docs(tmp_path / pair.mission_file)))
+        renamed_text = re.sub(r"\b(object|human) (\w+)", lambda m: f"{m[1]} renamed_{m[2][::-1]}",
+                              room_path.read_text())
+        renamed_text = renamed_text.replace("robot robot", "robot other_name")
+        assert renamed_text != room_path.read_text()
+        room_path.write_text(renamed_text)
+        renamed = describe(scene_of_documents(*_docs(tmp_path / pair.mission_file)))
+        assert renamed == original
+
+
+def _docs(mission_path: Path):  # type: ignore[no-untyped-def]
+    mission_doc = load_mission(mission_path, Workspace())
+    return mission_doc.room, mission_doc
+
+
+def test_index_and_metadata_carry_parameters_and_descriptors(tmp_path: Path) -> None:
+    suite = generate(_suite("medium", 9, 3), tmp_path)
+    write_suite(suite, tmp_path, coverage_report(suite))
+    with (tmp_path / "index.csv").open(newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    assert len(rows) == 3
+    for row in rows:
+        room_path = tmp_path / row["room"]
+        assert (tmp_path / row["mission"]).is_file()
+        meta = read_metadata(room_path.read_text())
+        for key, value in meta["parameters"].items():
+            assert row[key] == value
+        for key, value in meta["descriptors"].items():
+            assert row[key] == value
+        assert float(row["tortuosity"]) >= 1.0
+        assert float(row["visibility_m"]) > 0
+
+
+def test_systematic_pairwise_suite_covers_every_pair(tmp_path: Path) -> None:
+    space = preset_space("small").replaced({"size": ("6x5", "7x6"), "objects": ("6", "10"),
+                                            "cycles": ("1", "2"), "mix": ("mixed", "clutter")})
+    suite = generate(SuiteRequest(space, "systematic", None, 1, max_grid=4), tmp_path)
+    assert suite.design.design == "pairwise"
+    report = coverage_report(suite)
+    match = re.search(r"Pairs of levels covered: (\d+) of (\d+)", report)
+    assert match and match[1] == match[2]
+
+
+def test_cli_writes_a_suite_that_rei_gen_check_accepts(tmp_path: Path,
+                                                        capsys: pytest.CaptureFixture[str]
+                                                        ) -> None:
+    out = tmp_path / "suite"
+    assert rei_gen(["rooms", "-o", str(out), "--preset", "small", "--strategy", "systematic",
+                    "--count", "4", "--seed", "2"]) == 0
+    assert "Pairs of levels covered" in capsys.readouterr().out
+    assert rei_gen(["check", str(out)]) == 0
+    assert len(list(out.glob("*.room"))) == 4
+
+
+@pytest.mark.parametrize(("args", "option"), [
+    (["--count", "0"], "--count"),
+    (["--objects", "500"], "--objects"),
+    (["--size", "5x5", "--objects", "20", "--preset", "small"], "--objects"),
+    (["--spacing", "100"], "--spacing"),
+    (["--speed", "inf"], "--speed"),
+    (["--humans", "-1"], "--humans"),
+    (["--size", "4x4", "--spacing", "3", "--goals", "3", "--humans", "0", "--objects", "9"],
+     "--objects"),
+])
+def test_impossible_requests_exit_2_naming_the_option_and_write_nothing(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], args: list[str], option: str
+) -> None:
+    out = tmp_path / "suite"
+    assert rei_gen(["rooms", "-o", str(out), *args]) == 2
+    err = capsys.readouterr().err
+    assert option in err and "expected" in err and "found" in err
+    assert not out.exists()
