@@ -242,7 +242,10 @@ def _read_text(path: str) -> str:
 def _analyse(workspace: Workspace, uri: str, path: str, text: str, version: int | None
              ) -> Analysis:
     """Runs on the checker thread: the workspace's diagnostics and models of one file."""
-    workspace.set_text(path, text)
+    if workspace.overlays.get(_resolved(path)) != text:
+        # Normally set already (in edit order) by buffer_changed; setting it again would
+        # throw away the cached rooms, which a mission re-check after a room edit reuses.
+        workspace.set_text(path, text)
     suffix = Path(path).suffix
     if suffix not in known_suffixes():
         # A language whose checker is not installed (yet): say nothing rather than
