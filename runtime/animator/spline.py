@@ -1,0 +1,66 @@
+"""Catmull-Rom (Hermite cubic) splines through timed control vertices (thesis 4.2.1, Table 1).
+
+Per segment i, with h = t[i+1] - t[i]:
+    a_i = (v[i+1] + v[i]) / h^2 - 2 (p[i+1] - p[i]) / h^3
+    b_i = 3 (p[i+1] - p[i]) / h^2 - (v[i+1] + 2 v[i]) / h
+    c_i = v[i],  d_i = p[i]
+    r(t) = a_i (t - t_i)^3 + b_i (t - t_i)^2 + c_i (t - t_i) + d_i
+and the vertex velocity is the mean of the two neighbouring chord velocities (thesis 4.2.1).
+A loop wraps its neighbours around (its last vertex repeats the first); an open spline
+starts and ends at rest. This module must never import the simulator.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+class CatmullRom:
+    def __init__(self, times: np.ndarray, points: np.ndarray, loop: bool) -> None:
+        t = np.asarray(times, dtype=float)
+        pts = np.asarray(points, dtype=float)
+        if len(t) < 2 or np.any(np.diff(t) <= 0):
+            raise ValueError("a spline needs at least two vertices at increasing times")
+        self.t, self.p, self.loop = t, pts, loop
+        n = len(t)
+        chord = np.diff(pts, axis=0) / np.diff(t)[:, None]  # velocity along each segment
+        v = np.zeros_like(pts)
+        v[1:-1] = 0.5 * (chord[:-1] + chord[1:])
+        if loop and n > 2:
+            v[0] = v[-1] = 0.5 * (chord[-1] + chord[0])
+        h = np.diff(t)[:, None]
+        dp = pts[1:] - pts[:-1]
+        self.a = (v[1:] + v[:-1]) / h**2 - 2 * dp / h**3
+        self.b = 3 * dp / h**2 - (v[1:] + 2 * v[:-1]) / h
+        self.c = v[:-1]
+        self.d = pts[:-1]
+        self.vertex_velocity = v
+
+    @property
+    def duration(self) -> float:
+        return float(self.t[-1] - self.t[0])
+
+    def _local(self, time: float) -> tuple[int, float, bool]:
+        """Segment index, time into it, and whether the spline has ended (open splines)."""
+        rel = time - self.t[0]
+        if self.loop:
+            rel = rel % self.duration
+        elif rel >= self.duration:
+            return len(self.t) - 2, float(self.t[-1] - self.t[-2]), True
+        rel = max(rel, 0.0)
+        tt = self.t[0] + rel
+        i = int(np.searchsorted(self.t, tt, side="right") - 1)
+        i = min(max(i, 0), len(self.t) - 2)
+        return i, float(tt - self.t[i]), False
+
+    def position(self, time: float) -> tuple[float, float]:
+        i, s, _ = self._local(time)
+        r = ((self.a[i] * s + self.b[i]) * s + self.c[i]) * s + self.d[i]
+        return float(r[0]), float(r[1])
+
+    def velocity(self, time: float) -> tuple[float, float]:
+        i, s, ended = self._local(time)
+        if ended:
+            return 0.0, 0.0
+        v = (3 * self.a[i] * s + 2 * self.b[i]) * s + self.c[i]
+        return float(v[0]), float(v[1])

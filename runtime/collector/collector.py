@@ -1,0 +1,72 @@
+"""The data collector: samples the run at the monitor configuration's rate (thesis 5.1.4, 9.1).
+
+It turns the simulator's ground truth and the robot's belief into typed ``Sample``s and
+publishes them, in order, to every attached ``SampleSink``. Mission events are buffered and
+delivered with the next sample, so none is lost between samples. This module must never
+import pybullet or change the run: it only observes.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+from rei.runtime.collector.sink import SampleSink
+from rei.runtime.messages import (
+    LaserScan,
+    MissionEvent,
+    NavState,
+    RobotBelief,
+    Sample,
+    StreamHeader,
+)
+
+
+class DataCollector:
+    def __init__(self, header: StreamHeader, sinks: Sequence[SampleSink],
+                 laser_max_range: float) -> None:
+        self.header = header
+        self.laser_max_range = laser_max_range
+        self.sinks = list(sinks)
+        self.seq = 0
+        self.last_time: float | None = None
+        self._events: list[MissionEvent] = []
+        self._last_scan_time: float | None = None
+        self.started = False
+
+    def start(self) -> None:
+        for sink in self.sinks:
+            sink.start(self.header)
+        self.started = True
+
+    def event(self, events: Sequence[MissionEvent]) -> None:
+        self._events.extend(events)
+
+    @property
+    def has_pending_events(self) -> bool:
+        return bool(self._events)
+
+    def sample(self, time: float, robot_pose: tuple[float, float, float],
+               robot_twist: tuple[float, float, float], poses: np.ndarray, twists: np.ndarray,
+               odom: tuple[float, float, float], odom_twist: tuple[float, float],
+               scan: LaserScan | None, scan_time: float | None, nav_state: NavState,
+               task: str | None) -> Sample:
+        fresh = scan if scan is not None and scan_time != self._last_scan_time else None
+        self._last_scan_time = scan_time
+        laser_min = float(scan.ranges.min()) if scan is not None else self.laser_max_range
+        belief = RobotBelief(odom, odom_twist, laser_min, fresh, nav_state, task)
+        sample = Sample(self.seq, time, robot_pose, robot_twist, poses, twists, belief,
+                        tuple(self._events))
+        self._events = []
+        self.seq += 1
+        self.last_time = time
+        for sink in self.sinks:
+            sink.feed(sample)
+        return sample
+
+    def finish(self, end_time: float, outcome: str, reason: str) -> None:
+        if not self.started:
+            return
+        for sink in self.sinks:
+            sink.finish(end_time, outcome, reason)

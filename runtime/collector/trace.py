@@ -1,0 +1,232 @@
+"""The run's sample trace on disk: exact, deterministic JSON lines, and reading it back.
+
+Line 1 is the stream header, then one line per sample, then an ``end`` line with the
+outcome. Floats are written by ``repr`` (Python's shortest round-tripping form), so reading
+a trace gives back bit-identical numbers. Per-object poses and twists are written as the
+rows that changed since the previous sample (static objects appear once), which keeps a
+trace of a room of walls small without losing exactness. The writer streams to
+``NAME.partial`` and renames it into place at ``finish``: a trace file that exists is
+complete; a killed run leaves only the partial file. This module must never import pybullet.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import IO, Any, Iterator
+
+import numpy as np
+
+from rei.catalogue import Box, Cylinder, Footprint, Polygon, Tile
+from rei.runtime.errors import RunError
+from rei.runtime.messages import (
+    SCHEMA_VERSION,
+    LaserScan,
+    MissionEvent,
+    NavState,
+    ObservedObject,
+    RobotBelief,
+    Sample,
+    StreamHeader,
+)
+
+FORMAT = "rei-trace"
+TRACE_VERSION = 1
+
+
+class TraceError(RunError):
+    """A trace file cannot be read: wrong format or version, or damaged."""
+
+
+def _dumps(value: Any) -> str:
+    return json.dumps(value, separators=(",", ":"), allow_nan=False, ensure_ascii=False)
+
+
+def _footprint_json(fp: Footprint) -> dict[str, Any]:
+    if isinstance(fp, Box):
+        return {"shape": "box", "size": [fp.size_x, fp.size_y]}
+    if isinstance(fp, Cylinder):
+        return {"shape": "cylinder", "radius": fp.radius}
+    if isinstance(fp, Polygon):
+        return {"shape": "polygon", "points": [list(p) for p in fp.points]}
+    return {"shape": "tile"}
+
+
+def _footprint(data: dict[str, Any]) -> Footprint:
+    shape = data["shape"]
+    if shape == "box":
+        return Box(data["size"][0], data["size"][1])
+    if shape == "cylinder":
+        return Cylinder(data["radius"])
+    if shape == "polygon":
+        return Polygon(tuple(tuple(p) for p in data["points"]))
+    return Tile()
+
+
+def _object_json(o: ObservedObject) -> dict[str, Any]:
+    return {"name": o.name, "role": o.role, "type": o.type,
+            "footprint": _footprint_json(o.footprint), "height": o.height}
+
+
+def _object(d: dict[str, Any]) -> ObservedObject:
+    return ObservedObject(d["name"], d["role"], d["type"], _footprint(d["footprint"]), d["height"])
+
+
+def header_json(h: StreamHeader) -> dict[str, Any]:
+    return {"format": FORMAT, "trace_version": TRACE_VERSION, "version": h.version,
+            "world": h.world, "mission": h.mission, "seed": h.seed, "rate": h.rate,
+            "robot": _object_json(h.robot), "objects": [_object_json(o) for o in h.objects],
+            "tile_size": h.tile_size, "floors": [list(f) for f in h.floors]}
+
+
+def _event_json(e: MissionEvent) -> dict[str, Any]:
+    return {"kind": e.kind, "time": e.time, "task": e.task, "index": e.index, "reason": e.reason}
+
+
+class TraceWriter:
+    """A ``SampleSink`` writing the trace file; ``path`` appears only when finished."""
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        self.partial = self.path.with_name(self.path.name + ".partial")
+        self._file: IO[str] | None = None
+        self._poses: np.ndarray | None = None
+        self._twists: np.ndarray | None = None
+
+    def start(self, header: StreamHeader) -> None:
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._file = open(self.partial, "w", encoding="utf-8", newline="\n")  # noqa: SIM115
+        self._file.write(_dumps(header_json(header)) + "\n")
+
+    @staticmethod
+    def _changed(new: np.ndarray, old: np.ndarray | None) -> list[list[Any]]:
+        if old is None or old.shape != new.shape:
+            rows = range(len(new))
+        else:
+            rows = np.nonzero((new != old).any(axis=1))[0].tolist()
+        return [[i, *new[i].tolist()] for i in rows]
+
+    def feed(self, sample: Sample) -> None:
+        assert self._file is not None, "start() first"
+        b = sample.belief
+        scan = None
+        if b.scan is not None:
+            s = b.scan
+            scan = {"angle_min": s.angle_min, "angle_increment": s.angle_increment,
+                    "range_min": s.range_min, "range_max": s.range_max,
+                    "ranges": np.asarray(s.ranges, dtype=float).tolist()}
+        line = {
+            "seq": sample.seq, "time": sample.time,
+            "robot_pose": list(sample.robot_pose), "robot_twist": list(sample.robot_twist),
+            "poses": self._changed(sample.poses, self._poses),
+            "twists": self._changed(sample.twists, self._twists),
+            "belief": {"odom": list(b.odom), "odom_twist": list(b.odom_twist),
+                       "laser_min": b.laser_min, "scan": scan, "nav_state": b.nav_state.value,
+                       "task": b.task},
+            "events": [_event_json(e) for e in sample.events],
+        }
+        self._poses, self._twists = sample.poses.copy(), sample.twists.copy()
+        self._file.write(_dumps(line) + "\n")
+
+    def finish(self, end_time: float, outcome: str, reason: str) -> None:
+        if self._file is None:
+            return
+        self._file.write(_dumps({"end": end_time, "outcome": outcome, "reason": reason}) + "\n")
+        self._file.flush()
+        os.fsync(self._file.fileno())
+        self._file.close()
+        self._file = None
+        os.replace(self.partial, self.path)
+
+
+def write(path: str | Path, header: StreamHeader, samples: Iterator[Sample] | list[Sample],
+          end_time: float, outcome: str = "completed", reason: str = "") -> None:
+    """Write a whole trace at once (what a run streams through ``TraceWriter``)."""
+    writer = TraceWriter(path)
+    writer.start(header)
+    for sample in samples:
+        writer.feed(sample)
+    writer.finish(end_time, outcome, reason)
+
+
+def _header(data: dict[str, Any], path: Path) -> StreamHeader:
+    if data.get("format") != FORMAT:
+        raise TraceError(f"{path}: expected a REI trace (format '{FORMAT}'), found "
+                         f"{data.get('format')!r}")
+    if data.get("trace_version") != TRACE_VERSION or data.get("version") != SCHEMA_VERSION:
+        raise TraceError(f"{path}: expected trace version {TRACE_VERSION} with sample schema "
+                         f"{SCHEMA_VERSION}, found {data.get('trace_version')!r} with schema "
+                         f"{data.get('version')!r} (record it again with this REI)")
+    return StreamHeader(data["version"], data["world"], data["mission"], data["seed"],
+                        data["rate"], _object(data["robot"]),
+                        tuple(_object(o) for o in data["objects"]), data["tile_size"],
+                        tuple((f[0], f[1], f[2]) for f in data["floors"]))
+
+
+def _samples(lines: Iterator[tuple[int, str]], n: int, path: Path) -> Iterator[Sample]:
+    poses = np.zeros((n, 3))
+    twists = np.zeros((n, 3))
+    for lineno, text in lines:
+        try:
+            d = json.loads(text)
+            if "end" in d:
+                return
+            for row in d["poses"]:
+                poses[row[0]] = row[1:]
+            for row in d["twists"]:
+                twists[row[0]] = row[1:]
+            b = d["belief"]
+            scan = None
+            if b["scan"] is not None:
+                s = b["scan"]
+                scan = LaserScan(s["angle_min"], s["angle_increment"], s["range_min"],
+                                 s["range_max"], np.array(s["ranges"], dtype=float))
+            belief = RobotBelief(tuple(b["odom"]), tuple(b["odom_twist"]),  # type: ignore[arg-type]
+                                 b["laser_min"], scan, NavState(b["nav_state"]), b["task"])
+            events = tuple(MissionEvent(e["kind"], e["time"], e["task"], e["index"], e["reason"])
+                           for e in d["events"])
+            yield Sample(d["seq"], d["time"], tuple(d["robot_pose"]),  # type: ignore[arg-type]
+                         tuple(d["robot_twist"]), poses.copy(), twists.copy(),  # type: ignore[arg-type]
+                         belief, events)
+        except (KeyError, IndexError, TypeError, ValueError) as exc:
+            raise TraceError(f"{path}:{lineno}: damaged sample line ({exc})") from None
+
+
+def read_trace(path: str | Path) -> tuple[StreamHeader, Iterator[Sample]]:
+    """The header and a lazy iterator over the samples of a trace (or its .partial file)."""
+    path = Path(path)
+    try:
+        handle = open(path, encoding="utf-8")  # noqa: SIM115  (closed by the generator)
+    except OSError as exc:
+        raise TraceError(f"cannot read the trace '{path}': {exc.strerror}") from None
+    try:
+        first = handle.readline()
+        try:
+            header = _header(json.loads(first), path)
+        except json.JSONDecodeError:
+            raise TraceError(f"{path}:1: expected a REI trace header (JSON), found "
+                             f"{first[:40]!r}") from None
+        except (KeyError, TypeError, IndexError) as exc:
+            raise TraceError(f"{path}:1: damaged trace header ({exc})") from None
+    except BaseException:
+        handle.close()
+        raise
+
+    def lines() -> Iterator[tuple[int, str]]:
+        with handle:
+            for lineno, text in enumerate(handle, start=2):
+                if text.strip():
+                    yield lineno, text
+
+    return header, _samples(lines(), len(header.objects), path)
+
+
+def read_trace_end(path: str | Path) -> tuple[float, str, str] | None:
+    """(end time, outcome, reason) from the trace's last line; None if it has none."""
+    last = None
+    with open(path, encoding="utf-8") as handle:
+        for text in handle:
+            if text.startswith('{"end"'):
+                last = json.loads(text)
+    return (last["end"], last["outcome"], last["reason"]) if last else None

@@ -1,0 +1,148 @@
+"""`rei run MISSION -o DIR`: generate the world, run the mission headless, write trace and summary.
+
+Writes into DIR: ``world/`` (the generated `pybullet` and `monitor` targets the run loads),
+``trace.jsonl`` (the sample stream), ``summary.json`` (a RunSummary) and ``run.log`` (the
+mission events and the outcome). Every output is a function of the inputs, the seed and the
+REI version only: wall-clock time goes to the terminal, never into DIR. Exit status: 0 the
+mission completed, 1 a task failed or the time ran out, 2 invalid input, 3 a run error,
+130 interrupted (the outputs are then marked incomplete).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+from pathlib import Path
+from typing import IO, Sequence
+
+from rei.lang.cli_support import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_RUN_ERROR
+from rei.runtime.collector import SampleSink, TraceWriter, load_monitor_config
+from rei.runtime.errors import RunError
+from rei.runtime.results import RunSummary
+from rei.runtime.robot import BUILT_IN, make_controller
+from rei.runtime.run import RunConfig, RunRecord, generate_world, run_mission, summary_of
+from rei.runtime.world import load_manifest
+
+TRACE = "trace.jsonl"
+SUMMARY = "summary.json"
+LOG = "run.log"
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    parser = sub.add_parser(
+        "run", help="run a mission in the simulator and record its trace and summary",
+        description="Check and generate what the mission needs, run it headless in pybullet "
+                    "with the robot under test, and write trace.jsonl, summary.json and run.log "
+                    "into the output folder. Same inputs and seed give byte-identical outputs.")
+    parser.add_argument("mission", type=Path, metavar="MISSION", help="the .mission file")
+    parser.add_argument("-o", "--output", type=Path, required=True, metavar="DIR",
+                        help="output folder (created if missing)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the run (default 0)")
+    parser.add_argument("--controller", default="reference", metavar="NAME",
+                        help=f"robot under test: {', '.join(BUILT_IN)}, or module:Class "
+                             f"(default reference)")
+    parser.add_argument("--duration", type=float, default=None, metavar="S",
+                        help="stop after S simulated seconds (default: the mission's time limit)")
+    parser.add_argument("--watchdog", type=float, default=5.0, metavar="S",
+                        help="wall-clock seconds a controller call may take (default 5)")
+    parser.add_argument("--physics-rate", type=float, default=100.0, metavar="HZ",
+                        help="physics steps per simulated second (default 100)")
+    parser.add_argument("--odom-drift", type=float, default=0.0, metavar="SIGMA",
+                        help="relative odometry error per control tick (default 0: exact)")
+    parser.add_argument("--quiet", action="store_true", help="no progress display")
+    parser.set_defaults(func=run)
+
+
+def write_atomic(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` through a temporary file, so a kill never leaves it torn."""
+    tmp = path.with_name(f".{path.name}.tmp")
+    with open(tmp, "w", encoding="utf-8", newline="\n") as handle:
+        handle.write(text)
+        handle.flush()
+        os.fsync(handle.fileno())
+    os.replace(tmp, path)
+
+
+def summary_text(summary: RunSummary) -> str:
+    return json.dumps(summary.to_json(), indent=2, sort_keys=True, allow_nan=False) + "\n"
+
+
+def _finite(name: str, value: float | None) -> None:
+    if value is not None and not math.isfinite(value):
+        raise RunError(f"{name}: expected a finite number, found {value}")
+
+
+def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", seed: int = 0,
+             duration: float | None = None, watchdog: float | None = 5.0,
+             physics_rate: float = 100.0, odom_drift: float = 0.0,
+             sinks: Sequence[SampleSink] = (), progress: IO[str] | None = None,
+             ) -> tuple[RunSummary, RunRecord]:
+    """Everything `rei run` does; extra ``sinks`` (the monitor) see the same stream as the trace."""
+    for name, value in (("--duration", duration), ("--watchdog", watchdog),
+                        ("--physics-rate", physics_rate), ("--odom-drift", odom_drift)):
+        _finite(name, value)
+    if duration is not None and duration <= 0:
+        raise RunError(f"--duration: expected a positive number of seconds, found {duration:g}")
+    if physics_rate <= 0 or odom_drift < 0 or (watchdog is not None and watchdog <= 0):
+        raise RunError("--physics-rate and --watchdog expected positive numbers, --odom-drift "
+                       "a non-negative one")
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise RunError(f"cannot create the output folder '{out_dir}': {exc.strerror}") from None
+    world_dir = out_dir / "world"
+    mission = generate_world(mission_path, world_dir)
+    manifest = load_manifest(world_dir)
+    monitor = load_monitor_config(world_dir)
+    robot = make_controller(controller)
+    config = RunConfig(seed=seed, physics_rate=physics_rate, duration=duration,
+                       watchdog=watchdog, odom_drift=odom_drift)
+    for stale in (out_dir / SUMMARY, out_dir / TRACE):
+        stale.unlink(missing_ok=True)
+
+    def show(now: float, end: float) -> None:
+        if progress is None:
+            return
+        width = 30
+        done = int(width * now / end) if end > 0 else width
+        progress.write(f"\r  {mission.name}: {now:7.1f} / {end:.0f} s  "
+                       f"[{'#' * done}{'.' * (width - done)}]")
+        progress.flush()
+
+    with open(out_dir / LOG, "w", encoding="utf-8", newline="\n") as log_file:
+        def log(line: str) -> None:
+            log_file.write(line + "\n")
+            log_file.flush()
+
+        log(f"mission {mission.name} in room {mission.world.name}, controller {controller}, "
+            f"seed {seed}")
+        record = run_mission(mission, manifest, monitor, robot,
+                             [TraceWriter(out_dir / TRACE), *sinks], config,
+                             progress=show if progress is not None else None, log=log)
+    if progress is not None:
+        progress.write("\n")
+    summary = summary_of(record, mission, controller, seed)
+    write_atomic(out_dir / SUMMARY, summary_text(summary))
+    return summary, record
+
+
+def run(args: argparse.Namespace) -> int:
+    progress = None if args.quiet or not sys.stderr.isatty() else sys.stderr
+    summary, record = run_into(args.mission, args.output, args.controller, args.seed,
+                               args.duration, args.watchdog, args.physics_rate, args.odom_drift,
+                               progress=progress)
+    rtf = record.duration / record.wall_seconds if record.wall_seconds > 0 else math.inf
+    m = summary.measurements
+    print(f"{summary.mission}: {summary.outcome} ({summary.reason}) after "
+          f"{summary.duration:.1f} s simulated, {m['tasks_succeeded']} task(s) succeeded, "
+          f"{m['tasks_failed']} failed, {m['collisions']} collision(s); "
+          f"{rtf:.0f}x real time; outputs in {args.output}", file=sys.stderr)
+    if summary.outcome == "error":
+        print(f"rei run: error: {summary.reason}", file=sys.stderr)
+        return EXIT_RUN_ERROR
+    if summary.outcome == "interrupted":
+        return EXIT_INTERRUPTED
+    return EXIT_OK if summary.outcome == "completed" else EXIT_FAILED

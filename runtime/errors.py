@@ -1,0 +1,11 @@
+"""Errors of the run stage: a simulation run could not be set up.
+
+A run that breaks *while running* (a controller that raises, hangs or sends non-finite
+commands) is not an exception to the caller: it ends with outcome ``error`` and a reason.
+"""
+
+from rei.lang.errors import ReiError
+
+
+class RunError(ReiError):
+    """A run could not be set up: a missing or invalid world, configuration or controller."""

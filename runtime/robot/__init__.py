@@ -1,0 +1,18 @@
+"""The robot under test: the controller protocol, built-in controllers and the conformance checker."""
+
+from rei.runtime.robot.conformance import check_controller
+from rei.runtime.robot.protocol import (
+    Controller,
+    ControllerContext,
+    GoalFeedback,
+    GoalTracker,
+    MapObstacle,
+    NavGoal,
+    Observation,
+    VelocityCommand,
+)
+from rei.runtime.robot.select import BUILT_IN, make_controller
+
+__all__ = ["BUILT_IN", "Controller", "ControllerContext", "GoalFeedback", "GoalTracker",
+           "MapObstacle", "NavGoal", "Observation", "VelocityCommand", "check_controller",
+           "make_controller"]

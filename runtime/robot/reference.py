@@ -1,0 +1,357 @@
+"""`reference`: a real navigator shipped with REI, so a mission runs out of the box.
+
+Global planning: A* (networkx) over a grid of the known static map, cells blocked within the
+robot's footprint radius of any wall or static object and made dearer near them, so paths keep
+to the middle of passages. Local planning: a dynamic-window search over (linear, angular)
+velocity pairs within the drive limits, each rolled out for a short horizon against the
+points the laser sees (humans and moving objects included), scored by progress towards a
+lookahead point on the path, clearance and speed. The navigator aborts a goal that makes no
+progress for ``BLOCKED_AFTER`` seconds (blocked or oscillating, thesis 7.4.4), and a goal with
+no path. It reads only its observation (odometry and laser), never the ground truth.
+This module must never import pybullet.
+"""
+
+from __future__ import annotations
+
+import math
+
+import networkx as nx
+import numpy as np
+
+from rei.runtime.robot.protocol import (
+    STOP,
+    ControllerContext,
+    GoalFeedback,
+    GoalTracker,
+    NavGoal,
+    Observation,
+    VelocityCommand,
+)
+
+RESOLUTION = 0.1
+"""Metres per planning cell."""
+COMFORT = 0.45
+"""Metres from obstacles below which cells cost more."""
+LOOKAHEAD = 0.6
+HORIZON = 1.6
+"""Seconds each velocity pair is rolled out."""
+ROLLOUT_STEPS = 8
+MARGIN = 0.04
+"""Metres kept between the footprint and any laser point."""
+SENSE_RADIUS = 1.6
+BLOCKED_AFTER = 30.0
+"""Seconds without 0.1 m of progress before a goal is aborted."""
+FINAL_APPROACH = 0.35
+"""Metres from the goal where the rollouts give way to a direct approach."""
+REPLAN_AFTER = 3.0
+"""Seconds without an admissible forward motion before the path is replanned around what the laser sees."""
+
+
+def clearance_field(points: np.ndarray, ctx: ControllerContext) -> np.ndarray:
+    """Distance from each (G, 2) point to the nearest obstacle surface of the static map."""
+    best = np.full(len(points), np.inf)
+    for ob in ctx.obstacles:
+        rel = points - (ob.x, ob.y)
+        if ob.shape == "cylinder":
+            d = np.hypot(rel[:, 0], rel[:, 1]) - ob.radius
+        else:
+            c, s = math.cos(ob.yaw), math.sin(ob.yaw)
+            qx = np.abs(c * rel[:, 0] + s * rel[:, 1]) - ob.size_x / 2
+            qy = np.abs(-s * rel[:, 0] + c * rel[:, 1]) - ob.size_y / 2
+            d = np.hypot(np.maximum(qx, 0), np.maximum(qy, 0)) + np.minimum(np.maximum(qx, qy), 0)
+        best = np.minimum(best, d)
+    return best
+
+
+class ReferenceNavigator:
+    name = "reference"
+
+    def __init__(self) -> None:
+        self._tracker = GoalTracker()
+        self._ctx: ControllerContext | None = None
+
+    # -- setup ---------------------------------------------------------------------------
+
+    def reset(self, context: ControllerContext) -> None:
+        self._ctx = context
+        self._tracker = GoalTracker()
+        self._path: np.ndarray | None = None
+        self._pose = None
+        self._index = 0
+        self._best_remaining = math.inf
+        self._last_progress_time = 0.0
+        self._stuck_since: float | None = None
+        hx, hy = context.robot_size[0] / 2, context.robot_size[1] / 2
+        self._half = (hx, hy)
+        self._radius = math.hypot(hx, hy)
+        limit = context.drive.max_linear
+        if context.max_speed is not None:
+            limit = min(limit, context.max_speed)
+        self._vmax = limit
+        self._wmax = context.drive.max_angular
+        self._build_grid(context)
+        self._build_rollouts()
+
+    def _build_grid(self, ctx: ControllerContext) -> None:
+        x0, y0, x1, y1 = ctx.bounds
+        nx_, ny_ = int(math.ceil((x1 - x0) / RESOLUTION)), int(math.ceil((y1 - y0) / RESOLUTION))
+        xs = x0 + (np.arange(nx_) + 0.5) * RESOLUTION
+        ys = y0 + (np.arange(ny_) + 0.5) * RESOLUTION
+        gx, gy = np.meshgrid(xs, ys, indexing="ij")
+        clear = clearance_field(np.stack((gx.ravel(), gy.ravel()), axis=1), ctx).reshape(nx_, ny_)
+        self._origin = (x0, y0)
+        self._shape = (nx_, ny_)
+        self._clear = clear
+        inflate = self._radius + 0.01
+        free = clear > inflate
+        cost = 1.0 + 4.0 * np.clip((COMFORT - clear) / COMFORT, 0.0, 1.0)
+        graph: nx.Graph = nx.Graph()
+        idx = np.argwhere(free)
+        graph.add_nodes_from(map(tuple, idx.tolist()))
+        for di, dj in ((1, 0), (0, 1), (1, 1), (1, -1)):
+            a = idx
+            b = idx + (di, dj)
+            ok = (b[:, 0] < nx_) & (b[:, 1] >= 0) & (b[:, 1] < ny_)
+            a, b = a[ok], b[ok]
+            ok = free[b[:, 0], b[:, 1]]
+            a, b = a[ok], b[ok]
+            length = math.hypot(di, dj)
+            w = length * 0.5 * (cost[a[:, 0], a[:, 1]] + cost[b[:, 0], b[:, 1]])
+            graph.add_weighted_edges_from(
+                ((int(p[0]), int(p[1])), (int(q[0]), int(q[1])), float(c))
+                for p, q, c in zip(a, b, w))
+        self._graph = graph
+        self._free_cells = idx
+
+    def _build_rollouts(self) -> None:
+        vs = self._vmax * np.array([-0.25, 0.0, 0.25, 0.5, 0.75, 1.0])
+        ws = self._wmax * np.array([-0.6, -0.35, -0.18, -0.08, 0.0, 0.08, 0.18, 0.35, 0.6])
+        v, w = np.meshgrid(vs, ws, indexing="ij")
+        self._cmds = np.stack((v.ravel(), w.ravel()), axis=1)
+        ts = np.linspace(HORIZON / ROLLOUT_STEPS, HORIZON, ROLLOUT_STEPS)
+        vv, ww = self._cmds[:, 0:1], self._cmds[:, 1:2]
+        th = ww * ts[None, :]
+        safe_w = np.where(np.abs(ww) < 1e-9, 1.0, ww)
+        x = np.where(np.abs(ww) < 1e-9, vv * ts, vv / safe_w * np.sin(th))
+        y = np.where(np.abs(ww) < 1e-9, 0.0, vv / safe_w * (1 - np.cos(th)))
+        self._roll = np.stack((x, y, th), axis=2)  # (K, S, 3) in the robot's frame
+
+    # -- goals (Figure 22) ---------------------------------------------------------------
+
+    def send_goal(self, goal: NavGoal) -> None:
+        self._tracker.send(goal)
+
+    def cancel_goal(self) -> None:
+        self._tracker.cancel()
+
+    def feedback(self) -> GoalFeedback:
+        return self._tracker.feedback(self._remaining if self._tracker.running else None)
+
+    # -- planning --------------------------------------------------------------------------
+
+    def _cell(self, x: float, y: float) -> tuple[int, int]:
+        i = int((x - self._origin[0]) / RESOLUTION)
+        j = int((y - self._origin[1]) / RESOLUTION)
+        return min(max(i, 0), self._shape[0] - 1), min(max(j, 0), self._shape[1] - 1)
+
+    def _nearest_free(self, cell: tuple[int, int]) -> tuple[int, int] | None:
+        if cell in self._graph:
+            return cell
+        if len(self._free_cells) == 0:
+            return None
+        d = np.abs(self._free_cells - np.array(cell)).sum(axis=1)
+        best = self._free_cells[int(np.argmin(d))]
+        return int(best[0]), int(best[1])
+
+    def _plan(self, start: tuple[float, float], goal: NavGoal,
+              blocked: set[tuple[int, int]] | None = None) -> np.ndarray | None:
+        a = self._nearest_free(self._cell(*start))
+        b = self._nearest_free(self._cell(goal.x, goal.y))
+        if a is None or b is None:
+            return None
+        blocked = blocked or set()
+
+        def weight(u: tuple[int, int], v: tuple[int, int], data: dict[str, float]) -> float | None:
+            return None if v in blocked or u in blocked else data["weight"]
+
+        def h(u: tuple[int, int], v: tuple[int, int]) -> float:
+            return math.hypot(u[0] - v[0], u[1] - v[1])
+
+        try:
+            cells = nx.astar_path(self._graph, a, b, heuristic=h, weight=weight)
+        except nx.NetworkXNoPath:
+            return None
+        pts = [(self._origin[0] + (i + 0.5) * RESOLUTION, self._origin[1] + (j + 0.5) * RESOLUTION)
+               for i, j in cells]
+        pts.append((goal.x, goal.y))
+        return np.array(pts, dtype=float)
+
+    @property
+    def _remaining(self) -> float:
+        path = self._path
+        if path is None or self._pose is None:
+            return math.inf
+        rest = path[self._index:]
+        d = math.hypot(rest[0, 0] - self._pose[0], rest[0, 1] - self._pose[1])
+        return d + float(np.hypot(*np.diff(rest, axis=0).T).sum()) if len(rest) > 1 else d
+
+    # -- control ---------------------------------------------------------------------------
+
+    _pose: tuple[float, float, float] | None = None
+
+    def step(self, observation: Observation) -> VelocityCommand:
+        tracker = self._tracker
+        self._pose = observation.odom_pose
+        if not tracker.running or tracker.goal is None:
+            return STOP
+        goal = tracker.goal
+        x, y, yaw = observation.odom_pose
+        if tracker.state.value == "pending":
+            tracker.accept()
+            self._path = self._plan((x, y), goal)
+            self._index = 0
+            self._best_remaining = math.inf
+            self._last_progress_time = observation.time
+            self._stuck_since = None
+            if self._path is None:
+                tracker.abort("no path to the goal on the static map")
+                return STOP
+        reach = min(0.1, 0.5 * goal.tolerance)
+        dist = math.hypot(goal.x - x, goal.y - y)
+        if dist <= reach:
+            if goal.yaw is None:
+                tracker.succeed()
+                return STOP
+            err = math.remainder(goal.yaw - yaw, math.tau)
+            if abs(err) < 0.05:
+                tracker.succeed()
+                return STOP
+            return VelocityCommand(0.0, float(np.clip(2.0 * err, -0.6 * self._wmax, 0.6 * self._wmax)))
+        remaining = self._advance((x, y))
+        if remaining < self._best_remaining - 0.1:
+            self._best_remaining = remaining
+            self._last_progress_time = observation.time
+        elif observation.time - self._last_progress_time > BLOCKED_AFTER:
+            tracker.abort(f"no progress for {BLOCKED_AFTER:g} s (blocked or oscillating)")
+            return STOP
+        points = self._laser_points(observation)
+        if dist < FINAL_APPROACH:
+            return self._approach(observation.odom_pose, goal, dist, points)
+        cmd = self._choose(observation.odom_pose, points, dist)
+        if cmd is None:
+            if self._stuck_since is None:
+                self._stuck_since = observation.time
+            elif observation.time - self._stuck_since > REPLAN_AFTER:
+                self._replan_around(points, goal, (x, y))
+                self._stuck_since = observation.time
+            return STOP
+        self._stuck_since = None
+        return cmd
+
+    def _approach(self, pose: tuple[float, float, float], goal: NavGoal, dist: float,
+                  points: np.ndarray) -> VelocityCommand:
+        """The last few decimetres: turn towards the goal, then creep onto it."""
+        x, y, yaw = pose
+        err = math.remainder(math.atan2(goal.y - y, goal.x - x) - yaw, math.tau)
+        w = float(np.clip(2.0 * err, -0.6 * self._wmax, 0.6 * self._wmax))
+        if abs(err) > 0.3:
+            return VelocityCommand(0.0, w)
+        hx, hy = self._half
+        ahead = points[(points[:, 0] > 0) & (np.abs(points[:, 1]) < hy + MARGIN)] \
+            if len(points) else points
+        if len(ahead) and float(ahead[:, 0].min()) - hx < dist + MARGIN:
+            return VelocityCommand(0.0, w)
+        return VelocityCommand(float(min(0.5 * self._vmax, 0.8 * dist + 0.02)), w)
+
+    def _advance(self, xy: tuple[float, float]) -> float:
+        path = self._path
+        assert path is not None
+        window = path[self._index:self._index + 30]
+        d = np.hypot(window[:, 0] - xy[0], window[:, 1] - xy[1])
+        self._index += int(np.argmin(d))
+        return self._remaining
+
+    def _lookahead(self, xy: tuple[float, float]) -> np.ndarray:
+        path = self._path
+        assert path is not None
+        rest = path[self._index:]
+        d = np.hypot(rest[:, 0] - xy[0], rest[:, 1] - xy[1])
+        beyond = np.nonzero(d >= LOOKAHEAD)[0]
+        return rest[int(beyond[0])] if len(beyond) else rest[-1]
+
+    def _laser_points(self, observation: Observation) -> np.ndarray:
+        """Laser endpoints near the robot, in the robot's frame."""
+        scan = observation.scan
+        if scan is None:
+            return np.zeros((0, 2))
+        r = scan.ranges
+        angles = scan.angle_min + scan.angle_increment * np.arange(len(r))
+        keep = (r < min(SENSE_RADIUS, scan.range_max - 1e-6)) & (r >= scan.range_min)
+        mx, my = self._ctx.laser.mount_x, self._ctx.laser.mount_y  # type: ignore[union-attr]
+        return np.stack((mx + r[keep] * np.cos(angles[keep]), my + r[keep] * np.sin(angles[keep])),
+                        axis=1)
+
+    def _choose(self, pose: tuple[float, float, float], points: np.ndarray,
+                dist: float) -> VelocityCommand | None:
+        x, y, yaw = pose
+        target = self._lookahead((x, y))
+        c, s = math.cos(yaw), math.sin(yaw)
+        tx = c * (target[0] - x) + s * (target[1] - y)
+        ty = -s * (target[0] - x) + c * (target[1] - y)
+        roll = self._roll
+        hx, hy = self._half
+        if len(points):
+            # Points in the frame of every rolled-out pose: (K, S, P).
+            dx = points[None, None, :, 0] - roll[:, :, 0:1]
+            dy = points[None, None, :, 1] - roll[:, :, 1:2]
+            ct, st = np.cos(roll[:, :, 2:3]), np.sin(roll[:, :, 2:3])
+            px = ct * dx + st * dy
+            py = -st * dx + ct * dy
+            gap = np.maximum(np.abs(px) - hx, np.abs(py) - hy)  # < 0 inside the footprint
+            hit = (gap < MARGIN).any(axis=2).any(axis=1)
+            clearance = np.clip(gap.min(axis=(1, 2)), 0.0, 0.5)
+            # The robot itself turning in place sweeps its circumcircle.
+            near_now = np.hypot(points[:, 0], points[:, 1]).min()
+        else:
+            hit = np.zeros(len(self._cmds), dtype=bool)
+            clearance = np.full(len(self._cmds), 0.5)
+            near_now = math.inf
+        v, w = self._cmds[:, 0], self._cmds[:, 1]
+        turning = (v == 0.0) & (w != 0.0)
+        hit = np.where(turning, near_now < self._radius + 0.02, hit)
+        end = roll[:, -1, :]
+        to_target = np.hypot(tx - end[:, 0], ty - end[:, 1])
+        heading_err = np.abs(np.arctan2(ty - end[:, 1], tx - end[:, 0]) - end[:, 2])
+        heading_err = np.minimum(heading_err, 2 * math.pi - heading_err)
+        # Close to the goal, slow down so the robot stops within tolerance.
+        slow = min(1.0, max(0.25, dist / 0.6))
+        over = np.maximum(v - self._vmax * slow, 0.0)
+        score = (-1.0 * to_target - 0.35 * heading_err + 0.6 * clearance
+                 + 0.25 * v / self._vmax - 3.0 * over - 0.4 * (v < 0))
+        score = np.where(hit, -np.inf, score)
+        # Standing still is admissible but never progress: only chosen when nothing else is.
+        score = np.where((v == 0.0) & (w == 0.0), -np.inf, score)
+        best = int(np.argmax(score))
+        if not np.isfinite(score[best]):
+            return None
+        return VelocityCommand(float(v[best]), float(w[best]))
+
+    def _replan_around(self, points: np.ndarray, goal: NavGoal, xy: tuple[float, float]) -> None:
+        """Replan with the cells around what the laser sees now marked as blocked."""
+        if self._pose is None or not len(points):
+            return
+        x, y, yaw = self._pose
+        c, s = math.cos(yaw), math.sin(yaw)
+        wx = x + c * points[:, 0] - s * points[:, 1]
+        wy = y + s * points[:, 0] + c * points[:, 1]
+        grow = int(math.ceil((self._radius + 0.05) / RESOLUTION))
+        blocked: set[tuple[int, int]] = set()
+        for px, py in zip(wx, wy):
+            ci, cj = self._cell(float(px), float(py))
+            for di in range(-grow, grow + 1):
+                for dj in range(-grow, grow + 1):
+                    blocked.add((ci + di, cj + dj))
+        blocked.discard(self._cell(*xy))
+        path = self._plan(xy, goal, blocked)
+        if path is not None:
+            self._path, self._index = path, 0

@@ -1,0 +1,48 @@
+"""Choosing the robot under test by name (`reference`, `teleop`, `teleop:circle`) or `module:Class`."""
+
+from __future__ import annotations
+
+import importlib
+
+from rei.lang.suggest import did_you_mean
+from rei.runtime.errors import RunError
+from rei.runtime.robot.protocol import Controller
+from rei.runtime.robot.reference import ReferenceNavigator
+from rei.runtime.robot.teleop import SCRIPTS, TeleopController
+
+BUILT_IN = ("reference", "teleop", *(f"teleop:{s}" for s in sorted(SCRIPTS)))
+
+
+def make_controller(spec: str) -> Controller:
+    """A fresh controller for ``spec``; RunError naming the choices when unknown."""
+    if spec == "reference":
+        return ReferenceNavigator()
+    if spec == "teleop":
+        return TeleopController()
+    if spec.startswith("teleop:"):
+        script = spec.split(":", 1)[1]
+        if script not in SCRIPTS:
+            raise RunError(f"--controller: expected a teleop script among "
+                           f"{', '.join(sorted(SCRIPTS))}, found '{script}'"
+                           + did_you_mean(script, sorted(SCRIPTS)))
+        return TeleopController(script)
+    if ":" in spec:
+        module_name, _, attr = spec.partition(":")
+        try:
+            module = importlib.import_module(module_name)
+        except ImportError as exc:
+            raise RunError(f"--controller: cannot import module '{module_name}': {exc}") from None
+        factory = getattr(module, attr, None)
+        if factory is None:
+            raise RunError(f"--controller: module '{module_name}' has no '{attr}'")
+        try:
+            controller = factory()
+        except Exception as exc:  # noqa: BLE001  (user code)
+            raise RunError(f"--controller: '{spec}()' raised {type(exc).__name__}: {exc}") from None
+        if not isinstance(controller, Controller):
+            raise RunError(f"--controller: '{spec}()' expected an object with name, reset, "
+                           f"send_goal, cancel_goal, feedback and step, found "
+                           f"{type(controller).__name__}")
+        return controller
+    raise RunError(f"--controller: expected one of {', '.join(BUILT_IN)} or module:Class, "
+                   f"found '{spec}'" + did_you_mean(spec, list(BUILT_IN)))

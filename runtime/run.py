@@ -1,0 +1,328 @@
+"""The run loop: pybullet, animator, sensors, robot under test, mission executor and collector.
+
+One fixed physics step drives everything; the controller, the laser and the collector run
+every n-th step at their own rates (each rate must divide the physics rate). All randomness
+comes from one ``numpy.random.Generator`` seeded from the run's seed, iteration is in
+declaration order and no wall-clock time enters the outputs, so the same inputs and seed give
+the same bytes. A controller that raises, hangs past the watchdog or sends a non-finite
+command ends the run with outcome ``error``; Ctrl-C ends it ``interrupted``; in both cases the
+sinks are finished, so what was written stays consistent. This module must never judge the
+run beyond task outcomes (the monitor and the evaluator do that, as sinks).
+"""
+
+from __future__ import annotations
+
+import math
+import time as wallclock
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+from rei.generators.concrete import ConcreteMission
+from rei.runtime.animator import Animated, planar_command, spline_of
+from rei.runtime.collector import DataCollector, MonitorConfig, SampleSink
+from rei.runtime.errors import RunError
+from rei.runtime.messages import SCHEMA_VERSION, LaserScan, MissionEvent, NavState, StreamHeader
+from rei.runtime.mission import MissionExecutor, TaskResult
+from rei.runtime.results import RESULTS_VERSION, Outcome, RunSummary
+from rei.runtime.robot.protocol import (
+    STOP,
+    Controller,
+    ControllerContext,
+    MapObstacle,
+    Observation,
+    VelocityCommand,
+)
+from rei.runtime.robot.watchdog import ControllerFault, GuardedController
+from rei.runtime.sensors.laser import Laser2D, ShapeSet, merge_wall_tiles, shapes_of
+from rei.runtime.sensors.odometry import Odometry
+from rei.runtime.world.bullet import BulletWorld
+from rei.runtime.world.manifest import WorldManifest
+
+
+@dataclass(frozen=True)
+class RunConfig:
+    seed: int = 0
+    physics_rate: float = 100.0
+    """Physics steps per simulated second."""
+    control_rate: float = 10.0
+    """Controller calls (and mission executor ticks) per simulated second."""
+    duration: float | None = None
+    """Stop after this many simulated seconds even if the mission's time limit is later."""
+    watchdog: float | None = 5.0
+    """Wall-clock seconds a controller call may take; None runs it in the main thread."""
+    odom_drift: float = 0.0
+    """Relative standard deviation of odometry's per-tick error (0: odometry is exact)."""
+
+
+@dataclass(frozen=True)
+class RunRecord:
+    outcome: Outcome
+    reason: str
+    duration: float
+    """Simulated seconds."""
+    tasks: tuple[TaskResult, ...]
+    measurements: dict[str, Any] = field(default_factory=dict)
+    wall_seconds: float = 0.0
+    """Wall-clock time of the loop (never written into the outputs)."""
+    steps: int = 0
+
+
+def _every(physics_rate: float, rate: float, what: str) -> int:
+    ratio = physics_rate / rate
+    n = round(ratio)
+    if n < 1 or abs(ratio - n) > 1e-9 * ratio:
+        raise RunError(f"{what} of {rate:g} Hz expected to divide the physics rate of "
+                       f"{physics_rate:g} Hz, found a ratio of {ratio:g}")
+    return n
+
+
+def static_map(manifest: WorldManifest) -> tuple[MapObstacle, ...]:
+    """What the robot may know beforehand: walls and static (fixed) objects."""
+    obstacles = []
+    for body in manifest.walls + tuple(o for o in manifest.objects if o.fixed):
+        fp = body.footprint
+        if hasattr(fp, "radius"):
+            obstacles.append(MapObstacle(body.name, body.role, body.x, body.y, body.yaw,
+                                         "cylinder", radius=fp.radius))  # type: ignore[union-attr]
+        else:
+            obstacles.append(MapObstacle(body.name, body.role, body.x, body.y, body.yaw, "box",
+                                         fp.size_x, fp.size_y))  # type: ignore[union-attr]
+    return tuple(obstacles)
+
+
+def stream_header(manifest: WorldManifest, monitor: MonitorConfig, mission: str,
+                  seed: int) -> StreamHeader:
+    names = [b.name for b in manifest.observed]
+    if [o.name for o in monitor.objects] != names:
+        raise RunError("the monitor configuration's objects expected to be the world's walls "
+                       "and objects in order; regenerate both targets from the same input")
+    return StreamHeader(SCHEMA_VERSION, manifest.world, mission, seed, monitor.rate,
+                        monitor.robot, monitor.objects, manifest.tile_size, manifest.floors)
+
+
+class _Contacts:
+    """Contact episodes of the robot: a new episode starts when a body starts touching it."""
+
+    def __init__(self) -> None:
+        self.touching: set[str] = set()
+        self.episodes = 0
+        self.bodies: set[str] = set()
+        self.first: float | None = None
+
+    def update(self, names: list[str], time: float) -> None:
+        now = set(names)
+        new = now - self.touching
+        if new:
+            self.episodes += len(new)
+            self.bodies |= new
+            if self.first is None:
+                self.first = time
+        self.touching = now
+
+
+def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: MonitorConfig,
+                controller: Controller, sinks: Sequence[SampleSink], config: RunConfig,
+                progress: Callable[[float, float], None] | None = None,
+                log: Callable[[str], None] | None = None) -> RunRecord:
+    """Run the mission once; the record of how it ended (never raises for controller faults)."""
+    say = log or (lambda line: None)
+    every_control = _every(config.physics_rate, config.control_rate, "the control rate")
+    every_laser = _every(config.physics_rate, manifest.laser.rate, "the laser rate")
+    every_sample = _every(config.physics_rate, monitor.rate, "the monitor's sample rate")
+    header = stream_header(manifest, monitor, mission.name, config.seed)
+    rng = np.random.default_rng(config.seed)
+    end_time = mission.time_limit
+    end_reason = f"mission time limit of {mission.time_limit:g} s reached"
+    if config.duration is not None and config.duration < end_time:
+        end_time = config.duration
+        end_reason = f"duration limit of {config.duration:g} s reached"
+    last_step = int(math.floor(end_time * config.physics_rate + 1e-9))
+
+    laser_spec = manifest.laser
+    plane = laser_spec.mount_z
+    seen = [b for b in manifest.objects if b.height > plane]
+    static_seen = [b for b in seen if b.fixed]
+    moving_seen = [b for b in seen if not b.fixed]
+    walls = merge_wall_tiles(tuple(w for w in manifest.walls if w.height > plane),
+                             manifest.tile_size)
+    statics = shapes_of(static_seen, np.array([(b.x, b.y, b.yaw) for b in static_seen]))
+    laser = Laser2D(laser_spec, ShapeSet(np.concatenate((walls, statics.boxes)), statics.circles))
+
+    n_walls = len(manifest.walls)
+    all_poses = np.array([(b.x, b.y, b.yaw) for b in manifest.observed], dtype=float).reshape(-1, 3)
+    all_twists = np.zeros_like(all_poses)
+    moving_index = [i for i, b in enumerate(manifest.objects) if not b.fixed]
+    moving_rows = np.array([n_walls + i for i in moving_index], dtype=int)
+    seen_index = [i for i, b in enumerate(manifest.objects) if not b.fixed and b.height > plane]
+
+    robot_spec = manifest.robot
+    start = (robot_spec.x, robot_spec.y, robot_spec.yaw)
+    context = ControllerContext(
+        robot_size=(robot_spec.footprint.half_extents()[0] * 2,
+                    robot_spec.footprint.half_extents()[1] * 2),
+        drive=manifest.drive, laser=laser_spec, start_pose=start, obstacles=static_map(manifest),
+        bounds=manifest.bounds, tile_size=manifest.tile_size, control_rate=config.control_rate,
+        seed=config.seed, max_speed=mission.max_speed)
+    vmax = manifest.drive.max_linear if mission.max_speed is None else min(
+        manifest.drive.max_linear, mission.max_speed)
+    wmax = manifest.drive.max_angular
+
+    executor = MissionExecutor(mission.tasks())
+    collector = DataCollector(header, sinks, laser_spec.max_range)
+    contacts = _Contacts()
+    odom = Odometry(start, config.odom_drift, rng)
+    outcome: Outcome | None = None
+    reason = ""
+    now = 0.0
+    path_length = 0.0
+    min_laser = math.inf
+    steps = 0
+    wall_start = wallclock.perf_counter()
+    guard = GuardedController(controller, config.watchdog)
+    world = BulletWorld(manifest, config.physics_rate)
+    try:
+        animated = [Animated(world.object_ids[i], spline_of(b.trajectory), b.role == "human")
+                    for i, b in enumerate(manifest.objects) if b.trajectory is not None]
+        collector.start()
+        scan: LaserScan | None = None
+        scan_time: float | None = None
+        cmd: VelocityCommand = STOP
+        last_truth = start
+        next_progress = 0.0
+
+        def emit(events: list[MissionEvent]) -> None:
+            for e in events:
+                task = f" {e.task} (#{e.index})" if e.task is not None else ""
+                why = f": {e.reason}" if e.reason else ""
+                say(f"t={e.time:9.3f}  {e.kind}{task}{why}")
+            collector.event(events)
+
+        def record_sample(t: float, truth: tuple[float, float, float]) -> None:
+            poses, twists = world.object_states()
+            if len(moving_rows):
+                all_poses[moving_rows] = poses[moving_index]
+                all_twists[moving_rows] = twists[moving_index]
+            fb_state, task = nav_view
+            collector.sample(t, truth, world.twist(world.robot_id), all_poses, all_twists,
+                             odom.pose, odom.twist, scan, scan_time, fb_state, task)
+
+        nav_view: tuple[NavState, str | None] = (NavState.IDLE, None)
+        try:
+            guard.reset(context)
+            for k in range(last_step + 1):
+                steps = k
+                now = k / config.physics_rate
+                truth = world.pose(world.robot_id)
+                contacts.update(world.robot_contacts(), now)
+                if k % every_laser == 0:
+                    moving = None
+                    if seen_index:
+                        poses, _ = world.object_states()
+                        moving = shapes_of([manifest.objects[i] for i in seen_index],
+                                           poses[seen_index])
+                    ranges = laser.scan(truth, moving)
+                    min_laser = min(min_laser, float(ranges.min()))
+                    scan = LaserScan(laser.angle_min, laser.angle_increment, laser_spec.min_range,
+                                     laser_spec.max_range, ranges)
+                    scan_time = now
+                if k % every_control == 0:
+                    path_length += math.hypot(truth[0] - last_truth[0], truth[1] - last_truth[1])
+                    last_truth = truth
+                    odom.update(truth, every_control / config.physics_rate)
+                    emit(executor.tick(now, guard, truth))
+                    fb = guard.feedback()
+                    nav_view = (fb.state, executor.current_task)
+                    if executor.finished:
+                        record_sample(now, truth)
+                        break
+                    obs = Observation(now, odom.pose, odom.twist, scan, scan_time)
+                    raw = guard.step(obs)
+                    # The motor driver saturates: commands beyond the drive limits are clipped.
+                    cmd = VelocityCommand(min(max(raw.linear, -vmax), vmax),
+                                          min(max(raw.angular, -wmax), wmax))
+                final = k == last_step
+                if final:
+                    emit(executor.abandon(now, end_reason, truth))
+                    outcome, reason = "timeout", end_reason
+                if k % every_sample == 0 or final:
+                    record_sample(now, truth)
+                if progress is not None and now >= next_progress:
+                    progress(now, end_time)
+                    next_progress = now + 1.0
+                if final:
+                    break
+                for item in animated:
+                    vx, vy, wz = planar_command(item, now, 1.0 / config.physics_rate,
+                                                world.pose(item.body))
+                    world.set_planar_velocity(item.body, vx, vy, wz)
+                world.drive_robot(cmd.linear, cmd.angular)
+                world.step()
+        except ControllerFault as fault:
+            outcome, reason = "error", str(fault)
+            say(f"t={now:9.3f}  error: {reason}")
+            truth = world.pose(world.robot_id)
+            emit(executor.abandon(now, f"run error: {reason}", truth))
+            record_sample(now, truth)
+        except KeyboardInterrupt:
+            outcome, reason = "interrupted", "interrupted by the user (output incomplete)"
+            say(f"t={now:9.3f}  interrupted")
+            truth = world.pose(world.robot_id)
+            emit(executor.abandon(now, "interrupted", truth))
+            record_sample(now, truth)
+        if outcome is None:
+            failed = [r for r in executor.results if not r.succeeded]
+            outcome = "failed" if failed else "completed"
+            reason = (f"{len(failed)} of {len(executor.results)} tasks failed" if failed
+                      else f"all {len(executor.results)} tasks succeeded")
+        say(f"t={now:9.3f}  outcome {outcome}: {reason}")
+        collector.finish(now, outcome, reason)
+    finally:
+        guard.close()
+        world.close()
+    tasks = tuple(executor.results)
+    measurements: dict[str, Any] = {
+        "path_length": path_length,
+        "tasks": [{"index": r.index, "task": r.task, "succeeded": r.succeeded, "reason": r.reason,
+                   "start": r.start, "end": r.end, "time": r.end - r.start,
+                   "final_distance": r.final_distance} for r in tasks],
+        "time_per_task": {f"{r.index}:{r.task}": r.end - r.start for r in tasks},
+        "tasks_succeeded": sum(r.succeeded for r in tasks),
+        "tasks_failed": sum(not r.succeeded for r in tasks),
+        "collisions": contacts.episodes,
+        "collided_with": sorted(contacts.bodies),
+        "first_collision": contacts.first,
+        "min_laser_range": min_laser if math.isfinite(min_laser) else None,
+        "samples": collector.seq,
+        "physics_steps": steps,
+        "incomplete": outcome == "interrupted",
+    }
+    return RunRecord(outcome, reason, now, tasks, measurements,
+                     wallclock.perf_counter() - wall_start, steps)
+
+
+def summary_of(record: RunRecord, mission: ConcreteMission, controller: str,
+               seed: int) -> RunSummary:
+    """The run summary before any monitor is attached (no signals, no verdicts yet)."""
+    return RunSummary(RESULTS_VERSION, mission.name, mission.world.name, seed, controller,
+                      record.outcome, record.reason, record.duration, 0.0, {}, (),
+                      dict(record.measurements))
+
+
+def generate_world(mission_path: Path, out_dir: Path) -> ConcreteMission:
+    """Check the mission and generate the `pybullet` and `monitor` targets into ``out_dir``."""
+    from rei.generators.concrete.build import load_concrete_mission  # noqa: PLC0415
+    from rei.generators.output import OutputTree, write_tree  # noqa: PLC0415
+    from rei.generators.targets import GenerationRequest, get_target  # noqa: PLC0415
+
+    mission = load_concrete_mission(mission_path)
+    request = GenerationRequest(mission_path, mission.world, mission)
+    tree = OutputTree()
+    for name in ("pybullet", "monitor"):
+        tree.merge(get_target(name).generate(request))
+    write_tree(tree, out_dir)
+    return mission
+
+

@@ -1,0 +1,139 @@
+"""A planar laser scanner, ray-cast in numpy against the world's footprints (thesis 9.1).
+
+Each scan casts every beam against the boxes and cylinders within range at once (broadcast
+over beams x shapes), instead of one pybullet ray per beam: for a 360-beam scan in a room of
+walls this is an order of magnitude cheaper than ``rayTestBatch`` and gives the same ranges
+(tests compare the two). Wall tiles are merged into runs along x so a room's boundary is a
+handful of boxes. Only bodies taller than the scan plane are seen. Ranges are quantised to a
+millimetre, the resolution of the LDS-01 and most 2D scanners. This module must never import
+pybullet.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from rei.catalogue import Box, Cylinder, LaserSpec
+from rei.runtime.world.manifest import BodySpec
+
+RESOLUTION = 1e-3
+
+
+@dataclass(frozen=True)
+class ShapeSet:
+    """Boxes (cx, cy, yaw, hx, hy) and circles (cx, cy, r), as arrays."""
+
+    boxes: np.ndarray
+    circles: np.ndarray
+
+
+def merge_wall_tiles(walls: tuple[BodySpec, ...], tile: float) -> np.ndarray:
+    """Wall tiles merged into boxes (cx, cy, 0, hx, hy), one per run of adjacent tiles along x."""
+    rows: dict[int, list[int]] = {}
+    for w in walls:
+        rows.setdefault(round(w.y / tile), []).append(round(w.x / tile))
+    boxes = []
+    for j in sorted(rows):
+        cells = sorted(set(rows[j]))
+        start = prev = cells[0]
+        for i in cells[1:] + [None]:  # type: ignore[list-item]
+            if i is not None and i == prev + 1:
+                prev = i
+                continue
+            boxes.append(((start + prev) / 2 * tile, j * tile, 0.0,
+                          (prev - start + 1) * tile / 2, tile / 2))
+            if i is not None:
+                start = prev = i
+    return np.array(boxes, dtype=float).reshape(-1, 5)
+
+
+def shapes_of(bodies: list[BodySpec], poses: np.ndarray) -> ShapeSet:
+    """Boxes and circles of bodies at the given (N, 3) poses."""
+    boxes, circles = [], []
+    for body, (x, y, yaw) in zip(bodies, poses):
+        fp = body.footprint
+        if isinstance(fp, Cylinder):
+            circles.append((x, y, fp.radius))
+        elif isinstance(fp, Box):
+            boxes.append((x, y, yaw, fp.size_x / 2, fp.size_y / 2))
+    return ShapeSet(np.array(boxes, dtype=float).reshape(-1, 5),
+                    np.array(circles, dtype=float).reshape(-1, 3))
+
+
+def ray_boxes(origin: np.ndarray, dirs: np.ndarray, boxes: np.ndarray) -> np.ndarray:
+    """(N,) nearest hit distance of each ray against (M, 5) boxes; inf where none."""
+    if len(boxes) == 0:
+        return np.full(len(dirs), np.inf)
+    c, s = np.cos(boxes[:, 2]), np.sin(boxes[:, 2])
+    rel = origin[None, :] - boxes[:, :2]
+    ox = c * rel[:, 0] + s * rel[:, 1]
+    oy = -s * rel[:, 0] + c * rel[:, 1]
+    dx = c[:, None] * dirs[None, :, 0] + s[:, None] * dirs[None, :, 1]
+    dy = -s[:, None] * dirs[None, :, 0] + c[:, None] * dirs[None, :, 1]
+    dx = np.where(np.abs(dx) < 1e-12, 1e-12, dx)
+    dy = np.where(np.abs(dy) < 1e-12, 1e-12, dy)
+    hx, hy = boxes[:, 3:4], boxes[:, 4:5]
+    tx1 = (-hx - ox[:, None]) / dx
+    tx2 = (hx - ox[:, None]) / dx
+    ty1 = (-hy - oy[:, None]) / dy
+    ty2 = (hy - oy[:, None]) / dy
+    near = np.maximum(np.minimum(tx1, tx2), np.minimum(ty1, ty2))
+    far = np.minimum(np.maximum(tx1, tx2), np.maximum(ty1, ty2))
+    # An origin inside a box (the robot pressed into it) reads 0: the scanner is blinded.
+    t = np.where(far >= np.maximum(near, 0.0), np.maximum(near, 0.0), np.inf)
+    return t.min(axis=0)
+
+
+def ray_circles(origin: np.ndarray, dirs: np.ndarray, circles: np.ndarray) -> np.ndarray:
+    if len(circles) == 0:
+        return np.full(len(dirs), np.inf)
+    rel = origin[None, :] - circles[:, :2]
+    b = rel @ dirs.T
+    cc = (rel * rel).sum(axis=1) - circles[:, 2] ** 2
+    disc = b * b - cc[:, None]
+    root = np.sqrt(np.maximum(disc, 0.0))
+    t = np.where(disc >= 0, -b - root, np.inf)
+    t = np.where((disc >= 0) & (t < 0) & (-b + root >= 0), 0.0, t)
+    t = np.where(t < 0, np.inf, t)
+    return t.min(axis=0)
+
+
+class Laser2D:
+    """Scans a fixed set of static shapes plus moving shapes given per scan."""
+
+    def __init__(self, spec: LaserSpec, static: ShapeSet) -> None:
+        self.spec = spec
+        self.angle_min = -spec.fov / 2
+        self.angle_increment = spec.fov / spec.beams
+        self.angles = self.angle_min + self.angle_increment * np.arange(spec.beams)
+        self.static = static
+        self._box_radius = np.hypot(static.boxes[:, 3], static.boxes[:, 4])
+
+    def origin(self, pose: tuple[float, float, float]) -> np.ndarray:
+        x, y, yaw = pose
+        c, s = math.cos(yaw), math.sin(yaw)
+        return np.array([x + c * self.spec.mount_x - s * self.spec.mount_y,
+                         y + s * self.spec.mount_x + c * self.spec.mount_y])
+
+    def scan(self, pose: tuple[float, float, float], moving: ShapeSet | None = None) -> np.ndarray:
+        """Ranges of every beam from the robot at ``pose`` (max_range where nothing is hit)."""
+        spec = self.spec
+        o = self.origin(pose)
+        world_angles = self.angles + pose[2]
+        dirs = np.stack((np.cos(world_angles), np.sin(world_angles)), axis=1)
+        reach = spec.max_range
+        boxes = self.static.boxes
+        near = np.hypot(boxes[:, 0] - o[0], boxes[:, 1] - o[1]) - self._box_radius < reach
+        circles = self.static.circles
+        cnear = np.hypot(circles[:, 0] - o[0], circles[:, 1] - o[1]) - circles[:, 2] < reach
+        box_sets, circle_sets = [boxes[near]], [circles[cnear]]
+        if moving is not None:
+            box_sets.append(moving.boxes)
+            circle_sets.append(moving.circles)
+        t = np.minimum(ray_boxes(o, dirs, np.concatenate(box_sets)),
+                       ray_circles(o, dirs, np.concatenate(circle_sets)))
+        ranges = np.where(t > reach, reach, np.maximum(t, spec.min_range))
+        return np.round(ranges, 3)

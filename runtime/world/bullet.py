@@ -1,0 +1,147 @@
+"""The pybullet world of a run: loads the generated target, steps physics, reads ground truth.
+
+Headless (DIRECT mode), one physics client per ``BulletWorld`` so two worlds can share a
+process. The plane is simulated without gravity: every movable body is driven by planar
+velocities (robot: its differential-drive command; animated bodies: the animator), which
+keeps bodies upright after contacts without holding them by force, while contacts between
+them stay real. This module must never decide what the robot does or judge the run.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pybullet as p
+
+from rei.runtime.errors import RunError
+from rei.runtime.world.manifest import BodySpec, WorldManifest
+
+
+def _quat(yaw: float) -> tuple[float, float, float, float]:
+    return (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
+
+
+def _yaw(q: tuple[float, ...]) -> float:
+    x, y, z, w = q
+    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+class BulletWorld:
+    """The loaded world; call ``close`` (or use as a context manager) to free the client."""
+
+    def __init__(self, manifest: WorldManifest, physics_rate: float) -> None:
+        self.manifest = manifest
+        self.dt = 1.0 / physics_rate
+        self.client = p.connect(p.DIRECT)
+        try:
+            cid = self.client
+            p.resetSimulation(physicsClientId=cid)
+            p.setPhysicsEngineParameter(fixedTimeStep=self.dt, deterministicOverlappingPairs=1,
+                                        numSolverIterations=10, physicsClientId=cid)
+            p.setGravity(0.0, 0.0, 0.0, physicsClientId=cid)
+            self.wall_ids = [self._load(b) for b in manifest.walls]
+            self.object_ids = [self._load(b) for b in manifest.objects]
+            self.robot_id = self._load(manifest.robot)
+        except Exception:
+            p.disconnect(physicsClientId=self.client)
+            raise
+        self._names = {bid: b.name for bid, b in zip(self.wall_ids, manifest.walls)}
+        self._names.update({bid: b.name for bid, b in zip(self.object_ids, manifest.objects)})
+        # Bodies that move but are not animated (free dynamic objects) are kept planar after
+        # every step; animated ones are driven by the animator.
+        self.free_ids = [bid for bid, b in zip(self.object_ids, manifest.objects)
+                         if not b.fixed and b.trajectory is None]
+        self.moving_index = [i for i, b in enumerate(manifest.objects) if not b.fixed]
+
+    def _load(self, body: BodySpec) -> int:
+        path = Path(self.manifest.folder) / body.urdf
+        if not path.is_file():
+            raise RunError(f"the generated world names '{body.urdf}' for '{body.name}', but "
+                           f"'{path}' does not exist (regenerate the pybullet target)")
+        try:
+            bid = p.loadURDF(str(path), [body.x, body.y, body.z], _quat(body.yaw),
+                             useFixedBase=body.fixed, physicsClientId=self.client)
+        except p.error as exc:
+            raise RunError(f"pybullet cannot load '{path}': {exc}") from None
+        if not body.fixed:
+            p.changeDynamics(bid, -1, linearDamping=0.0, angularDamping=0.0, lateralFriction=0.5,
+                             physicsClientId=self.client)
+        return bid
+
+    def __enter__(self) -> BulletWorld:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        if self.client >= 0:
+            p.disconnect(physicsClientId=self.client)
+            self.client = -1
+
+    def pose(self, bid: int) -> tuple[float, float, float]:
+        pos, orn = p.getBasePositionAndOrientation(bid, physicsClientId=self.client)
+        return (pos[0], pos[1], _yaw(orn))
+
+    def twist(self, bid: int) -> tuple[float, float, float]:
+        lin, ang = p.getBaseVelocity(bid, physicsClientId=self.client)
+        return (lin[0], lin[1], ang[2])
+
+    def place(self, bid: int, pose: tuple[float, float, float]) -> None:
+        """Put a body at a planar pose (tests and benchmarks; a run never teleports bodies)."""
+        z = p.getBasePositionAndOrientation(bid, physicsClientId=self.client)[0][2]
+        p.resetBasePositionAndOrientation(bid, (pose[0], pose[1], z), _quat(pose[2]),
+                                          physicsClientId=self.client)
+
+    def set_planar_velocity(self, bid: int, vx: float, vy: float, wz: float) -> None:
+        p.resetBaseVelocity(bid, (vx, vy, 0.0), (0.0, 0.0, wz), physicsClientId=self.client)
+
+    def drive_robot(self, linear: float, angular: float) -> None:
+        """Apply a differential-drive command as the robot's planar body velocity."""
+        _, _, yaw = self.pose(self.robot_id)
+        self.set_planar_velocity(self.robot_id, linear * math.cos(yaw), linear * math.sin(yaw),
+                                 angular)
+
+    def step(self) -> None:
+        for bid in self.free_ids:
+            lin, ang = p.getBaseVelocity(bid, physicsClientId=self.client)
+            p.resetBaseVelocity(bid, (lin[0], lin[1], 0.0), (0.0, 0.0, ang[2]),
+                                physicsClientId=self.client)
+        p.stepSimulation(physicsClientId=self.client)
+
+    def robot_contacts(self) -> list[str]:
+        """Names of the bodies the robot touches now (sorted)."""
+        points = p.getContactPoints(bodyA=self.robot_id, physicsClientId=self.client)
+        return sorted({self._names.get(pt[2], str(pt[2])) for pt in points if pt[8] < 1e-3})
+
+    def object_states(self) -> tuple[np.ndarray, np.ndarray]:
+        """(N, 3) poses and twists of manifest.objects, in order."""
+        n = len(self.object_ids)
+        poses = np.empty((n, 3))
+        twists = np.zeros((n, 3))
+        for i, (bid, body) in enumerate(zip(self.object_ids, self.manifest.objects)):
+            if body.fixed:
+                poses[i] = (body.x, body.y, body.yaw)
+            else:
+                poses[i] = self.pose(bid)
+                twists[i] = self.twist(bid)
+        return poses, twists
+
+    def ray_scan(self, origin: tuple[float, float, float], angles: np.ndarray,
+                 max_range: float) -> np.ndarray:
+        """Ranges by pybullet's own ray test (rayTestBatch), ignoring the robot itself.
+
+        The runtime's laser is the vectorised one in rei.runtime.sensors.laser; this is the
+        reference it is checked against, and the baseline of the benchmark.
+        """
+        ox, oy, oz = origin
+        starts = [(ox, oy, oz)] * len(angles)
+        ends = [(ox + max_range * math.cos(a), oy + max_range * math.sin(a), oz) for a in angles]
+        ranges = np.full(len(angles), max_range)
+        hits = p.rayTestBatch(starts, ends, numThreads=1, physicsClientId=self.client)
+        for i, hit in enumerate(hits):
+            if hit[0] >= 0 and hit[0] != self.robot_id:
+                ranges[i] = hit[2] * max_range
+        return ranges

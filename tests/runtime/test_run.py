@@ -1,0 +1,166 @@
+"""`rei run` end to end: outputs, determinism across processes, watchdog and error outcomes."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rei.runtime.cli import main
+from rei.runtime.collector import read_trace
+from rei.runtime.collector.trace import read_trace_end
+from rei.runtime.commands.run import run_into
+from tests.conftest import EXAMPLES, REPO
+
+NAVIGATION = EXAMPLES / "navigation" / "navigation.mission"
+SIMPLE_WALL = EXAMPLES / "simple_wall" / "simple_wall.mission"
+
+
+def test_a_short_run_writes_trace_summary_and_log(tmp_path: Path) -> None:
+    status = main(["run", str(NAVIGATION), "-o", str(tmp_path), "--duration", "5", "--quiet"])
+    assert status == 1  # the time ran out before the mission ended
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["outcome"] == "timeout" and summary["duration"] == 5.0
+    assert summary["signal_counts"] == {} and summary["verdicts"] == []
+    header, samples = read_trace(tmp_path / "trace.jsonl")
+    assert header.rate == 10.0 and header.mission == "to_the_elevator"
+    roles = [o.role for o in header.objects]
+    assert roles.count("wall") == 32 and "human" in roles
+    rows = list(samples)
+    assert [s.seq for s in rows] == list(range(len(rows)))
+    assert rows[0].time == 0.0 and rows[-1].time == 5.0
+    assert all(s.poses.shape == (len(header.objects), 3) for s in rows)
+    kinds = [e.kind for s in rows for e in s.events]
+    assert kinds == ["begin", "task_start", "task_success", "task_start", "task_fail", "end"]
+    # The human walks; the walls stay.
+    walker = roles.index("human")
+    assert not np.array_equal(rows[0].poses[walker], rows[-1].poses[walker])
+    assert np.array_equal(rows[0].poses[0], rows[-1].poses[0])
+    assert rows[-1].belief.laser_min < 3.5
+    assert read_trace_end(tmp_path / "trace.jsonl") == (5.0, "timeout", summary["reason"])
+    log = (tmp_path / "run.log").read_text()
+    assert "task_start elevator" in log and "outcome timeout" in log
+    assert (tmp_path / "world" / "world.json").is_file()
+    assert (tmp_path / "world" / "monitor.json").is_file()
+
+
+def _run_fresh(out: Path, hashseed: str) -> None:
+    env = dict(os.environ, PYTHONHASHSEED=hashseed)
+    subprocess.run([sys.executable, "-m", "rei.runtime.cli", "run", str(NAVIGATION), "-o",
+                    str(out), "--duration", "25", "--seed", "4", "--odom-drift", "0.01",
+                    "--quiet"], cwd=REPO, env=env, check=False, capture_output=True)
+
+
+def _tree(folder: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*"))
+            if p.is_file()}
+
+
+@pytest.mark.slow
+def test_same_inputs_and_seed_give_identical_bytes_in_fresh_processes(tmp_path: Path) -> None:
+    _run_fresh(tmp_path / "a", "1")
+    _run_fresh(tmp_path / "b", "2")
+    a, b = _tree(tmp_path / "a"), _tree(tmp_path / "b")
+    assert set(a) >= {"trace.jsonl", "summary.json", "run.log", "world/world.json"}
+    assert a == b
+
+
+def test_another_seed_changes_the_drifting_odometry(tmp_path: Path) -> None:
+    for seed in ("1", "2"):
+        main(["run", str(NAVIGATION), "-o", str(tmp_path / seed), "--duration", "3",
+              "--seed", seed, "--odom-drift", "0.05", "--quiet"])
+    one = [s.belief.odom for s in read_trace(tmp_path / "1" / "trace.jsonl")[1]]
+    two = [s.belief.odom for s in read_trace(tmp_path / "2" / "trace.jsonl")[1]]
+    assert one != two
+
+
+@pytest.mark.parametrize(("name", "reason"), [
+    ("Hanging", "did not return within the watchdog's 0.5 s"),
+    ("Raising", "step() raised ValueError: the planner lost its map"),
+    ("NonFinite", "non-finite command"),
+])
+def test_a_broken_controller_ends_the_run_with_an_error(name: str, reason: str,
+                                                        tmp_path: Path) -> None:
+    summary, _ = run_into(NAVIGATION, tmp_path, f"tests.runtime.faulty:{name}", duration=10.0,
+                          watchdog=0.5)
+    assert summary.outcome == "error" and reason in summary.reason
+    saved = json.loads((tmp_path / "summary.json").read_text())
+    assert saved["outcome"] == "error" and reason in saved["reason"]
+    end = read_trace_end(tmp_path / "trace.jsonl")
+    assert end is not None and end[1] == "error"
+    # The controller failed at its 20th step (t = 1.9 s); the trace ends there, consistently.
+    rows = list(read_trace(tmp_path / "trace.jsonl")[1])
+    assert rows[-1].time == pytest.approx(1.9) and rows[-1].events[-1].kind == "end"
+
+
+def test_the_cli_reports_a_run_error_with_exit_status_3(tmp_path: Path) -> None:
+    status = main(["run", str(NAVIGATION), "-o", str(tmp_path), "--controller",
+                   "tests.runtime.faulty:Raising", "--duration", "5", "--quiet"])
+    assert status == 3
+
+
+def test_an_interrupted_run_leaves_consistent_outputs_marked_incomplete(tmp_path: Path) -> None:
+    status = main(["run", str(NAVIGATION), "-o", str(tmp_path), "--controller",
+                   "tests.runtime.faulty:Interrupting", "--duration", "10", "--quiet"])
+    assert status == 130
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["outcome"] == "interrupted" and summary["measurements"]["incomplete"] is True
+    header, rows = read_trace(tmp_path / "trace.jsonl")
+    assert [e.kind for s in rows for e in s.events][-1] == "end"
+
+
+def test_tasks_fail_on_timeout_and_on_false_success(tmp_path: Path) -> None:
+    summary, _ = run_into(NAVIGATION, tmp_path / "idle", "tests.runtime.faulty:Idle",
+                          duration=31.0)
+    first = summary.measurements["tasks"][0]
+    assert not first["succeeded"] and first["reason"] == "timeout after 30 s"
+    summary, _ = run_into(NAVIGATION, tmp_path / "liar", "tests.runtime.faulty:ClaimsSuccess",
+                          duration=2.0)
+    tasks = summary.measurements["tasks"]
+    assert tasks[0]["succeeded"]  # it starts on the first goal
+    assert not tasks[1]["succeeded"] and tasks[1]["reason"].startswith("outside tolerance")
+    assert summary.outcome == "failed"
+
+
+def test_bad_arguments_are_input_errors(tmp_path: Path) -> None:
+    assert main(["run", str(NAVIGATION), "-o", str(tmp_path), "--controller", "nope",
+                 "--quiet"]) == 2
+    assert main(["run", str(NAVIGATION), "-o", str(tmp_path), "--duration", "nan",
+                 "--quiet"]) == 2
+    assert main(["run", str(tmp_path / "missing.mission"), "-o", str(tmp_path),
+                 "--quiet"]) == 2
+
+
+def test_teleop_drives_into_the_wall_and_away_thesis_7_2(tmp_path: Path) -> None:
+    summary, _ = run_into(SIMPLE_WALL, tmp_path, "teleop")
+    m = summary.measurements
+    assert "wall_e" in m["collided_with"] and "wall_w" not in m["collided_with"]
+    xs = [s.robot_pose[0] for s in read_trace(tmp_path / "trace.jsonl")[1]]
+    # It stops at the east wall's face (x = 2.5 m) minus half its length, then backs off.
+    assert max(xs) == pytest.approx(2.5 - 0.281 / 2, abs=0.02)
+    assert xs[-1] < 0.3
+    assert m["tasks"][0]["succeeded"] and not m["tasks"][1]["succeeded"]
+
+
+def test_teleop_circles(tmp_path: Path) -> None:
+    summary, _ = run_into(EXAMPLES / "medium_sparse" / "medium_sparse.mission", tmp_path,
+                          "teleop:circle", duration=25.0)
+    header, rows = read_trace(tmp_path / "trace.jsonl")
+    yaws = [s.robot_pose[2] for s in rows]
+    assert max(yaws) > 3.0 and min(yaws) < -3.0  # it turned all the way round
+    # Circles of 0.5 m from the dock reach the walls: thesis 7.2.3 touches them from the side.
+    assert summary.measurements["path_length"] > 1.0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("example", ["navigation", "simple_wall", "small_dense", "medium_sparse"])
+def test_the_reference_navigator_completes_every_example_without_collision(
+        example: str, tmp_path: Path) -> None:
+    summary, _ = run_into(EXAMPLES / example / f"{example}.mission", tmp_path)
+    assert summary.outcome == "completed", summary.measurements["tasks"]
+    assert summary.measurements["collisions"] == 0
