@@ -158,6 +158,7 @@ def mission_completions(text_before: str, room: Room | None) -> list[Candidate]:
     return _keywords(("mission", "in"))
 
 
-def vepl_completions(query_names: Iterable[str]) -> list[Candidate]:
-    return _keywords(grammar_keywords("vepl")) + [Candidate(n, "query", "query")
-                                                  for n in query_names]
+def vepl_completions(names: Iterable[tuple[str, str]]) -> list[Candidate]:
+    """Keywords of the VEPL grammar and the (name, kind) pairs its model declares."""
+    return _keywords(grammar_keywords("vepl")) + [Candidate(n, kind, kind)
+                                                  for n, kind in names]

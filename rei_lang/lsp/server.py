@@ -29,6 +29,7 @@ from pygls.uris import from_fs_path, to_fs_path
 
 from rei.lang.errors import Diagnostic, Severity
 from rei.lang.lsp import completion as completing
+from rei.lang.lsp import vepl_support
 from rei.lang.lsp.navigation import Found, Place, find_in_mission, find_in_room
 from rei.lang.lsp.outline import Symbol, mission_outline, room_outline
 from rei.lang.lsp.positions import LineIndex, Units, units_for
@@ -152,7 +153,7 @@ class ReiLanguageServer(LanguageServer):
         self.analyses[analysis.uri] = analysis
         parsed = ((analysis.room is not None and analysis.room.room is not None)
                   or (analysis.mission is not None and analysis.mission.mission is not None)
-                  or analysis.vepl is not None)
+                  or vepl_support.specification(analysis.vepl) is not None)
         if parsed:
             self.last_parsed[analysis.uri] = analysis
 
@@ -217,6 +218,8 @@ class ReiLanguageServer(LanguageServer):
             found = find_in_room(analysis.room, index, line, col)
         elif analysis.mission is not None:
             found = find_in_mission(analysis.mission, index, line, col)
+        elif analysis.vepl is not None:
+            found = vepl_support.find(analysis.vepl, index, line, col)
         return (found, analysis) if found is not None else None
 
     def location(self, place: Place) -> types.Location:
@@ -264,16 +267,9 @@ def _analyse(workspace: Workspace, uri: str, path: str, text: str, version: int 
 
 
 def _vepl_model(workspace: Workspace, path: str) -> Any:
-    """The .vepl model when the VEPL language is installed (it is optional here)."""
+    """The .vepl document when the VEPL language is installed (it is optional here)."""
     try:
-        from rei.lang.vepl import document as vepl_document
-    except ImportError:
-        return None
-    loader = getattr(vepl_document, "analyse_vepl", None)
-    if loader is None:
-        return None
-    try:
-        return loader(workspace.source(path))
+        return vepl_support.analyse(workspace.source(path))
     except Exception:
         log.exception("reading the .vepl model of %s failed", path)
         return None
@@ -313,12 +309,15 @@ _SYMBOL_KINDS = {
     "grid": types.SymbolKind.Array, "floor": types.SymbolKind.Field,
     "wall": types.SymbolKind.Constant, "object": types.SymbolKind.Object,
     "human": types.SymbolKind.Object, "robot": types.SymbolKind.Class,
-    "goal": types.SymbolKind.Event, "declaration": types.SymbolKind.Function,
+    "goal": types.SymbolKind.Event, "query": types.SymbolKind.Function,
+    "event": types.SymbolKind.Event, "signal": types.SymbolKind.Constant,
+    "requirement": types.SymbolKind.Interface,
 }
 _COMPLETION_KINDS = {
     "keyword": types.CompletionItemKind.Keyword, "floor": types.CompletionItemKind.Field,
     "wall": types.CompletionItemKind.Constant, "type": types.CompletionItemKind.Class,
     "query": types.CompletionItemKind.Function, "file": types.CompletionItemKind.File,
+    "event": types.CompletionItemKind.Event, "parameter": types.CompletionItemKind.Variable,
 }
 
 
@@ -336,31 +335,6 @@ def _document_symbol(symbol: Symbol, index: LineIndex) -> types.DocumentSymbol:
 
 def _before(a: types.Position, b: types.Position) -> bool:
     return (a.line, a.character) <= (b.line, b.character)
-
-
-def _vepl_outline(model: Any) -> Iterable[Symbol]:
-    """Top-level declarations of a .vepl model, if its module exposes them."""
-    declarations = getattr(model, "declarations", None)
-    if not declarations:
-        return ()
-    out = []
-    for decl in declarations:
-        span = getattr(decl, "span", None)
-        name = getattr(decl, "name", None)
-        if span is None or not isinstance(name, str):
-            continue
-        out.append(Symbol(name, "declaration", type(decl).__name__.lower(), span, span))
-    return out
-
-
-def _vepl_query_names(model: Any) -> list[str]:
-    names: list[str] = []
-    for attribute in ("queries", "patterns", "declarations"):
-        for decl in getattr(model, attribute, None) or ():
-            name = getattr(decl, "name", None)
-            if isinstance(name, str) and name not in names:
-                names.append(name)
-    return names
 
 
 def build_server() -> ReiLanguageServer:
@@ -419,7 +393,7 @@ def build_server() -> ReiLanguageServer:
             candidates = completing.mission_completions(before, room)
         elif suffix == ".vepl":
             model = parsed.vepl if parsed is not None else None
-            candidates = completing.vepl_completions(_vepl_query_names(model))
+            candidates = completing.vepl_completions(vepl_support.completion_names(model))
         else:
             candidates = []
         items = [types.CompletionItem(label=c.label, detail=c.detail or None,
@@ -462,7 +436,7 @@ def build_server() -> ReiLanguageServer:
         elif analysis.mission is not None and analysis.mission.mission is not None:
             symbols = [mission_outline(analysis.mission.mission, index)]
         elif analysis.vepl is not None:
-            symbols = _vepl_outline(analysis.vepl)
+            symbols = vepl_support.outline(analysis.vepl, index)
         return [_document_symbol(s, index) for s in symbols]
 
     return server

@@ -321,3 +321,28 @@ async def test_an_example_room_opens_clean(client: RecordingClient, examples_dir
     [room] = await document_symbols(client, path)
     assert room.name == "navigation"
     await editor.close(path)
+
+
+async def test_vepl_diagnostics_completion_outline_and_definition(client: RecordingClient,
+                                                                  tmp_path: Path) -> None:
+    vepl = pytest.importorskip("rei.lang.vepl.document")
+    text = Path(vepl.DEFAULT_VEPL).read_text(encoding="utf-8")
+    path = tmp_path / "monitor.vepl"
+    path.write_text(text, encoding="utf-8")
+    editor = Editor(client)
+    published = await editor.open(path)
+    assert codes(published) == [d.rule for d in Workspace().check(path)]
+    # Queries are completed by name, from the last version that parsed.
+    half = text + "\nquery broken() { neg find \n"
+    assert "SYNTAX" in codes(await editor.change(path, half))
+    labels = await completion_labels(client, path, position_of(half, "neg find \n", offset=9))
+    assert {"findCollisionToObject", "findCloseToObject", "queryEvent", "signal"} <= set(labels)
+    await editor.change(path, text)
+    outline = {s.name: s for s in await document_symbols(client, path)}
+    assert outline["findCollisionToObject"].kind == types.SymbolKind.Function
+    [loc] = await definition(client, path, position_of(text, "neg find findCollisionToObject",
+                                                       offset=12))
+    assert loc.range.start == position_of(text, "findCollisionToObject(o")
+    hover = await hover_text(client, path, position_of(text, "as findFarObject", offset=5))
+    assert "**query** `findFarObject`" in hover
+    await editor.close(path)
