@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import functools
 import re
+from collections.abc import Iterable
 from dataclasses import dataclass
 from importlib import resources
-from typing import Iterable
 
 from rei.catalogue import Catalogue, default_catalogue
 from rei.lang.room.model import Room
@@ -102,7 +102,7 @@ def _walls(room: Room | None) -> list[Candidate]:
 
 def _types(catalogue: Catalogue | None, role: str | None) -> list[Candidate]:
     catalogue = catalogue or default_catalogue()
-    names = catalogue.names(role) if role else catalogue.names()  # type: ignore[arg-type]
+    names = catalogue.names(role) if role else catalogue.names()  # type: ignore[arg-type,unused-ignore]
     if not names:
         names = catalogue.names()
     out = []

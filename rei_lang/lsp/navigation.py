@@ -8,10 +8,11 @@ say what ``rei-gen check`` and the generators also believe.
 from __future__ import annotations
 
 import re
+from collections.abc import Iterator
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
-from typing import Iterator, Literal
+from typing import Literal
 
 from rei.catalogue import Box, Catalogue, Cylinder, ObjectType, Polygon, Tile
 from rei.lang.errors import Span
@@ -125,8 +126,8 @@ def find_in_room(doc: RoomDocument, index: LineIndex, line: int, col: int) -> Fo
                                                  "block", name), index)
     if room.catalogue_span is not None and room.catalogue_path is not None and contains(
             room.catalogue_span, line, col):
-        written = Written(room.catalogue_span, "file", room.catalogue_path)
-        return Found(written, _file_place(room.catalogue_path),
+        catalogue = Written(room.catalogue_span, "file", room.catalogue_path)
+        return Found(catalogue, _file_place(room.catalogue_path),
                      f"catalogue file `{room.catalogue_path}`")
     written = _smallest_at(room_names(room, index), line, col)
     return describe(doc, written, index) if written is not None else None

@@ -18,10 +18,11 @@ import asyncio
 import functools
 import logging
 import sys
+from collections.abc import Callable, Iterable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Iterable, TypeVar
+from typing import Any, TypeVar
 
 from lsprotocol import types
 from pygls.lsp.server import LanguageServer
@@ -286,7 +287,7 @@ def to_lsp(diagnostic: Diagnostic, index: LineIndex) -> types.Diagnostic:
     )
 
 
-def guarded(default: Callable[[], R]) -> Callable[[Callable[..., R]], Callable[..., R]]:
+def guarded(default: Callable[[], Any]) -> Callable[[Callable[..., R]], Callable[..., R]]:
     """Log any exception of a handler and answer ``default()`` instead: one broken request
     must never take the server down."""
 
@@ -297,7 +298,8 @@ def guarded(default: Callable[[], R]) -> Callable[[Callable[..., R]], Callable[.
                 return fn(*args, **kwargs)
             except Exception:
                 log.exception("%s failed", fn.__name__)
-                return default()
+                answer: R = default()
+                return answer
 
         return wrapper
 

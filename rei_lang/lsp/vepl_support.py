@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import logging
 import re
-from typing import Any, Iterator
+from collections.abc import Iterator
+from typing import Any
 
 from rei.lang.errors import Diagnostic, Span
 from rei.lang.lsp.navigation import Found, Place, Written, name_span
@@ -82,7 +83,7 @@ def find(document: Any, index: LineIndex, line: int, col: int) -> Found | None:
     source = getattr(document, "source", None)
     path = getattr(source, "path", "")
     written = Written(Span(path, line, match.start() + 1, line, match.end() + 1), "block", word)
-    for kind, shown, name, decl in declarations(document):
+    for _, shown, name, decl in declarations(document):
         if name == word:
             first_line = index.line_text(decl.span.line).strip()
             place = Place(decl.span.file, name_span(index, decl.span, name),

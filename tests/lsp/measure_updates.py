@@ -15,8 +15,14 @@ import tempfile
 import time
 from pathlib import Path
 
-from tests.lsp.conftest import SERVER_COMMAND, Editor, initialize_params, make_client
-from tests.lsp.conftest import publish_index, wait_published
+from tests.lsp.conftest import (
+    SERVER_COMMAND,
+    Editor,
+    initialize_params,
+    make_client,
+    publish_index,
+    wait_published,
+)
 from tests.lsp.rooms import explicit_room, grid_room
 
 EDITS = 15

@@ -12,8 +12,15 @@ import pytest_lsp
 from lsprotocol import types
 
 from rei.lang.workspace import Workspace
-from tests.lsp.conftest import CONFIG, Editor, RecordingClient, initialize_params, position_of
-from tests.lsp.conftest import publish_index, wait_published
+from tests.lsp.conftest import (
+    CONFIG,
+    Editor,
+    RecordingClient,
+    initialize_params,
+    position_of,
+    publish_index,
+    wait_published,
+)
 from tests.lsp.rooms import MISSION, ROOM
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")

@@ -11,8 +11,14 @@ import pytest
 import pytest_lsp
 from lsprotocol import types
 
-from tests.lsp.conftest import CONFIG, Editor, RecordingClient, initialize_params, position_of
-from tests.lsp.conftest import wait_published
+from tests.lsp.conftest import (
+    CONFIG,
+    Editor,
+    RecordingClient,
+    initialize_params,
+    position_of,
+    wait_published,
+)
 from tests.lsp.rooms import ROOM, explicit_room
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
@@ -137,8 +143,8 @@ async def test_unknown_and_unopened_files(client: RecordingClient, tmp_path: Pat
 async def test_a_huge_room_does_not_stall_other_requests(client: RecordingClient,
                                                          tmp_path: Path, valid_room: Path
                                                          ) -> None:
-    """A room of 10,000 explicit floors (0.45 MB) takes seconds to check; meanwhile the server answers
-    requests about other files (checking runs off the event loop)."""
+    """A room of 10,000 explicit floors (0.45 MB) takes seconds to check; meanwhile the
+    server answers requests about other files (checking runs off the event loop)."""
     editor = Editor(client)
     await editor.open(valid_room)
     path = tmp_path / "huge_floors.room"
