@@ -54,6 +54,10 @@ HEADINGS = (0.0, 90.0, 180.0, 270.0, 45.0, 135.0, 30.0, 60.0, 120.0, 150.0)
 HUMAN_MIN_STEP = 2.0
 """Tiles between consecutive control vertices of a human's trajectory."""
 HUMAN_TRIES = 30
+CHECK_STEP = 0.2
+"""Metres between the points where a trajectory's clearance is checked: a disc of 0.35 m
+moving 0.2 m between checks can dip at most 1.5 cm deeper than checked, inside the 0.1 m
+margin over the human's 0.25 m radius."""
 
 
 class AttemptFailed(Exception):
@@ -156,18 +160,11 @@ def _split(length: int, rng: random.Random) -> int:
 
 
 def grid_rows(params: RoomParameters, floors: set[Cell]) -> tuple[str, ...]:
+    walls = {(i + di, j + dj) for i, j in floors for di in (-1, 0, 1) for dj in (-1, 0, 1)}
     rows = []
     for r in range(0, params.height + 2):
-        line = []
-        for c in range(0, params.width + 2):
-            if (c, -r) in floors:
-                line.append(".")
-            elif any((c + dc, -(r + dr)) in floors
-                     for dr in (-1, 0, 1) for dc in (-1, 0, 1)):
-                line.append("#")
-            else:
-                line.append(" ")
-        rows.append("".join(line))
+        rows.append("".join("." if (c, -r) in floors else "#" if (c, -r) in walls else " "
+                            for c in range(0, params.width + 2)))
     return tuple(rows)
 
 
@@ -175,7 +172,10 @@ def _choose_goals(params: RoomParameters, floors: set[Cell], rng: random.Random)
     ordered = sorted(floors)
     reach = params.spacing - 1e-9
     # Only floors with some floor far enough away can lead on to a next goal.
-    onward = [c for c in ordered if any(math.dist(c, o) >= reach for o in ordered)]
+    coords = np.asarray(ordered, dtype=float)
+    gaps = coords[:, None, :] - coords[None, :, :]
+    farthest = np.sqrt((gaps ** 2).sum(axis=2).max(axis=1))
+    onward = [c for c, far in zip(ordered, farthest.tolist(), strict=True) if far >= reach]
     if not onward:
         raise AttemptFailed("spacing", f"no two floors {params.spacing:g} m apart")
     goals = [onward[rng.randrange(len(onward))]]
@@ -222,7 +222,7 @@ def _human(params: RoomParameters, index: int, floors: set[Cell], outside: CellM
                 cand = ordered[rng.randrange(len(ordered))]
                 if math.dist(cand, prev) < HUMAN_MIN_STEP:
                     continue
-                if not disc_touches(polyline([prev, cand], False), outside):
+                if not disc_touches(polyline([prev, cand], False, CHECK_STEP), outside):
                     vertices.append(cand)
                     break
             else:
@@ -232,8 +232,8 @@ def _human(params: RoomParameters, index: int, floors: set[Cell], outside: CellM
         if params.loop and math.dist(vertices[-1], vertices[0]) < 1.0:
             continue
         points = [(float(i), float(j)) for i, j in vertices]
-        spline = catmull_rom(points, params.loop)
-        straight = polyline(points, params.loop)
+        spline = catmull_rom(points, params.loop, CHECK_STEP)
+        straight = polyline(points, params.loop, CHECK_STEP)
         if disc_touches(spline, outside) or disc_touches(straight, outside):
             continue
         steps = spline[1:] - spline[:-1]
@@ -255,7 +255,8 @@ def construct(params: RoomParameters, facts: CatalogueFacts, rng: random.Random)
     robot = goals[0]
 
     stops = goals + ([goals[0]] if params.cycles > 1 else [])
-    base = bfs_route(floors, stops) or [robot]
+    crossing_wanted = params.crossing == "cross" and params.humans > 0
+    base = (bfs_route(floors, stops) if crossing_wanted else None) or [robot]
     outside = CellMask(outside)
     reserved: set[Cell] = set(goals)
     humans: list[HumanPlan] = []

@@ -24,7 +24,7 @@ from functools import lru_cache
 import numpy as np
 
 from rei.catalogue import Box, Cylinder, Footprint, Polygon
-from rei.generators.rooms.geometry import Cell, catmull_rom, entries, path_graph, route
+from rei.generators.rooms.geometry import Cell, catmull_rom, entries, fast_route
 
 RESOLUTION = 0.1
 """Metres per occupancy cell (BARN's grids are of this order for a robot of ~0.5 m)."""
@@ -157,9 +157,8 @@ def _rasterise(scene: Scene) -> _Raster:
 def robot_route(scene: Scene) -> list[Cell]:
     """The robot's shortest route through the goals in order (and back for cycles > 1)."""
     blocked = {o.cell for o in scene.obstacles}
-    graph = path_graph(c for c in scene.floors if c not in blocked)
     stops = list(scene.goals) + ([scene.goals[0]] if scene.cycles > 1 else [])
-    cells = route(graph, stops)
+    cells = fast_route({c for c in scene.floors if c not in blocked}, stops)
     if cells is None:
         raise UnreachableGoals("goals are not reachable in order")
     return cells
@@ -214,7 +213,9 @@ def describe(scene: Scene, route_cells: Sequence[Cell] | None = None) -> Descrip
     bx = (raster.i0 - 0.5) * raster.res * raster.sub + (border_c + 0.5) * raster.res
     by = (raster.j1 + 0.5) * raster.res * raster.sub - (border_r + 0.5) * raster.res
     if len(bx):
-        d = np.hypot(points[:, 0:1] - bx[None, :], points[:, 1:2] - by[None, :]).min(axis=1)
+        px, py = points[:, 0:1].astype(np.float32), points[:, 1:2].astype(np.float32)
+        bx32, by32 = bx.astype(np.float32)[None, :], by.astype(np.float32)[None, :]
+        d = np.sqrt(((px - bx32) ** 2 + (py - by32) ** 2).min(axis=1).astype(float))
         closest = float(np.maximum(d - raster.res / 2, 0.0).mean())
     else:
         closest = RAY_CAP
