@@ -1,0 +1,263 @@
+"""The `rx` target: a .vepl specification as a Python module of RxPY event automata.
+
+The module (``automata.py``) holds the queries as vectorised numpy functions, the query
+events, complex events and signals as reactivex pipelines on a virtual-time scheduler, and
+the requirements as data; rei.runtime.monitor.host loads it. Deterministic text from the
+same specification. This module must never import the runtime's host or write files itself.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from rei.generators.errors import GenerationError
+from rei.generators.output import OutputTree
+from rei.generators.targets import GenerationRequest
+from rei.generators.templating import make_environment, render, template_loader
+from rei.lang.errors import LanguageError
+from rei.lang.vepl import model as vm
+from rei.lang.vepl.document import load_vepl
+from rei.lang.vepl.linker import NAMED_STATES
+
+OUTPUT = "automata.py"
+FORMAT_VERSION = 1
+INTERPOLATED = {"laser_min", "speed", "time", "odom_error"}
+"""Measures that change continuously between samples (crossings are replayed in order)."""
+
+
+def _states(kind: str) -> tuple[str, ...]:
+    return vm.TASK_STATES if kind == "task_state" else NAMED_STATES[kind]
+
+
+@dataclass(frozen=True)
+class _QueryCode:
+    name: str
+    domain: str
+    kinds: tuple[str, ...]
+    signature: str
+    strict: str
+    relaxed: str | None
+
+    def shape(self, expr: str) -> str:
+        """Object/floor/task queries return an array over their domain; others a boolean."""
+        if not self.domain:
+            return f"np.asarray({expr}, dtype=bool)"
+        mask = ""
+        if self.kinds:
+            mask = " | ".join(f"w.kind({k!r})" for k in self.kinds)
+            mask = f"({mask}) & " if len(self.kinds) > 1 else f"{mask} & "
+        return f"{mask}np.broadcast_to({expr}, (w.n_{self.domain},))"
+
+
+class _Writer:
+    """Expressions as numpy code; ``relaxed`` widens every threshold by the hysteresis band
+    in the direction that keeps a match (flipped under 'not')."""
+
+    def __init__(self, query: vm.Query, hysteresis: float) -> None:
+        self.query = query
+        self.h = hysteresis
+
+    def code(self, e: vm.Expr, relaxed: bool, positive: bool = True) -> str:
+        c = lambda x, pos=positive: self.code(x, relaxed, pos)  # noqa: E731
+        if isinstance(e, vm.Num):
+            return repr(e.value)
+        if isinstance(e, vm.Measure):
+            return f"w.{e.name}"
+        if isinstance(e, vm.Var):
+            domain = self.query.param.domain if self.query.param else "object"
+            return f"w.indices({domain!r})"
+        if isinstance(e, vm.Call):
+            if e.function == "distance":
+                return "w.distance"
+            if e.function == "on":
+                return "w.robot_floor"
+            if e.function == "state":
+                return "w.task_state"
+            args = "".join(", " + c(a) for a in e.args)
+            return f"w.call({e.function!r}{args})"
+        if isinstance(e, vm.Arith):
+            return f"({c(e.left)} {e.op} {c(e.right)})"
+        if isinstance(e, vm.Compare):
+            left = c(e.left)
+            if isinstance(e.right, vm.StateName):
+                kind = self._state_kind(e.left)
+                code = _states(kind).index(e.right.name)
+                return f"({left} {e.op} {code})"
+            right = c(e.right)
+            if relaxed and self.h > 0 and e.op in ("<", "<=", ">", ">="):
+                widen = (e.op in ("<", "<=")) == positive
+                right = f"{right} {'+' if widen else '-'} HYSTERESIS"
+            return f"({left} {e.op} {right})"
+        if isinstance(e, vm.BoolOp):
+            joiner = " & " if e.op == "and" else " | "
+            return "(" + joiner.join(c(x) for x in e.operands) + ")"
+        if isinstance(e, vm.Not):
+            return f"~{self.code(e.operand, relaxed, not positive)}"
+        if isinstance(e, vm.Find):
+            ref = f"q[{e.query!r}]"
+            inner = ref if e.arg is not None else f"np.any({ref})"
+            return f"~{inner}" if e.negated else inner
+        raise GenerationError(f"cannot generate code for {e!r}")
+
+    @staticmethod
+    def _state_kind(e: vm.Expr) -> str:
+        if isinstance(e, vm.Call) and e.function == "state":
+            return "task_state"
+        assert isinstance(e, vm.Measure)
+        return e.name
+
+    def margins(self, e: vm.Expr, out: list[str]) -> None:
+        if isinstance(e, vm.Compare) and not isinstance(e.right, vm.StateName):
+            if _measured(e.left) or _measured(e.right):
+                base = f"{self.code(e.left, False)} - {self.code(e.right, False)}"
+                out.append(f"np.asarray({base}, dtype=float)")
+                if self.h > 0 and e.op in ("<", "<=", ">", ">="):
+                    out.append(f"np.asarray({base} - HYSTERESIS, dtype=float)")
+                    out.append(f"np.asarray({base} + HYSTERESIS, dtype=float)")
+            return
+        for child in _children(e):
+            self.margins(child, out)
+
+
+def _children(e: vm.Expr) -> tuple[vm.Expr, ...]:
+    if isinstance(e, vm.BoolOp):
+        return e.operands
+    if isinstance(e, vm.Not):
+        return (e.operand,)
+    if isinstance(e, vm.Compare | vm.Arith):
+        return (e.left, e.right)
+    if isinstance(e, vm.Call):
+        return e.args
+    return ()
+
+
+def _measured(e: vm.Expr) -> bool:
+    if isinstance(e, vm.Measure):
+        return e.name in INTERPOLATED
+    if isinstance(e, vm.Call):
+        return e.function == "distance" or e.user
+    return any(_measured(c) for c in _children(e))
+
+
+def _constant(e: vm.Expr) -> float | None:
+    if isinstance(e, vm.Num):
+        return e.value
+    if isinstance(e, vm.Arith):
+        a, b = _constant(e.left), _constant(e.right)
+        if a is None or b is None:
+            return None
+        return {"+": a + b, "-": a - b, "*": a * b, "/": a / b if b else math.inf}[e.op]
+    return None
+
+
+def distance_cutoff(spec: vm.Specification) -> float:
+    """The largest threshold a footprint distance is compared with (inf if not constant)."""
+    worst = 0.0
+
+    def visit(e: vm.Expr) -> None:
+        nonlocal worst
+        if isinstance(e, vm.Compare):
+            sides = (e.left, e.right)
+            for side, other in (sides, sides[::-1]):
+                if isinstance(side, vm.Call) and side.function == "distance":
+                    value = _constant(other)
+                    worst = max(worst, math.inf if value is None else value)
+                elif _uses_distance(side):
+                    worst = math.inf
+        for child in _children(e):
+            visit(child)
+
+    for q in spec.queries:
+        visit(q.condition)
+    return worst + spec.hysteresis if math.isfinite(worst) else math.inf
+
+
+def _uses_distance(e: vm.Expr) -> bool:
+    if isinstance(e, vm.Call) and e.function == "distance":
+        return True
+    return any(_uses_distance(c) for c in _children(e))
+
+
+def _pyrepr(value: Any) -> str:
+    if isinstance(value, float):
+        if math.isinf(value):
+            return "math.inf"
+        return repr(value)
+    return repr(value)
+
+
+def _signature(q: vm.Query, path: str) -> str:
+    param = ""
+    if q.param:
+        kinds = f"[{', '.join(q.param.kinds)}]" if q.param.kinds else ""
+        param = f"{q.param.name}: {q.param.domain}{kinds}"
+    return f"query {q.name}({param}), {path} line {q.span.line}."
+
+
+def _event_refs(p: vm.Pattern) -> list[str]:
+    if isinstance(p, vm.EvRef):
+        return [p.name]
+    parts: tuple[vm.Pattern, ...]
+    if isinstance(p, vm.EvSeq | vm.EvAnd):
+        parts = p.parts
+    elif isinstance(p, vm.EvOr):
+        parts = p.options
+    else:
+        parts = (p.operand,)
+    out: list[str] = []
+    for x in parts:
+        for r in _event_refs(x):
+            if r not in out:
+                out.append(r)
+    return out
+
+
+def render_module(spec: vm.Specification, source_name: str) -> str:
+    queries = []
+    margins: list[str] = []
+    for q in spec.queries:
+        w = _Writer(q, spec.hysteresis)
+        strict = w.code(q.condition, False)
+        relaxed = w.code(q.condition, True) if spec.hysteresis > 0 else None
+        if relaxed == strict:
+            relaxed = None
+        w.margins(q.condition, margins)
+        queries.append(_QueryCode(q.name, q.param.domain if q.param else "",
+                                  q.param.kinds if q.param else (),
+                                  _signature(q, source_name), strict, relaxed))
+    complex_events = [
+        {"name": c.name, "text": c.text, "context": c.context,
+         "context_text": "strict immediate" if c.context == "strict" else c.context,
+         "refs": _event_refs(c.pattern)}
+        for c in spec.complex_events]
+    env = make_environment(template_loader("rx"), xml=False)
+    env.filters["pyrepr"] = _pyrepr
+    cutoff = distance_cutoff(spec)
+    text = render(env, "automata.py.j2", spec=spec, source_name=source_name,
+                  format_version=FORMAT_VERSION, queries=queries,
+                  margins=list(dict.fromkeys(margins)), complex=complex_events,
+                  cutoff="math.inf" if math.isinf(cutoff) else repr(cutoff),
+                  functions=repr(dict(spec.functions)))
+    compile(text, OUTPUT, "exec")  # a template bug must fail here, not in a user's run
+    return text
+
+
+@dataclass(frozen=True)
+class RxTarget:
+    name: str = "rx"
+    description: str = "RxPY event automata (a Python module) from a .vepl specification"
+    accepts: tuple[str, ...] = (".vepl",)
+
+    def generate(self, request: GenerationRequest) -> OutputTree:
+        try:
+            spec = load_vepl(request.source)
+        except LanguageError as exc:
+            raise GenerationError(str(exc)) from None
+        tree = OutputTree()
+        tree.add_text(OUTPUT, render_module(spec, request.source.name))
+        return tree
+
+
+TARGET = RxTarget()

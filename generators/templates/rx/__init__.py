@@ -1,0 +1,1 @@
+"""Templates of the `rx` target: the generated event-automata module (data only)."""

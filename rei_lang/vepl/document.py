@@ -1,0 +1,58 @@
+"""One .vepl file analysed end to end: parse, link, check; the entry point of rei-gen check.
+
+``check_vepl`` is what rei.lang.workspace calls for .vepl files; ``load_vepl`` raises
+LanguageError with every problem. This module must never import the runtime.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from rei.lang.errors import Diagnostic, LanguageError, sorted_diagnostics
+from rei.lang.parsing import parse
+from rei.lang.source import SourceText, read_source
+from rei.lang.vepl.linker import link_vepl
+from rei.lang.vepl.model import Specification
+
+if TYPE_CHECKING:
+    from rei.lang.workspace import Workspace
+
+DEFAULT_VEPL = Path(str(resources.files("rei.lang.vepl").joinpath("default.vepl")))
+"""The default specification: thesis Table 3 utilities, appendix 9.2.2 patterns, 5.1.2
+requirements."""
+
+
+@dataclass(frozen=True)
+class VeplDocument:
+    source: SourceText | None
+    spec: Specification | None
+    diagnostics: tuple[Diagnostic, ...]
+
+    @property
+    def ok(self) -> bool:
+        return self.spec is not None and not any(d.is_error for d in self.diagnostics)
+
+
+def analyse_vepl(source: SourceText | Diagnostic) -> VeplDocument:
+    if isinstance(source, Diagnostic):
+        return VeplDocument(None, None, (source,))
+    parsed = parse("vepl", source)
+    if isinstance(parsed, Diagnostic):
+        return VeplDocument(source, None, (parsed,))
+    spec, diagnostics = link_vepl(parsed, source)
+    return VeplDocument(source, spec, tuple(sorted_diagnostics(diagnostics)))
+
+
+def check_vepl(workspace: Workspace, path: str | Path) -> list[Diagnostic]:
+    return list(analyse_vepl(workspace.source(path)).diagnostics)
+
+
+def load_vepl(path: str | Path | None = None) -> Specification:
+    """A valid specification (the default one when ``path`` is None); raises LanguageError."""
+    doc = analyse_vepl(read_source(path if path is not None else DEFAULT_VEPL))
+    if not doc.ok or doc.spec is None:
+        raise LanguageError([d for d in doc.diagnostics if d.is_error])
+    return doc.spec

@@ -1,0 +1,247 @@
+"""Typed records of a checked .vepl specification (immutable; times in seconds).
+
+Expressions and event patterns are small trees of frozen dataclasses; the code generator
+(rei.generators.targets.rx) turns them into Python. This module must never import textX
+objects into its records or anything of the runtime.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+from rei.lang.errors import Span
+
+Domain = Literal["object", "floor", "task"]
+ContextKind = Literal["chronicle", "immediate", "strict"]
+CompareOp = Literal["<", "<=", ">", ">=", "==", "!="]
+
+TASK_STATES = ("pending", "active", "succeeded", "failed")
+MISSION_STATES = ("pending", "running", "ended")
+SCALAR_MEASURES = ("laser_min", "speed", "time", "odom_error", "robot_inradius",
+                   "robot_circumradius")
+"""Names an expression may read from the robot description without arguments."""
+
+
+# ---- query expressions -------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Num:
+    value: float
+
+
+@dataclass(frozen=True)
+class Var:
+    """A query parameter (an object, floor or task of the query's domain)."""
+
+    name: str
+
+
+@dataclass(frozen=True)
+class Measure:
+    """A scalar of the robot description (laser_min, speed, ...)."""
+
+    name: str
+
+
+@dataclass(frozen=True)
+class StateName:
+    """A task or mission state on the right of '==' (active, succeeded, running, ...)."""
+
+    name: str
+
+
+@dataclass(frozen=True)
+class Call:
+    """A built-in (distance, on, state, mission_state) or a registered user function."""
+
+    function: str
+    args: tuple[Expr, ...]
+    user: bool = False
+
+
+@dataclass(frozen=True)
+class Arith:
+    op: Literal["+", "-", "*", "/"]
+    left: Expr
+    right: Expr
+
+
+@dataclass(frozen=True)
+class Compare:
+    op: CompareOp
+    left: Expr
+    right: Expr
+
+
+@dataclass(frozen=True)
+class BoolOp:
+    op: Literal["and", "or"]
+    operands: tuple[Expr, ...]
+
+
+@dataclass(frozen=True)
+class Not:
+    operand: Expr
+
+
+@dataclass(frozen=True)
+class Find:
+    """``find q(x)`` / ``neg find q(_)``: another query's matches (``_`` = any match)."""
+
+    query: str
+    arg: str | None
+    """The variable bound to the other query's parameter, None for '_' or no parameter."""
+    negated: bool
+
+
+Expr = Num | Var | Measure | StateName | Call | Arith | Compare | BoolOp | Not | Find
+
+
+@dataclass(frozen=True)
+class QueryParam:
+    name: str
+    domain: Domain
+    kinds: tuple[str, ...] = ()
+    """For objects: the roles or catalogue types it ranges over (empty: every object)."""
+
+
+@dataclass(frozen=True)
+class Query:
+    name: str
+    param: QueryParam | None
+    """At most one parameter: a query matches per object, floor or task, or just holds."""
+    condition: Expr
+    span: Span
+
+
+@dataclass(frozen=True)
+class QueryEvent:
+    name: str
+    query: str
+    found: bool
+    per_match: bool
+    """True: one event per match (``e(o) as q(o) found``); False: the match set as a whole
+    became non-empty (found) or empty (lost), thesis 9.2.2.1."""
+    span: Span
+
+
+# ---- event patterns ----------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class EvRef:
+    name: str
+
+
+@dataclass(frozen=True)
+class EvSeq:
+    parts: tuple[Pattern, ...]
+
+
+@dataclass(frozen=True)
+class EvOr:
+    options: tuple[Pattern, ...]
+
+
+@dataclass(frozen=True)
+class EvAnd:
+    parts: tuple[Pattern, ...]
+
+
+@dataclass(frozen=True)
+class EvNot:
+    operand: Pattern
+
+
+@dataclass(frozen=True)
+class EvRepeat:
+    operand: Pattern
+    low: int
+    """At least this many (0 for {*}, 1 for {+}, n for {n})."""
+    exact: bool
+    """{n}: exactly n; otherwise any number above low."""
+
+
+@dataclass(frozen=True)
+class EvWindow:
+    operand: Pattern
+    seconds: float
+
+
+Pattern = EvRef | EvSeq | EvOr | EvAnd | EvNot | EvRepeat | EvWindow
+
+
+@dataclass(frozen=True)
+class ComplexEvent:
+    name: str
+    pattern: Pattern
+    context: ContextKind
+    text: str
+    """The pattern as written, for the generated module's comments."""
+    span: Span
+
+
+@dataclass(frozen=True)
+class Signal:
+    name: str
+    event: str
+    utility: float
+    span: Span
+
+
+# ---- requirements ------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Never:
+    event: str
+
+
+@dataclass(frozen=True)
+class Eventually:
+    event: str
+
+
+@dataclass(frozen=True)
+class CountBound:
+    event: str
+    op: CompareOp
+    bound: float
+
+
+@dataclass(frozen=True)
+class Whenever:
+    trigger: str
+    targets: tuple[str, ...]
+    """Events/signals that must occur, or queries that must hold, after each trigger."""
+    window: float | None
+    """Seconds; None: by the end of the run."""
+
+
+Clause = Never | Eventually | CountBound | Whenever
+
+
+@dataclass(frozen=True)
+class Requirement:
+    name: str
+    description: str
+    clauses: tuple[Clause, ...]
+    span: Span
+
+
+@dataclass(frozen=True)
+class Specification:
+    name: str
+    path: str
+    parameters: dict[str, float]
+    functions: dict[str, int]
+    """User check functions by name -> arity; the runtime must register them."""
+    queries: tuple[Query, ...]
+    """In evaluation order (a query after every query it finds)."""
+    query_events: tuple[QueryEvent, ...]
+    complex_events: tuple[ComplexEvent, ...]
+    signals: tuple[Signal, ...]
+    requirements: tuple[Requirement, ...]
+
+    @property
+    def hysteresis(self) -> float:
+        return self.parameters.get("hysteresis", 0.0)

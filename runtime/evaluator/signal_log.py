@@ -1,0 +1,57 @@
+"""The event log of a run: one row per signal with time, signal, utility, running total
+utility and the objects involved (thesis 6.1.5), written as CSV. Never reorders rows: they
+are in the order the automata raised the signals."""
+
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass, field
+from pathlib import Path
+
+COLUMNS = ("time", "signal", "utility", "total_utility", "objects")
+
+
+@dataclass(frozen=True)
+class SignalRow:
+    time: float
+    signal: str
+    utility: float
+    total_utility: float
+    objects: tuple[str, ...]
+
+
+@dataclass
+class SignalLog:
+    utilities: dict[str, float]
+    rows: list[SignalRow] = field(default_factory=list)
+    total: float = 0.0
+
+    def add(self, signal: str, time: float, objects: tuple[str, ...]) -> SignalRow:
+        utility = self.utilities[signal]
+        self.total += utility
+        row = SignalRow(time, signal, utility, self.total, objects)
+        self.rows.append(row)
+        return row
+
+    def counts(self) -> dict[str, int]:
+        counts = dict.fromkeys(self.utilities, 0)
+        for r in self.rows:
+            counts[r.signal] += 1
+        return counts
+
+    def write_csv(self, path: str | Path) -> None:
+        with open(path, "w", newline="", encoding="utf-8") as handle:
+            writer = csv.writer(handle, lineterminator="\n")
+            writer.writerow(COLUMNS)
+            for r in self.rows:
+                writer.writerow((repr(r.time), r.signal, f"{r.utility:g}",
+                                 f"{r.total_utility:g}", ";".join(r.objects)))
+
+
+def read_csv(path: str | Path) -> list[SignalRow]:
+    with open(path, newline="", encoding="utf-8") as handle:
+        reader = csv.DictReader(handle)
+        return [SignalRow(float(r["time"]), r["signal"], float(r["utility"]),
+                          float(r["total_utility"]),
+                          tuple(r["objects"].split(";")) if r["objects"] else ())
+                for r in reader]

@@ -1,0 +1,51 @@
+"""The monitor's part of a run summary (thesis 5.2, Tables 5-10): total utility, signal
+counts, verdicts and measurements, merged into a RunSummary and written as summary.json.
+Never changes what the run itself recorded (outcome, reason, mission, seed)."""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+from rei.runtime.results import RunSummary, Verdict
+
+
+@dataclass(frozen=True)
+class MonitorResult:
+    total_utility: float
+    signal_counts: dict[str, int]
+    verdicts: tuple[Verdict, ...]
+    measurements: dict[str, Any]
+    duration: float
+
+    @property
+    def exit_status(self) -> int:
+        """0 when every requirement passed, 1 when one failed or none could be decided."""
+        return 0 if all(v.status == "pass" for v in self.verdicts) else 1
+
+
+def merge_summary(base: RunSummary, result: MonitorResult) -> RunSummary:
+    return replace(base, total_utility=result.total_utility,
+                   signal_counts=dict(result.signal_counts), verdicts=result.verdicts,
+                   measurements={**base.measurements, **result.measurements})
+
+
+def _clean(value: Any) -> Any:
+    """JSON without NaN/inf: a measurement that never got a value is null."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _clean(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_clean(v) for v in value]
+    return value
+
+
+def write_summary(summary: RunSummary, out_dir: str | Path) -> Path:
+    path = Path(out_dir) / "summary.json"
+    path.write_text(json.dumps(_clean(summary.to_json()), indent=1, sort_keys=True,
+                               allow_nan=False) + "\n", encoding="utf-8")
+    return path

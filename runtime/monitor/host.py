@@ -1,0 +1,249 @@
+"""The host of the generated event automata: it turns each sample into query events,
+pushes them through the RxPY automata on a virtual-time scheduler advanced with the
+simulation clock, and hands signals and events to the evaluator.
+
+Per sample: the queries are evaluated once, vectorised; when any match changed, the
+crossings of every threshold between the previous and this sample are replayed in order
+(a jump FAR -> COLLISION passes through CLOSE); then each mission event of the sample is
+applied and the queries evaluated again. Within a step, every 'lost' event comes before
+every 'found' event (so `notA -> B` sees a state change in order). Bad samples are
+counted and skipped. This module must never read the wall clock or import the simulator.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from types import ModuleType
+from typing import Any, Callable, Mapping
+
+import numpy as np
+from reactivex.scheduler import VirtualTimeScheduler
+from reactivex.subject import Subject
+
+from rei.lang.vepl.document import DEFAULT_VEPL
+from rei.runtime.evaluator.signal_log import SignalLog
+from rei.runtime.evaluator.summary import MonitorResult
+from rei.runtime.evaluator.verdicts import RequirementChecker
+from rei.runtime.messages import Sample, StreamHeader
+from rei.runtime.monitor.automata import QueryEventSpec, QueryInputs, load_generated
+from rei.runtime.monitor.cep import Occurrence
+from rei.runtime.monitor.errors import MonitorError
+from rei.runtime.monitor.model import RuntimeModel, SampleProblems, check_sample, crossings, \
+    interpolate
+
+UserFunction = Callable[..., Any]
+FINISHED = ("completed", "failed")
+"""Outcomes after which the run's evidence is complete (timeout, error, interrupted: not)."""
+
+
+def generate_automata(vepl: str | Path | None, out_dir: str | Path) -> Path:
+    """Generate the `rx` target of a .vepl file (the default one when None) into out_dir."""
+    from rei.generators.output import write_tree  # noqa: PLC0415  (generation is a stage above)
+    from rei.generators.pipeline import plan  # noqa: PLC0415
+
+    source = Path(vepl) if vepl is not None else DEFAULT_VEPL
+    result = plan(source, "rx")
+    write_tree(result.tree, out_dir)
+    return Path(out_dir) / "automata.py"
+
+
+class AutomataHost:
+    """One run of one generated module; not reusable across runs."""
+
+    def __init__(self, module: ModuleType, header: StreamHeader,
+                 functions: Mapping[str, UserFunction] | None = None) -> None:
+        missing = sorted(set(module.FUNCTIONS) - set(functions or {}))
+        if missing:
+            raise MonitorError(f"the specification '{module.SPEC_NAME}' expected the user "
+                               f"function(s) {', '.join(missing)} to be registered, found none")
+        self.module = module
+        self.header = header
+        self.functions = dict(functions or {})
+        self.model = RuntimeModel(header, module.DISTANCE_CUTOFF)
+        self.domains = {q.name: q.domain for q in module.QUERIES}
+        self.lost_first: tuple[QueryEventSpec, ...] = tuple(
+            e for e in module.QUERY_EVENTS if not e.found) + tuple(
+            e for e in module.QUERY_EVENTS if e.found)
+        self.problems = SampleProblems()
+        self.scheduler = VirtualTimeScheduler(0.0)
+        self.atomic: Subject[Occurrence] = Subject()
+        self.events = module.build_automata(self.atomic, self.scheduler)
+        self.log = SignalLog({s.name: s.utility for s in module.SIGNALS})
+        self.checker = RequirementChecker(module.REQUIREMENTS, set(self.domains))
+        self.watched_queries = sorted(self.checker.watched_queries())
+        self.sink_signal: Callable[[Occurrence], None] | None = None
+        for name in sorted(self.checker.watched_events()):
+            if name in self.events:
+                self.events[name].subscribe(
+                    lambda e, n=name: self.checker.on_event(n, e.time))
+        module.build_signals(self.events).subscribe(self._on_signal)
+        signal_names = {s.name for s in module.SIGNALS}
+        self._signal_watch = signal_names & self.checker.watched_events()
+        baseline = self.model.baseline()
+        baseline.functions = self.functions
+        self.prev_inputs: QueryInputs = baseline
+        self.prev_q: dict[str, Any] = module.evaluate_queries(baseline, {})
+        self.serial = 0
+        self.last_seq: int | None = None
+        self.last_time = -math.inf
+        self.first_time: float | None = None
+        self.samples = 0
+
+    def _on_signal(self, e: Occurrence) -> None:
+        self.log.add(e.name, e.time, e.objects)
+        if e.name in self._signal_watch:
+            self.checker.on_event(e.name, e.time)
+
+    # ---- samples ----------------------------------------------------------------------------
+
+    def feed(self, s: Sample) -> None:
+        if self.last_seq is not None and s.seq <= self.last_seq:
+            self.problems.add("duplicate" if s.seq == self.last_seq else "out_of_order",
+                              self.last_time)
+            return
+        if not s.time > self.last_time:
+            self.problems.add("out_of_order", self.last_time)
+            return
+        problem = check_sample(s, self.header)
+        if problem is not None:
+            self.problems.add(problem, self.last_time if not math.isfinite(s.time) else s.time)
+            return
+        if self.last_seq is not None and s.seq > self.last_seq + 1:
+            self.problems.add("missing", s.time, s.seq - self.last_seq - 1)
+        self.last_seq, self.last_time = s.seq, s.time
+        if self.first_time is None:
+            self.first_time = s.time
+        self.samples += 1
+        self.scheduler.advance_to(s.time)  # NOT windows that closed before this sample fire
+        w = self.model.observe(s)
+        w.functions = self.functions
+        q = self.module.evaluate_queries(w, self.prev_q)
+        if self._changed(q):
+            before = self.module.margins(self.prev_inputs)
+            after = self.module.margins(w)
+            fractions = crossings(before, after)
+            for lo, hi in zip(fractions, fractions[1:]):
+                step = interpolate(self.prev_inputs, w, (lo + hi) / 2)
+                self._step(self.module.evaluate_queries(step, self.prev_q), s.time)
+            q = self.module.evaluate_queries(w, self.prev_q)
+            self._step(q, s.time)
+        elif self.watched_queries:
+            self._holding(q, s.time)
+        self.prev_q = q
+        for event in s.events:
+            w = self.model.apply(event, w)
+            self._step(self.module.evaluate_queries(w, self.prev_q), s.time)
+        self.prev_inputs = w
+
+    def _changed(self, q: dict[str, Any]) -> bool:
+        for name, new in q.items():
+            old = self.prev_q[name]
+            if np.shape(old) != np.shape(new) or not np.array_equal(old, new):
+                return True
+        return False
+
+    def _holding(self, q: dict[str, Any], time: float) -> None:
+        self.checker.on_step(time, {n: bool(np.any(q[n])) for n in self.watched_queries})
+
+    def _step(self, q: dict[str, Any], time: float) -> None:
+        """Emit the query events between ``self.prev_q`` and ``q``, lost before found."""
+        for spec in self.lost_first:
+            new = q[spec.query]
+            old = self.prev_q[spec.query]
+            domain = self.domains[spec.query]
+            if np.shape(old) != np.shape(new):  # tasks appeared since: they matched nothing
+                grown = np.zeros(np.shape(new), dtype=bool)
+                grown[: np.size(old)] = old
+                old = grown
+            if spec.per_match:
+                changed = (new & ~old) if spec.found else (old & ~new)
+                if changed.any():
+                    names = self.model.names(domain)
+                    for i in np.flatnonzero(changed):
+                        self._emit(spec.name, time, (names[i],))
+            else:
+                now_any, was_any = bool(np.any(new)), bool(np.any(old))
+                if spec.found and now_any and not was_any:
+                    self._emit(spec.name, time, self._objects(domain, new))
+                elif not spec.found and was_any and not now_any:
+                    self._emit(spec.name, time, self._objects(domain, old))
+        self.prev_q = q
+        if self.watched_queries:
+            self._holding(q, time)
+
+    def _objects(self, domain: str, mask: Any) -> tuple[str, ...]:
+        if not domain:
+            return ()
+        names = self.model.names(domain)
+        return tuple(names[i] for i in np.flatnonzero(mask))
+
+    def _emit(self, name: str, time: float, objects: tuple[str, ...]) -> None:
+        self.serial += 1
+        self.atomic.on_next(Occurrence(name, time, objects, self.serial))
+
+    # ---- end ----------------------------------------------------------------------------------
+
+    def finish(self, end_time: float, outcome: str, reason: str = "") -> MonitorResult:
+        end = max(end_time, self.last_time) if math.isfinite(end_time) else self.last_time
+        if math.isfinite(end) and end > self.scheduler._clock:  # noqa: SLF001
+            self.scheduler.advance_to(end)
+        end = end if math.isfinite(end) else 0.0
+        finished = outcome in FINISHED
+        verdicts = self.checker.verdicts(end, self.problems, finished,
+                                         f"outcome {outcome}" + (f": {reason}" if reason else ""))
+        return MonitorResult(self.log.total, self.log.counts(), verdicts,
+                             self.measurements(end), end - (self.first_time or 0.0))
+
+    def measurements(self, end: float) -> dict[str, Any]:
+        m = self.model
+        goals = [{"task": t.name, "index": t.index, "started": t.started, "ended": t.ended,
+                  "status": t.status,
+                  "time_to_goal": None if t.ended is None else t.ended - t.started}
+                 for t in m.tasks]
+        return {
+            "min_distance_to_human": None if math.isinf(m.min_distance_to_human)
+            else m.min_distance_to_human,
+            "min_distance_to_object": None if math.isinf(m.min_distance_to_object)
+            else m.min_distance_to_object,
+            "path_length": m.path_length,
+            "time_to_goal": goals,
+            "samples": self.samples,
+            "sample_problems": dict(self.problems.counts),
+            "specification": self.module.SPEC_NAME,
+        }
+
+
+class MonitorSink:
+    """A sample sink that monitors a run with the automata of a .vepl file.
+
+    ``MonitorSink(vepl, out_dir)``: ``vepl`` None means the default specification; the
+    automata are generated into ``out_dir/automata/`` and loaded at ``start``; ``finish``
+    writes ``out_dir/events.csv`` and keeps the result (``self.result``).
+    """
+
+    def __init__(self, vepl: str | Path | None, out_dir: str | Path,
+                 functions: Mapping[str, UserFunction] | None = None,
+                 automata: str | Path | None = None) -> None:
+        self.vepl = vepl
+        self.out_dir = Path(out_dir)
+        self.functions = functions
+        self.automata = Path(automata) if automata is not None else None
+        self.host: AutomataHost | None = None
+        self.result: MonitorResult | None = None
+
+    def start(self, header: StreamHeader) -> None:
+        self.out_dir.mkdir(parents=True, exist_ok=True)
+        path = self.automata or generate_automata(self.vepl, self.out_dir / "automata")
+        self.host = AutomataHost(load_generated(path), header, self.functions)
+
+    def feed(self, sample: Sample) -> None:
+        if self.host is None:
+            raise MonitorError("the monitor was fed a sample before the stream header")
+        self.host.feed(sample)
+
+    def finish(self, end_time: float, outcome: str, reason: str) -> None:
+        if self.host is None:
+            raise MonitorError("the monitor was finished before the stream header")
+        self.result = self.host.finish(end_time, outcome, reason)
+        self.host.log.write_csv(self.out_dir / "events.csv")

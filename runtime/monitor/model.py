@@ -1,0 +1,208 @@
+"""The runtime model the queries read (thesis 5.1.5.1), updated from the sample stream.
+
+Concrete environment: pose, twist and footprint of every observed object, and the footprint
+distance from the robot to each (vectorised, rei.runtime.monitor.geometry). Abstract
+environment: the floor the robot stands on, through the generators' inverse mapping (the
+floor centres in the stream header). Robot description: odometry, laser minimum, navigation
+state, mission and task states. Also the sample hygiene: non-finite, out-of-order,
+duplicated and missing samples are counted, never modelled. This module must never import
+the simulator.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from rei.lang.vepl.linker import NAMED_STATES
+from rei.lang.vepl.model import MISSION_STATES, TASK_STATES
+from rei.runtime.messages import MissionEvent, Sample, StreamHeader
+from rei.runtime.monitor.automata import QueryInputs
+from rei.runtime.monitor.geometry import FootprintSet
+
+FAR_AWAY = 1e6
+"""Distances and laser readings of the baseline before the first sample: nothing is near,
+so a run that starts close to an object enters CLOSE with a FAR -> CLOSE transition."""
+PROBLEM_KINDS = ("non_finite", "out_of_order", "duplicate", "missing", "malformed")
+TASK_CODE = {s: i for i, s in enumerate(TASK_STATES)}
+MISSION_CODE = {s: i for i, s in enumerate(MISSION_STATES)}
+NAV_CODE = {s: i for i, s in enumerate(NAMED_STATES["nav_state"])}
+
+
+@dataclass
+class SampleProblems:
+    """Bad samples seen in a run, with when, so verdicts they touch become inconclusive."""
+
+    counts: dict[str, int] = field(default_factory=lambda: dict.fromkeys(PROBLEM_KINDS, 0))
+    times: list[float] = field(default_factory=list)
+
+    def add(self, kind: str, time: float, n: int = 1) -> None:
+        self.counts[kind] += n
+        self.times.append(time)
+
+    @property
+    def total(self) -> int:
+        return sum(self.counts.values())
+
+    def within(self, start: float, end: float) -> bool:
+        return any(start <= t <= end for t in self.times)
+
+
+@dataclass
+class TaskRecord:
+    key: str
+    name: str
+    index: int | None
+    started: float
+    ended: float | None = None
+    status: str = "active"
+
+
+class RuntimeModel:
+    """Per-run state; built from the stream header, updated by every accepted sample."""
+
+    def __init__(self, header: StreamHeader, cutoff: float = math.inf) -> None:
+        self.header = header
+        self.cutoff = cutoff
+        self.footprints = FootprintSet.build(header.robot.footprint,
+                                             [o.footprint for o in header.objects],
+                                             header.tile_size)
+        self.object_names = tuple(o.name for o in header.objects)
+        masks: dict[str, np.ndarray] = {}
+        for i, o in enumerate(header.objects):
+            for key in (o.role, o.type):
+                masks.setdefault(key, np.zeros(len(header.objects), dtype=bool))[i] = True
+        self.kind_masks = masks
+        self.human_mask = masks.get("human", np.zeros(len(header.objects), dtype=bool))
+        self.floor_names = tuple(f[0] for f in header.floors)
+        self._floor_xy = np.array([(f[1], f[2]) for f in header.floors], dtype=float).reshape(
+            -1, 2)
+        self.inradius = self.footprints.robot_inradius()
+        self.circumradius = self.footprints.robot_bound
+        self.tasks: list[TaskRecord] = []
+        self.task_codes = np.zeros(0, dtype=np.int64)
+        self.mission_state = MISSION_CODE["pending"]
+        self.mission_began: float | None = None
+        self.mission_ended: float | None = None
+        self.path_length = 0.0
+        self.min_distance_to_human = math.inf
+        self.min_distance_to_object = math.inf
+        self._last_xy: tuple[float, float] | None = None
+
+    # ---- per sample -----------------------------------------------------------------------
+
+    def baseline(self) -> QueryInputs:
+        n = len(self.object_names)
+        return QueryInputs(np.full(n, FAR_AWAY), self.kind_masks,
+                           np.zeros(len(self.floor_names), dtype=bool), self.task_codes.copy(),
+                           FAR_AWAY, 0.0, 0.0, 0.0, self.inradius, self.circumradius,
+                           MISSION_CODE["pending"], NAV_CODE["idle"])
+
+    def observe(self, s: Sample) -> QueryInputs:
+        """The query inputs of an accepted sample (and the run's measurements updated)."""
+        x, y, _ = s.robot_pose
+        distance = self.footprints.distances(s.robot_pose, s.poses, self.cutoff)
+        if len(distance):
+            self.min_distance_to_object = min(self.min_distance_to_object,
+                                              float(distance.min()))
+            if self.human_mask.any():
+                self.min_distance_to_human = min(self.min_distance_to_human,
+                                                 float(distance[self.human_mask].min()))
+        if self._last_xy is not None:
+            self.path_length += math.hypot(x - self._last_xy[0], y - self._last_xy[1])
+        self._last_xy = (x, y)
+        ox, oy, _ = s.belief.odom
+        return QueryInputs(
+            distance, self.kind_masks, self._robot_floor(x, y), self.task_codes.copy(),
+            float(s.belief.laser_min), math.hypot(s.robot_twist[0], s.robot_twist[1]),
+            s.time, math.hypot(ox - x, oy - y), self.inradius, self.circumradius,
+            self.mission_state, NAV_CODE.get(s.belief.nav_state.value, 0))
+
+    def _robot_floor(self, x: float, y: float) -> np.ndarray:
+        mask = np.zeros(len(self.floor_names), dtype=bool)
+        if len(mask):
+            half = self.header.tile_size / 2
+            inside = (np.abs(self._floor_xy[:, 0] - x) <= half) & (
+                np.abs(self._floor_xy[:, 1] - y) <= half)
+            hits = np.flatnonzero(inside)
+            if len(hits):
+                mask[hits[0]] = True  # on a shared edge the first floor in header order wins
+        return mask
+
+    def apply(self, e: MissionEvent, w: QueryInputs) -> QueryInputs:
+        """The inputs after a mission event (thesis 6.1.4: mission and task states)."""
+        if e.kind == "begin":
+            self.mission_state = MISSION_CODE["running"]
+            self.mission_began = e.time
+        elif e.kind == "end":
+            self.mission_state = MISSION_CODE["ended"]
+            self.mission_ended = e.time
+        else:
+            key = str(e.index) if e.index is not None else (e.task or "")
+            record = next((t for t in self.tasks if t.key == key), None)
+            if e.kind == "task_start":
+                if record is None:
+                    record = TaskRecord(key, e.task or key, e.index, e.time)
+                    self.tasks.append(record)
+                    self.task_codes = np.append(self.task_codes, TASK_CODE["active"])
+                else:
+                    record.status, record.started, record.ended = "active", e.time, None
+                    self.task_codes[self.tasks.index(record)] = TASK_CODE["active"]
+            elif record is not None:
+                record.status = "succeeded" if e.kind == "task_success" else "failed"
+                record.ended = e.time
+                self.task_codes[self.tasks.index(record)] = TASK_CODE[record.status]
+        return replace(w, task_state=self.task_codes.copy(), mission_state=self.mission_state)
+
+    def names(self, domain: str) -> tuple[str, ...]:
+        if domain == "object":
+            return self.object_names
+        if domain == "floor":
+            return self.floor_names
+        return tuple(t.name for t in self.tasks)
+
+
+def interpolate(a: QueryInputs, b: QueryInputs, f: float) -> QueryInputs:
+    """The inputs a fraction ``f`` of the way from sample ``a`` to sample ``b`` (the
+    continuous measures only; states come from ``b``)."""
+    return replace(b, distance=a.distance + f * (b.distance - a.distance),
+                   laser_min=a.laser_min + f * (b.laser_min - a.laser_min),
+                   speed=a.speed + f * (b.speed - a.speed),
+                   time=a.time + f * (b.time - a.time),
+                   odom_error=a.odom_error + f * (b.odom_error - a.odom_error))
+
+
+def crossings(before: list[np.ndarray], after: list[np.ndarray]) -> list[float]:
+    """Sorted distinct fractions in (0, 1) where a comparison margin changes sign."""
+    found: set[float] = set()
+    for m0, m1 in zip(before, after):
+        m0 = np.broadcast_to(m0, np.shape(m1)) if np.shape(m0) != np.shape(m1) else m0
+        if np.shape(m0) != np.shape(m1):
+            continue
+        flipped = np.signbit(m0) != np.signbit(m1)
+        if not np.any(flipped):
+            continue
+        a = np.asarray(m0)[flipped]
+        b = np.asarray(m1)[flipped]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            f = a / (a - b)
+        found.update(float(v) for v in f[np.isfinite(f) & (f > 0) & (f < 1)])
+    return sorted(found)
+
+
+def check_sample(s: Sample, header: StreamHeader) -> str | None:
+    """Why a sample cannot be used (a PROBLEM_KINDS entry), or None."""
+    n = len(header.objects)
+    poses = np.asarray(s.poses)
+    twists = np.asarray(s.twists)
+    if poses.shape != (n, 3) or twists.shape != (n, 3):
+        return "malformed"
+    scalars = (s.time, *s.robot_pose, *s.robot_twist, *s.belief.odom, *s.belief.odom_twist,
+               s.belief.laser_min)
+    if not all(math.isfinite(v) for v in scalars):
+        return "non_finite"
+    if not (np.isfinite(poses).all() and np.isfinite(twists).all()):
+        return "non_finite"
+    return None
