@@ -18,6 +18,7 @@ from rei.generators.errors import GenerationError
 from rei.generators.output import OutputTree, write_tree
 from rei.generators.targets import GenerationRequest, Target, available_targets, get_target
 from rei.lang.errors import Diagnostic, LanguageError
+from rei.lang.suggest import did_you_mean
 from rei.lang.workspace import Workspace
 
 ALL = "all"
@@ -74,9 +75,28 @@ def plan(source: Path, target: str, options: Mapping[str, str] | None = None,
     sub-folder named after it (so the launch target's ``../mission/mission.xml`` resolves).
     """
     targets = choose_targets(Path(source), target)
+    check_options(targets, options or {})
     request, warnings = build_request(Path(source), options, workspace)
     tree = render_targets(request, targets, subfolders=target == ALL)
     return GenerationPlan(tree, tuple(t.name for t in targets), tuple(warnings))
+
+
+def check_options(targets: list[Target], options: Mapping[str, str]) -> None:
+    """Refuse option keys no chosen target reads (a typo would otherwise pass silently).
+
+    A target may list the keys it reads in an ``options`` attribute; when one of the chosen
+    targets does not, any key might be its, so nothing is refused.
+    """
+    declared = [getattr(t, "options", None) for t in targets]
+    if any(keys is None for keys in declared):
+        return
+    known = sorted({key for keys in declared for key in keys})
+    for key in options:
+        if key not in known:
+            raise GenerationError(
+                f"--option {key}: expected a key among {', '.join(known) or 'none'} "
+                f"(read by {', '.join(t.name for t in targets)}), found '{key}'"
+                + did_you_mean(key, known))
 
 
 def render_targets(request: GenerationRequest, targets: list[Target], *,

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import json
 import math
-from functools import cache
 from importlib import resources
 from typing import Any
 
@@ -114,8 +113,8 @@ def _template_line(exc: BaseException, name: str) -> int | None:
     return line
 
 
-@cache
 def _schema(name: str) -> etree.XMLSchema:
+    # Parsed per check rather than cached in the module: a few milliseconds, and no state.
     with resources.files("rei.generators.schemas").joinpath(name).open("rb") as handle:
         return etree.XMLSchema(etree.parse(handle))
 

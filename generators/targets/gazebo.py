@@ -100,6 +100,8 @@ class GazeboTarget:
     name: str = "gazebo"
     description: str = "an SDF 1.9 world for Gazebo (floors, walls, objects, humans, robot)"
     accepts: tuple[str, ...] = (".room", ".mission")
+    options: tuple[str, ...] = ("robot",)
+    """The --option keys this target reads."""
     loader: jinja2.BaseLoader | None = field(default=None, compare=False)
 
     def generate(self, request: GenerationRequest) -> OutputTree:

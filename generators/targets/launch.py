@@ -130,6 +130,8 @@ class LaunchTarget:
     name: str = "launch"
     description: str = "a ROS 2 launch file for the robot's components and REI's run.json"
     accepts: tuple[str, ...] = (".room", ".mission")
+    options: tuple[str, ...] = ("controller", "duration", "monitor", "seed")
+    """The --option keys this target reads."""
     loader: jinja2.BaseLoader | None = field(default=None, compare=False)
 
     def generate(self, request: GenerationRequest) -> OutputTree:

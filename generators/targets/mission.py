@@ -41,6 +41,8 @@ class MissionTarget:
     name: str = "mission"
     description: str = "the mission as XML (goals in the world frame), valid against mission.xsd"
     accepts: tuple[str, ...] = (".mission",)
+    options: tuple[str, ...] = ()
+    """The --option keys this target reads (none)."""
     loader: jinja2.BaseLoader | None = field(default=None, compare=False)
     """Template loader; None means the bundled templates/mission/ folder."""
 

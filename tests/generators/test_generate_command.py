@@ -87,6 +87,8 @@ ROOM = EXAMPLES / "navigation" / "navigation.room"
     (ROOM, ["-t", "mission"], "expected a file ending in .mission"),
     (NAVIGATION, ["-t", "all", "--option", "seed"], "expected KEY=VALUE"),
     (NAVIGATION, ["-t", "launch", "--option", "seed=x"], "option seed"),
+    (NAVIGATION, ["-t", "launch", "--option", "sed=1"], "did you mean 'seed'"),
+    (NAVIGATION, ["-t", "mission", "--option", "seed=1"], "expected a key among none"),
 ])
 def test_bad_requests_exit_2_with_a_message(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], source: Path, argv: list[str],
