@@ -353,3 +353,22 @@ async def test_vepl_diagnostics_completion_outline_and_definition(client: Record
     hover = await hover_text(client, path, position_of(text, "as findFarObject", offset=5))
     assert "**query** `findFarObject`" in hover
     await editor.close(path)
+
+
+async def test_a_room_changed_on_disk_rechecks_open_missions(client: RecordingClient,
+                                                             tmp_path: Path) -> None:
+    room_path = tmp_path / "cafe.room"
+    mission_path = tmp_path / "visit.mission"
+    room_path.write_text(ROOM, encoding="utf-8")
+    mission_path.write_text(MISSION, encoding="utf-8")
+    editor = Editor(client)
+    assert await editor.open(mission_path) == []
+    # Another program rewrites the room (the room is not open in the editor).
+    room_path.write_text(ROOM.replace("floor yard", "floor garden"), encoding="utf-8")
+    mark = len(client.published)
+    client.workspace_did_change_watched_files(types.DidChangeWatchedFilesParams(changes=[
+        types.FileEvent(uri=uri(room_path), type=types.FileChangeType.Changed)]))
+    diagnostics = await wait_published(client, uri(mission_path), after=mark)
+    assert codes(diagnostics) == ["REF-UNRESOLVED"]
+    assert "did you mean 'garden'" in diagnostics[0].message
+    await editor.close(mission_path)
