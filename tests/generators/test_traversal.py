@@ -9,6 +9,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import strategies as st
 
 from rei.generators.concrete import ConcreteWorld, concretise_room
 from rei.lang.workspace import Workspace
@@ -120,3 +122,39 @@ def test_robot_heading_becomes_yaw(write: Write, heading: int, expected_yaw: flo
         robot r : turtlebot3_waffle on a heading {heading}
     }}""")
     assert world.robot.pose.yaw == pytest.approx(expected_yaw)
+
+
+@st.composite
+def grid_rooms(draw: st.DrawFn) -> tuple[list[str], tuple[int, int], float]:
+    """A walled grid with random inner walls and holes, and a robot on one of its floors."""
+    rows = draw(st.integers(2, 6))
+    cols = draw(st.integers(2, 7))
+    inner = [[draw(st.sampled_from("...#_")) for _ in range(cols)] for _ in range(rows)]
+    floors = [(r, c) for r in range(rows) for c in range(cols) if inner[r][c] == "."]
+    assume(floors)
+    robot = draw(st.sampled_from(floors))
+    text = ["#" * (cols + 2)] + ["#" + "".join(r) + "#" for r in inner] + ["#" * (cols + 2)]
+    tile = draw(st.sampled_from([0.5, 1.0, 1.25]))
+    return text, (robot[0] + 1, robot[1] + 1), tile
+
+
+@settings(max_examples=40, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.filter_too_much])
+@given(grid_rooms())
+def test_traversal_puts_every_grid_floor_where_the_grid_draws_it(
+    write: Write, room: tuple[list[str], tuple[int, int], float],
+) -> None:
+    rows, (r0, c0), tile = room
+    body = "\n".join(f'"{row}"' for row in rows)
+    path = write("p.room", f"room p {{ tile {tile} grid g {{ {body} }} "
+                           f"robot r : turtlebot3_waffle on g_{r0}_{c0} }}")
+    doc = Workspace().room(path)
+    rules = {d.rule for d in doc.diagnostics if d.is_error}
+    assume(not rules)  # grids whose floors fall apart are rejected by the checks, not placed
+    world = concretise_room(doc)
+    for block in world.floors + world.walls:
+        _, r, c = block.name.split("_")
+        # Column to the right is +x, row downwards is -y, measured from the robot's cell.
+        assert (block.x, block.y) == ((int(c) - c0) * tile, -(int(r) - r0) * tile)
+    for block in world.floors:
+        assert world.floor_at(block.x + 0.49 * tile, block.y - 0.49 * tile) == block.name
