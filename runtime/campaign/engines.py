@@ -134,7 +134,7 @@ class DaskEngine:
                                        key=f"rei-run-{spec.run_id}-{uuid.uuid4().hex[:8]}")
                 futures.append(future)
                 by_key[future.key] = spec
-            for future in distributed.as_completed(futures):
+            for future in distributed.as_completed(futures, loop=client.loop):
                 spec = by_key[future.key]
                 try:
                     result: RunResult = future.result()

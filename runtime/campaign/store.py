@@ -58,7 +58,10 @@ class RunRecord:
 
     @property
     def passed(self) -> bool:
-        return self.status == "ran" and self.summary is not None and self.summary.passed
+        """The run ran, completed its mission, and every requirement passed (like `rei run`'s
+        exit status 0: a failed task or a time-out fails the run even before any verdict)."""
+        return (self.status == "ran" and self.summary is not None and self.summary.passed
+                and self.summary.outcome == "completed")
 
     @property
     def outcome(self) -> str:

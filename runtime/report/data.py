@@ -90,18 +90,19 @@ def read_events(run_dir: Path) -> list[SignalEvent]:
 def read_paths(run_dir: Path) -> Paths | None:
     """Robot and human paths from the run's trace, when a trace reader is available."""
     try:
-        from rei.runtime.trace import read_trace  # type: ignore[import-not-found]  # noqa: PLC0415
-    except ImportError:
+        from rei.runtime.collector.trace import read_trace  # noqa: PLC0415
+    except ImportError:  # the run stage is not installed with this report: draw without paths
         return None
-    candidates = sorted(p for p in run_dir.iterdir() if p.name.startswith("trace"))
-    for path in candidates:
-        try:
-            header, samples = read_trace(path)
-        except Exception:  # noqa: BLE001  (a broken trace of a crashed run: draw without it)
+    for path in (run_dir / "trace.jsonl", run_dir / "trace.jsonl.partial"):
+        if not path.is_file():
             continue
-        samples = list(samples)
+        try:
+            header, stream = read_trace(path)
+            samples = list(stream)
+        except Exception:  # noqa: BLE001  (a crashed run's broken trace: draw without it)
+            continue
         if not samples:
-            return None
+            continue
         robot = np.array([(s.time, s.robot_pose[0], s.robot_pose[1]) for s in samples])
         humans = {}
         for i, obj in enumerate(header.objects):

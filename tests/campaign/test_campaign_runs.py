@@ -1,0 +1,188 @@
+"""Campaigns of real `rei run` processes: 50 runs that survive kill -9 and resume with every run
+exactly once, crashes and hangs recorded, the same campaign on a real Dask cluster, and the
+same seeds giving the same results on either engine."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pyarrow.parquet as pq
+import pytest
+from lxml import etree
+
+from rei.runtime.campaign import CampaignStore, plan_campaign
+
+from .conftest import require_rei_run
+from .records import EXAMPLES
+
+MISSIONS = [EXAMPLES / "simple_wall", EXAMPLES / "small_dense"]
+SAFETY_LIMIT = 600.0
+"""Seconds after which a stuck test fails instead of hanging CI (not a performance limit)."""
+
+
+def campaign_argv(out: Path, *extra: str, repeat: int = 25) -> list[str]:
+    return [sys.executable, "-m", "rei.runtime.cli", "campaign", *map(str, MISSIONS),
+            "-o", str(out), "--repeat", str(repeat), "--seed", "5", "--duration", "2", *extra]
+
+
+def recorded(out: Path) -> int:
+    runs = out / "runs"
+    return sum(1 for p in runs.glob("*/record.json")) if runs.is_dir() else 0
+
+
+def kill_and_resume(out: Path, argv: list[str], after: int) -> subprocess.CompletedProcess[str]:
+    """Start the campaign, SIGKILL its whole process group once ``after`` runs are recorded,
+    then run the same command again to the end."""
+    process = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                               start_new_session=True)
+    deadline = time.monotonic() + SAFETY_LIMIT
+    while recorded(out) < after and process.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    os.killpg(process.pid, signal.SIGKILL)
+    process.wait()
+    assert process.returncode == -signal.SIGKILL, process.stderr.read() if process.stderr else ""
+    if process.stderr:
+        process.stderr.close()
+    interrupted_at = recorded(out)
+    assert after <= interrupted_at < 50
+    resumed = subprocess.run(argv, capture_output=True, text=True, timeout=SAFETY_LIMIT)
+    assert f"{interrupted_at} of 50 runs already recorded" in resumed.stderr
+    return resumed
+
+
+def assert_every_run_once(out: Path) -> None:
+    plan = plan_campaign(MISSIONS, repeat=25, seed=5, duration=2.0)
+    _, manifest, records = CampaignStore.read(out)
+    assert [r.spec.run_id for r in records] == [s.run_id for s in plan.runs]
+    assert len(plan.runs) == 50
+    assert len(manifest["sessions"]) == 2
+    table = pq.read_table(out / "results.parquet").to_pylist()
+    assert sorted(r["run_id"] for r in table) == sorted(s.run_id for s in plan.runs)
+    assert {r["seed"] for r in table} == {s.seed for s in plan.runs}
+    assert all(r["status"] == "ran" for r in table)
+    assert not (out / "runs" / ".partial").exists()
+    runs = [p for p in (out / "runs").iterdir()]
+    assert len(runs) == 50
+    for folder in runs:
+        summary = json.loads((folder / "summary.json").read_text())
+        assert summary["seed"] == next(s.seed for s in plan.runs if s.run_id == folder.name)
+        assert (folder / "trace.jsonl").is_file()
+    suites = etree.parse(str(out / "junit.xml")).getroot().findall("testsuite")
+    assert [s.get("name") for s in suites] == ["simple_wall", "small_dense"]
+    assert (out / "report.html").stat().st_size > 0
+
+
+@pytest.mark.slow
+def test_fifty_runs_survive_kill_9_and_resume_with_every_run_once(tmp_path: Path) -> None:
+    require_rei_run()
+    out = tmp_path / "campaign"
+    resumed = kill_and_resume(out, campaign_argv(out, "--workers", "2"), after=6)
+    # Two simulated seconds are too short to finish these missions: every run times out, so
+    # the campaign reports failures and exits 1, as CI should see it.
+    assert resumed.returncode == 1, resumed.stderr
+    assert "50 of 50 runs recorded, 0 passed, 50 failed" in resumed.stderr
+    assert_every_run_once(out)
+
+
+@pytest.mark.slow
+def test_the_dask_engine_passes_the_same_test_on_a_real_cluster(tmp_path: Path,
+                                                                 dask_scheduler: str) -> None:
+    require_rei_run()
+    out = tmp_path / "campaign"
+    argv = campaign_argv(out, "--engine", "dask", "--scheduler", dask_scheduler)
+    resumed = kill_and_resume(out, argv, after=6)
+    assert resumed.returncode == 1, resumed.stderr
+    assert_every_run_once(out)
+    manifest = json.loads((out / "campaign.json").read_text())
+    assert manifest["sessions"][0]["engine"] == {"engine": "dask", "scheduler": dask_scheduler}
+
+
+def _summaries(out: Path) -> dict[str, str]:
+    return {p.parent.name: p.read_text() for p in sorted(out.glob("runs/*/summary.json"))}
+
+
+@pytest.mark.slow
+def test_same_seed_same_results_on_both_engines_and_any_worker_count(
+        tmp_path: Path, dask_scheduler: str) -> None:
+    require_rei_run()
+    runs = {}
+    for name, extra in (("one", ["--workers", "1"]), ("two", ["--workers", "2"]),
+                        ("dask", ["--engine", "dask", "--scheduler", dask_scheduler])):
+        out = tmp_path / name
+        done = subprocess.run(campaign_argv(out, *extra, "--no-report", repeat=2),
+                              capture_output=True, text=True, timeout=SAFETY_LIMIT)
+        assert done.returncode == 1, done.stderr
+        runs[name] = _summaries(out)
+    assert len(runs["one"]) == 4
+    assert runs["one"] == runs["two"] == runs["dask"]
+
+
+CONTROLLERS = """
+import os
+import signal
+import time
+
+from rei.runtime.robot.reference import ReferenceNavigator
+
+
+class Segfaulting(ReferenceNavigator):
+    \"\"\"A controller whose native code crashes the whole run process.\"\"\"
+
+    def step(self, observation):
+        os.kill(os.getpid(), signal.SIGSEGV)
+
+
+class Crawling(ReferenceNavigator):
+    \"\"\"A controller so slow that the run never ends in useful time (each call is within
+    `rei run`'s own per-call watchdog, so only the campaign's watchdog can stop it).\"\"\"
+
+    def step(self, observation):
+        time.sleep(0.2)
+        return super().step(observation)
+"""
+
+
+def _campaign(tmp_path: Path, out: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(tmp_path / "plugins"), os.environ.get("PYTHONPATH", "")])}
+    return subprocess.run([sys.executable, "-m", "rei.runtime.cli", "campaign", *args,
+                           "-o", str(out)], capture_output=True, text=True, env=env,
+                          timeout=SAFETY_LIMIT)
+
+
+@pytest.mark.slow
+def test_crashed_and_hung_runs_are_recorded_and_the_campaign_goes_on(tmp_path: Path) -> None:
+    require_rei_run()
+    (tmp_path / "plugins").mkdir()
+    (tmp_path / "plugins" / "bad_controllers.py").write_text(CONTROLLERS)
+    good = str(EXAMPLES / "simple_wall" / "simple_wall.mission")
+    crashed = _campaign(tmp_path, tmp_path / "crash", good, "--repeat", "2", "--duration", "2",
+                        "--controller", "bad_controllers:Segfaulting")
+    assert crashed.returncode == 1, crashed.stderr
+    records = CampaignStore.read(tmp_path / "crash")[2]
+    assert [r.status for r in records] == ["crashed", "crashed"]
+    assert "killed by signal 11" in records[0].message
+    # A watchdog far shorter than the run: it is killed and recorded as hung.
+    hung = _campaign(tmp_path, tmp_path / "hung", good, "--duration", "100", "--timeout", "2",
+                     "--controller", "bad_controllers:Crawling")
+    assert hung.returncode == 1, hung.stderr
+    (record,) = CampaignStore.read(tmp_path / "hung")[2]
+    assert record.status == "hung" and "watchdog" in record.message
+    junit = etree.parse(str(tmp_path / "hung" / "junit.xml")).getroot()
+    assert junit.find("testsuite/testcase/error").get("type") == "hung"
+    # The campaign goes on past bad runs: a good mission next to a broken one still runs.
+    broken = tmp_path / "missions" / "broken.mission"
+    broken.parent.mkdir()
+    broken.write_text('mission broken in "nowhere.room" {\n goal a at x timeout 5\n}\n')
+    mixed = _campaign(tmp_path, tmp_path / "mixed", str(broken), good, "--duration", "2")
+    assert mixed.returncode == 1, mixed.stderr
+    by_id = {r.spec.run_id: r for r in CampaignStore.read(tmp_path / "mixed")[2]}
+    assert by_id["broken.r00"].status == "crashed"
+    assert "exit status 2, no summary.json" in by_id["broken.r00"].message
+    assert by_id["simple_wall.r00"].status == "ran"
