@@ -78,9 +78,21 @@ def pairwise(sizes: Sequence[int]) -> list[tuple[int, ...]]:
                 new[j], new[f] = a, b
                 extra.append(new)
         rows.extend(extra)
+    # Free slots take the level used least so far (lowest index on ties), so the levels
+    # stay balanced instead of piling onto the first one.
+    used = [[0] * n for n in s]
+    for row in rows:
+        for f, v in enumerate(row):
+            if v is not None:
+                used[f][v] += 1
     out: list[tuple[int, ...]] = []
     for row in rows:
-        filled = [0 if v is None else v for v in row]
+        filled = []
+        for f, v in enumerate(row):
+            if v is None:
+                v = min(range(s[f]), key=lambda level, f=f: (used[f][level], level))
+                used[f][v] += 1
+            filled.append(v)
         original = [0] * k
         for pos, factor in enumerate(order):
             original[factor] = filled[pos]

@@ -199,3 +199,13 @@ def test_impossible_requests_exit_2_naming_the_option_and_write_nothing(
     err = capsys.readouterr().err
     assert option in err and "expected" in err and "found" in err
     assert not out.exists()
+
+
+@pytest.mark.parametrize("preset", ["small", "medium", "large"])
+def test_every_preset_systematic_suite_checks_clean(tmp_path: Path, preset: str) -> None:
+    space = preset_space(preset)
+    suite = generate(SuiteRequest(space, "systematic", 3, 6), tmp_path)
+    write_suite(suite, tmp_path, coverage_report(suite))
+    assert suite.design.design == "pairwise"
+    for pair in suite.pairs:
+        _assert_valid_pair(tmp_path / pair.room_file, tmp_path / pair.mission_file)
