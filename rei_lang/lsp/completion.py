@@ -146,12 +146,16 @@ def room_completions(text_before: str, room: Room | None, catalogue: Catalogue |
     return _keywords(("room",))
 
 
-def mission_completions(text_before: str, room: Room | None) -> list[Candidate]:
+def mission_completions(text_before: str, room: Room | None,
+                        room_files: Iterable[str] = ()) -> list[Candidate]:
+    """``room_files``: relative paths of the rooms a mission could import."""
     ctx = context_at(text_before)
     prev = ctx.previous[-1] if ctx.previous else ""
     if prev == "at":
         return _floors(room)
-    if prev in ("cycles", "time_limit", "max_speed", "tolerance", "heading", "timeout", "in"):
+    if prev == "in":
+        return [Candidate(f'"{name}"', "file", "room file") for name in room_files]
+    if prev in ("cycles", "time_limit", "max_speed", "tolerance", "heading", "timeout"):
         return []
     if ctx.blocks:
         return _keywords(w for w in grammar_keywords("mission") if w not in ("mission", "in"))

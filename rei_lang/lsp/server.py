@@ -243,6 +243,19 @@ def _read_text(path: str) -> str:
         return ""
 
 
+MAX_LISTED_ROOMS = 200
+
+
+def _room_files(mission_path: str) -> list[str]:
+    """The .room files beside a mission (what ``in "…"`` can name), a bounded list."""
+    try:
+        folder = Path(mission_path).parent
+        names = sorted(p.name for p in folder.glob("*.room") if p.is_file())
+    except OSError:
+        return []
+    return names[:MAX_LISTED_ROOMS]
+
+
 def _analyse(workspace: Workspace, uri: str, path: str, text: str, version: int | None
              ) -> Analysis:
     """Runs on the checker thread: the workspace's diagnostics and models of one file."""
@@ -392,7 +405,8 @@ def build_server() -> ReiLanguageServer:
             mission_doc = parsed.mission if parsed is not None else None
             room = (mission_doc.room.room if mission_doc is not None
                     and mission_doc.room is not None else None)
-            candidates = completing.mission_completions(before, room)
+            candidates = completing.mission_completions(before, room,
+                                                        _room_files(uri_to_path(uri)))
         elif suffix == ".vepl":
             model = parsed.vepl if parsed is not None else None
             candidates = completing.vepl_completions(vepl_support.completion_names(model))

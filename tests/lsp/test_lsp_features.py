@@ -164,6 +164,8 @@ async def test_mission_completion_offers_the_floors_of_its_room(client: Recordin
     assert {"start", "yard", "porch"} <= set(labels)
     keywords = await completion_labels(client, path, position_of(MISSION, "    goal last"))
     assert {"goal", "cycles", "time_limit", "max_speed"} <= set(keywords)
+    rooms = await completion_labels(client, path, position_of(MISSION, '"cafe', offset=0))
+    assert rooms == ['"cafe.room"']
     await editor.close(path)
 
 
