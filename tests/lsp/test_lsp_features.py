@@ -374,3 +374,55 @@ async def test_a_room_changed_on_disk_rechecks_open_missions(client: RecordingCl
     assert codes(diagnostics) == ["REF-UNRESOLVED"]
     assert "did you mean 'garden'" in diagnostics[0].message
     await editor.close(mission_path)
+
+
+OWN_CATALOGUE = """\
+[types.lamp]
+kind = "{kind}"
+description = "A standing lamp."
+footprint = {{ shape = "cylinder", radius = 0.2 }}
+height = 1.6
+mass = 4.0
+colour = [1.0, 0.9, 0.6, 1.0]
+"""
+OWN_ROOM = """\
+room lit {
+    catalogue "own.toml"
+    floor a { right b }
+    floor b
+    robot x : turtlebot3_waffle on a
+    object l : lamp on b
+}
+"""
+
+
+async def test_a_rooms_own_catalogue_problems_land_on_the_catalogue(client: RecordingClient,
+                                                                    tmp_path: Path) -> None:
+    catalogue = tmp_path / "own.toml"
+    catalogue.write_text(OWN_CATALOGUE.format(kind="banana"), encoding="utf-8")
+    room = tmp_path / "lit.room"
+    editor = Editor(client)
+    mark = len(client.published)
+    assert "CATALOGUE-FILE" in codes(await editor.open(room, OWN_ROOM))
+    on_catalogue = await wait_published(client, uri(catalogue), after=mark)
+    assert codes(on_catalogue) == ["CATALOGUE-FIELD"]
+    assert "banana" in on_catalogue[0].message
+    # Fixed on disk: the room is clean, the catalogue's diagnostics are withdrawn, and the
+    # room's own type is offered, described and found.
+    catalogue.write_text(OWN_CATALOGUE.format(kind="static"), encoding="utf-8")
+    mark = len(client.published)
+    client.workspace_did_change_watched_files(types.DidChangeWatchedFilesParams(changes=[
+        types.FileEvent(uri=uri(catalogue), type=types.FileChangeType.Changed)]))
+    assert await wait_published(client, uri(room), after=mark) == []
+    assert await wait_published(client, uri(catalogue), after=mark) == []
+    text = OWN_ROOM.replace("object l : lamp on b", "object m : ")
+    await editor.change(room, text)
+    labels = await completion_labels(client, room, position_of(text, "m : ", offset=4))
+    assert "lamp" in labels and "table" in labels
+    await editor.change(room, OWN_ROOM)
+    hover = await hover_text(client, room, position_of(OWN_ROOM, ": lamp", offset=3))
+    assert "**static** type `lamp`" in hover and "cylinder of radius 0.2 m" in hover
+    assert "mass 4 kg" in hover
+    [loc] = await definition(client, room, position_of(OWN_ROOM, ": lamp", offset=3))
+    assert loc.uri == uri(catalogue) and loc.range.start.line == 0
+    await editor.close(room)
