@@ -112,7 +112,7 @@ class CatalogueFacts:
     @staticmethod
     def of(catalogue: Catalogue, tile: float = 1.0) -> CatalogueFacts:
         types = {n: catalogue.types[n] for n in catalogue.names("static")}
-        headings = {}
+        headings: dict[str, tuple[float, ...]] = {}
         for name, otype in types.items():
             if isinstance(otype.footprint, Cylinder):  # turning a round thing changes nothing
                 headings[name] = (0.0,) if otype.footprint.radius <= tile / 2 else ()

@@ -65,7 +65,7 @@ def pairwise(sizes: Sequence[int]) -> list[tuple[int, ...]]:
             row.append(best)
             for j in range(f):
                 if row[j] is not None:
-                    uncovered.discard((j, row[j], best))  # type: ignore[arg-type]
+                    uncovered.discard((j, row[j], best))
         # Vertical growth, in a fixed order.
         extra: list[list[int | None]] = []
         for j, a, b in sorted(uncovered):
@@ -87,10 +87,11 @@ def pairwise(sizes: Sequence[int]) -> list[tuple[int, ...]]:
                 used[f][v] += 1
     out: list[tuple[int, ...]] = []
     for row in rows:
-        filled = []
+        filled: list[int] = []
         for f, v in enumerate(row):
             if v is None:
-                v = min(range(s[f]), key=lambda level, f=f: (used[f][level], level))
+                counts = used[f]
+                v = min(range(s[f]), key=lambda level: (counts[level], level))
                 used[f][v] += 1
             filled.append(v)
         original = [0] * k
