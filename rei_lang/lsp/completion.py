@@ -162,7 +162,19 @@ def mission_completions(text_before: str, room: Room | None,
     return _keywords(("mission", "in"))
 
 
-def vepl_completions(names: Iterable[tuple[str, str]]) -> list[Candidate]:
-    """Keywords of the VEPL grammar and the (name, kind) pairs its model declares."""
+OBJECT_ROLES = ("static", "dynamic", "human", "robot")
+
+
+def vepl_completions(text_before: str, names: Iterable[tuple[str, str]]) -> list[Candidate]:
+    """Keywords of the VEPL grammar and the (name, kind) pairs its model declares; inside
+    ``object[...]``, the roles and catalogue types an object parameter can range over."""
+    ctx = context_at(text_before)
+    tokens = ctx.previous
+    if tokens and tokens[-1] in ("[", ","):
+        opening = next((i for i in range(len(tokens) - 1, -1, -1) if tokens[i] in "[]()"), -1)
+        if opening > 0 and tokens[opening] == "[" and tokens[opening - 1] == "object":
+            roles = [Candidate(role, "keyword", "object role") for role in OBJECT_ROLES]
+            return roles + [c for c in _types(None, None) if c.kind == "type"
+                            and c.detail not in ("floor", "wall")]
     return _keywords(grammar_keywords("vepl")) + [Candidate(n, kind, kind)
                                                   for n, kind in names]

@@ -409,7 +409,8 @@ def build_server() -> ReiLanguageServer:
                                                         _room_files(uri_to_path(uri)))
         elif suffix == ".vepl":
             model = parsed.vepl if parsed is not None else None
-            candidates = completing.vepl_completions(vepl_support.completion_names(model))
+            candidates = completing.vepl_completions(before,
+                                                     vepl_support.completion_names(model))
         else:
             candidates = []
         items = [types.CompletionItem(label=c.label, detail=c.detail or None,

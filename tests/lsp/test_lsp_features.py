@@ -346,6 +346,11 @@ async def test_vepl_diagnostics_completion_outline_and_definition(client: Record
     assert "SYNTAX" in codes(await editor.change(path, half))
     labels = await completion_labels(client, path, position_of(half, "neg find \n", offset=9))
     assert {"findCollisionToObject", "findCloseToObject", "queryEvent", "signal"} <= set(labels)
+    kinds = text + "\nquery near(o: object[human, \n"
+    await editor.change(path, kinds)
+    labels = await completion_labels(client, path, position_of(kinds, "human, \n", offset=7))
+    assert {"static", "robot", "table", "chair"} <= set(labels)
+    assert "queryEvent" not in labels and "wall" not in labels
     await editor.change(path, text)
     outline = {s.name: s for s in await document_symbols(client, path)}
     assert outline["findCollisionToObject"].kind == types.SymbolKind.Function
