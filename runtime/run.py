@@ -258,7 +258,7 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
                     vx, vy, wz = planar_command(item, now, 1.0 / config.physics_rate,
                                                 world.pose(item.body))
                     world.set_planar_velocity(item.body, vx, vy, wz)
-                world.drive_robot(cmd.linear, cmd.angular)
+                world.drive_robot(cmd.linear, cmd.angular, truth[2])
                 world.step()
         except ControllerFault as fault:
             outcome, reason = "error", str(fault)

@@ -12,6 +12,8 @@ starts and ends at rest. This module must never import the simulator.
 
 from __future__ import annotations
 
+from bisect import bisect_right
+
 import numpy as np
 
 
@@ -35,32 +37,36 @@ class CatmullRom:
         self.c = v[:-1]
         self.d = pts[:-1]
         self.vertex_velocity = v
+        # Evaluated once per body and physics step: plain floats beat numpy scalars there.
+        self._times: list[float] = t.tolist()
+        self._coef = [((float(a[0]), float(a[1])), (float(b[0]), float(b[1])),
+                       (float(c[0]), float(c[1])), (float(d[0]), float(d[1])))
+                      for a, b, c, d in zip(self.a, self.b, self.c, self.d)]
 
     @property
     def duration(self) -> float:
-        return float(self.t[-1] - self.t[0])
+        return self._times[-1] - self._times[0]
 
     def _local(self, time: float) -> tuple[int, float, bool]:
         """Segment index, time into it, and whether the spline has ended (open splines)."""
-        rel = time - self.t[0]
+        times = self._times
+        rel = time - times[0]
         if self.loop:
-            rel = rel % self.duration
-        elif rel >= self.duration:
-            return len(self.t) - 2, float(self.t[-1] - self.t[-2]), True
-        rel = max(rel, 0.0)
-        tt = self.t[0] + rel
-        i = int(np.searchsorted(self.t, tt, side="right") - 1)
-        i = min(max(i, 0), len(self.t) - 2)
-        return i, float(tt - self.t[i]), False
+            rel = rel % (times[-1] - times[0])
+        elif rel >= times[-1] - times[0]:
+            return len(times) - 2, times[-1] - times[-2], True
+        tt = times[0] + max(rel, 0.0)
+        i = min(max(bisect_right(times, tt) - 1, 0), len(times) - 2)
+        return i, tt - times[i], False
 
     def position(self, time: float) -> tuple[float, float]:
         i, s, _ = self._local(time)
-        r = ((self.a[i] * s + self.b[i]) * s + self.c[i]) * s + self.d[i]
-        return float(r[0]), float(r[1])
+        (ax, ay), (bx, by), (cx, cy), (dx, dy) = self._coef[i]
+        return (((ax * s + bx) * s + cx) * s + dx, ((ay * s + by) * s + cy) * s + dy)
 
     def velocity(self, time: float) -> tuple[float, float]:
         i, s, ended = self._local(time)
         if ended:
             return 0.0, 0.0
-        v = (3 * self.a[i] * s + 2 * self.b[i]) * s + self.c[i]
-        return float(v[0]), float(v[1])
+        (ax, ay), (bx, by), (cx, cy), _ = self._coef[i]
+        return ((3 * ax * s + 2 * bx) * s + cx, (3 * ay * s + 2 * by) * s + cy)

@@ -35,10 +35,12 @@ COMFORT = 0.45
 LOOKAHEAD = 0.6
 HORIZON = 1.6
 """Seconds each velocity pair is rolled out."""
-ROLLOUT_STEPS = 8
+ROLLOUT_STEPS = 6
 MARGIN = 0.04
 """Metres kept between the footprint and any laser point."""
 SENSE_RADIUS = 1.6
+LOCAL_RES = 0.04
+"""Metres per cell of the robot-centred grid the roll-outs are checked on."""
 BLOCKED_AFTER = 30.0
 """Seconds without 0.1 m of progress before a goal is aborted."""
 FINAL_APPROACH = 0.35
@@ -77,6 +79,8 @@ class ReferenceNavigator:
         self._tracker = GoalTracker()
         self._path: np.ndarray | None = None
         self._pose = None
+        self._trig_key: tuple[float, float, int] | None = None
+        self._tail: np.ndarray | None = None
         self._index = 0
         self._best_remaining = math.inf
         self._last_progress_time = 0.0
@@ -118,23 +122,54 @@ class ReferenceNavigator:
             length = math.hypot(di, dj)
             w = length * 0.5 * (cost[a[:, 0], a[:, 1]] + cost[b[:, 0], b[:, 1]])
             graph.add_weighted_edges_from(
-                ((int(p[0]), int(p[1])), (int(q[0]), int(q[1])), float(c))
-                for p, q, c in zip(a, b, w))
+                ((p0, p1), (q0, q1), c) for p0, p1, q0, q1, c in
+                zip(a[:, 0].tolist(), a[:, 1].tolist(), b[:, 0].tolist(), b[:, 1].tolist(),
+                    w.tolist()))
         self._graph = graph
         self._free_cells = idx
 
     def _build_rollouts(self) -> None:
+        """Velocity pairs, their rolled-out poses, and each one's swept-distance map.
+
+        For every pair, ``_sweep[k, cell]`` is the distance from a cell of a robot-centred
+        local grid to the footprint anywhere along the roll-out (negative inside). Computed
+        once here, it turns the per-step collision check into a gather over the cells the
+        laser points fall in, instead of transforming every point into every rolled-out pose.
+        """
         vs = self._vmax * np.array([-0.25, 0.0, 0.25, 0.5, 0.75, 1.0])
         ws = self._wmax * np.array([-0.6, -0.35, -0.18, -0.08, 0.0, 0.08, 0.18, 0.35, 0.6])
         v, w = np.meshgrid(vs, ws, indexing="ij")
         self._cmds = np.stack((v.ravel(), w.ravel()), axis=1)
-        ts = np.linspace(HORIZON / ROLLOUT_STEPS, HORIZON, ROLLOUT_STEPS)
+        fine = ROLLOUT_STEPS * 2
+        ts = np.linspace(0.0, HORIZON, fine + 1)
         vv, ww = self._cmds[:, 0:1], self._cmds[:, 1:2]
         th = ww * ts[None, :]
         safe_w = np.where(np.abs(ww) < 1e-9, 1.0, ww)
         x = np.where(np.abs(ww) < 1e-9, vv * ts, vv / safe_w * np.sin(th))
         y = np.where(np.abs(ww) < 1e-9, 0.0, vv / safe_w * (1 - np.cos(th)))
-        self._roll = np.stack((x, y, th), axis=2)  # (K, S, 3) in the robot's frame
+        roll = np.stack((x, y, th), axis=2)  # (K, S, 3) in the robot's frame
+        self._roll_end = roll[:, -1, :]
+        # The grid reaches a little beyond the farthest roll-out: points outside it are clear.
+        reach = float(np.abs(roll[:, :, :2]).max()) + self._radius + 0.25
+        n = 2 * int(math.ceil(reach / LOCAL_RES))
+        centres = (np.arange(n) + 0.5) * LOCAL_RES - n * LOCAL_RES / 2
+        cx, cy = np.meshgrid(centres, centres, indexing="ij")
+        cells = np.stack((cx.ravel(), cy.ravel()), axis=1).astype(np.float32)
+        roll = roll.astype(np.float32)
+        hx, hy = self._half
+        sweep = np.full((len(self._cmds), len(cells)), np.inf, dtype=np.float32)
+        for step in range(roll.shape[1]):
+            px, py, pt = roll[:, step, 0:1], roll[:, step, 1:2], roll[:, step, 2:3]
+            dx = cells[None, :, 0] - px
+            dy = cells[None, :, 1] - py
+            c, sn = np.cos(pt), np.sin(pt)
+            qx = np.abs(c * dx + sn * dy) - hx
+            qy = np.abs(-sn * dx + c * dy) - hy
+            gap = np.hypot(np.maximum(qx, 0), np.maximum(qy, 0)) + np.minimum(np.maximum(qx, qy), 0)
+            sweep = np.minimum(sweep, gap)
+        # A cell stands for points anywhere inside it: count them half a diagonal closer.
+        self._sweep = sweep - np.float32(LOCAL_RES * 0.7072)
+        self._local_n = n
 
     # -- goals (Figure 22) ---------------------------------------------------------------
 
@@ -191,9 +226,12 @@ class ReferenceNavigator:
         path = self._path
         if path is None or self._pose is None:
             return math.inf
-        rest = path[self._index:]
-        d = math.hypot(rest[0, 0] - self._pose[0], rest[0, 1] - self._pose[1])
-        return d + float(np.hypot(*np.diff(rest, axis=0).T).sum()) if len(rest) > 1 else d
+        if self._tail is None or len(self._tail) != len(path):
+            # Path length from each point to the end, computed once per path.
+            seg = np.hypot(*np.diff(path, axis=0).T)
+            self._tail = np.concatenate((np.cumsum(seg[::-1])[::-1], [0.0]))
+        i = self._index
+        return math.hypot(path[i, 0] - self._pose[0], path[i, 1] - self._pose[1]) + float(self._tail[i])
 
     # -- control ---------------------------------------------------------------------------
 
@@ -210,6 +248,7 @@ class ReferenceNavigator:
             tracker.accept()
             self._path = self._plan((x, y), goal)
             self._index = 0
+            self._tail = None
             self._best_remaining = math.inf
             self._last_progress_time = observation.time
             self._stuck_since = None
@@ -285,11 +324,15 @@ class ReferenceNavigator:
         if scan is None:
             return np.zeros((0, 2))
         r = scan.ranges
-        angles = scan.angle_min + scan.angle_increment * np.arange(len(r))
+        key = (scan.angle_min, scan.angle_increment, len(r))
+        if self._trig_key != key:
+            angles = scan.angle_min + scan.angle_increment * np.arange(len(r))
+            self._trig = (np.cos(angles), np.sin(angles))
+            self._trig_key = key
+        cos, sin = self._trig
         keep = (r < min(SENSE_RADIUS, scan.range_max - 1e-6)) & (r >= scan.range_min)
         mx, my = self._ctx.laser.mount_x, self._ctx.laser.mount_y  # type: ignore[union-attr]
-        return np.stack((mx + r[keep] * np.cos(angles[keep]), my + r[keep] * np.sin(angles[keep])),
-                        axis=1)
+        return np.stack((mx + r[keep] * cos[keep], my + r[keep] * sin[keep]), axis=1)
 
     def _choose(self, pose: tuple[float, float, float], points: np.ndarray,
                 dist: float) -> VelocityCommand | None:
@@ -298,28 +341,19 @@ class ReferenceNavigator:
         c, s = math.cos(yaw), math.sin(yaw)
         tx = c * (target[0] - x) + s * (target[1] - y)
         ty = -s * (target[0] - x) + c * (target[1] - y)
-        roll = self._roll
-        hx, hy = self._half
+        n = self._local_n
         if len(points):
-            # Points in the frame of every rolled-out pose: (K, S, P).
-            dx = points[None, None, :, 0] - roll[:, :, 0:1]
-            dy = points[None, None, :, 1] - roll[:, :, 1:2]
-            ct, st = np.cos(roll[:, :, 2:3]), np.sin(roll[:, :, 2:3])
-            px = ct * dx + st * dy
-            py = -st * dx + ct * dy
-            gap = np.maximum(np.abs(px) - hx, np.abs(py) - hy)  # < 0 inside the footprint
-            hit = (gap < MARGIN).any(axis=2).any(axis=1)
-            clearance = np.clip(gap.min(axis=(1, 2)), 0.0, 0.5)
-            # The robot itself turning in place sweeps its circumcircle.
-            near_now = np.hypot(points[:, 0], points[:, 1]).min()
+            ij = np.floor(points / LOCAL_RES + n / 2).astype(np.int64)
+            inside = ((ij >= 0) & (ij < n)).all(axis=1)
+            flat = ij[inside, 0] * n + ij[inside, 1]
+            gaps = self._sweep[:, flat]
+            clearance = gaps.min(axis=1) if gaps.shape[1] else np.full(len(self._cmds), 0.5)
         else:
-            hit = np.zeros(len(self._cmds), dtype=bool)
             clearance = np.full(len(self._cmds), 0.5)
-            near_now = math.inf
+        hit = clearance < MARGIN
+        clearance = np.clip(clearance, 0.0, 0.5)
         v, w = self._cmds[:, 0], self._cmds[:, 1]
-        turning = (v == 0.0) & (w != 0.0)
-        hit = np.where(turning, near_now < self._radius + 0.02, hit)
-        end = roll[:, -1, :]
+        end = self._roll_end
         to_target = np.hypot(tx - end[:, 0], ty - end[:, 1])
         heading_err = np.abs(np.arctan2(ty - end[:, 1], tx - end[:, 0]) - end[:, 2])
         heading_err = np.minimum(heading_err, 2 * math.pi - heading_err)
@@ -354,4 +388,4 @@ class ReferenceNavigator:
         blocked.discard(self._cell(*xy))
         path = self._plan(xy, goal, blocked)
         if path is not None:
-            self._path, self._index = path, 0
+            self._path, self._index, self._tail = path, 0, None

@@ -98,9 +98,8 @@ class BulletWorld:
     def set_planar_velocity(self, bid: int, vx: float, vy: float, wz: float) -> None:
         p.resetBaseVelocity(bid, (vx, vy, 0.0), (0.0, 0.0, wz), physicsClientId=self.client)
 
-    def drive_robot(self, linear: float, angular: float) -> None:
-        """Apply a differential-drive command as the robot's planar body velocity."""
-        _, _, yaw = self.pose(self.robot_id)
+    def drive_robot(self, linear: float, angular: float, yaw: float) -> None:
+        """Apply a differential-drive command at the robot's heading ``yaw``."""
         self.set_planar_velocity(self.robot_id, linear * math.cos(yaw), linear * math.sin(yaw),
                                  angular)
 
