@@ -172,6 +172,8 @@ def fast_route(free: set[Cell], stops: Sequence[Cell]) -> list[Cell] | None:
         parent: dict[Cell, Cell] = {}
         heap = [(_octile(a, b), 0.0, a)]
         done: set[Cell] = set()
+        bi, bj = b
+        root2m1 = math.sqrt(2.0) - 1.0
         while heap:
             _, cost, cell = heapq.heappop(heap)
             if cell == b:
@@ -190,7 +192,9 @@ def fast_route(free: set[Cell], stops: Sequence[Cell]) -> list[Cell] | None:
                 if new < best.get(nxt, math.inf) - 1e-12:
                     best[nxt] = new
                     parent[nxt] = cell
-                    heapq.heappush(heap, (new + _octile(nxt, b), new, nxt))
+                    dx, dy = abs(nxt[0] - bi), abs(nxt[1] - bj)  # octile distance, inlined
+                    h = dx + root2m1 * dy if dx >= dy else dy + root2m1 * dx
+                    heapq.heappush(heap, (new + h, new, nxt))
         if b not in parent:
             return None
         leg = [b]
