@@ -105,14 +105,15 @@ def sheet_entries(path: Path) -> list[SheetEntry]:
 def _csv_entries(path: Path) -> list[SheetEntry]:
     try:
         with path.open(newline="", encoding="utf-8") as handle:
-            rows = list(csv.DictReader(handle))
-            columns = rows[0].keys() if rows else ()
+            reader = csv.DictReader(handle)
+            rows = list(reader)
+            columns = list(reader.fieldnames or ())
     except (OSError, UnicodeDecodeError, csv.Error) as exc:
         raise GenerationError(f"cannot read the index '{path}': {exc}") from None
     if not {"room", "mission"} & set(columns):
         raise LanguageError([Diagnostic(Span.point(str(path)), "INDEX-COLUMNS",
                                         f"expected a 'room' or 'mission' column, found "
-                                        f"{', '.join(columns) or 'no rows'}")])
+                                        f"{', '.join(columns) or 'an empty file'}")])
     entries = []
     for number, row in enumerate(rows, start=2):  # line 1 is the header
         relative = (row.get("mission") or "").strip() or (row.get("room") or "").strip()

@@ -104,3 +104,12 @@ def test_picture_bytes_match_what_the_file_holds(tmp_path: Path) -> None:
     assert rei_gen(["show", str(NAVIGATION), "-o", str(out)]) == 0
     assert out.read_bytes() == render_file(NAVIGATION, "png")
     assert matplotlib.image.imread(io.BytesIO(out.read_bytes())).ndim == 3
+
+
+def test_an_index_without_room_columns_is_a_located_error(
+    write: Write, tmp_path: Path, capsys: pytest.CaptureFixture[str],
+) -> None:
+    index = write("index.csv", "name,seed\na,1\n")
+    assert rei_gen(["show", str(index), "-o", str(tmp_path / "s.png")]) == 2
+    assert f"{index}:1:1: INDEX-COLUMNS: expected a 'room' or 'mission' column, found name, seed" \
+        in capsys.readouterr().err
