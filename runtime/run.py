@@ -14,12 +14,14 @@ from __future__ import annotations
 
 import math
 import time as wallclock
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Sequence
+from typing import Any
 
 import numpy as np
 
+from rei.catalogue import Box, Cylinder
 from rei.generators.concrete import ConcreteMission
 from rei.runtime.animator import Animated, planar_command, spline_of
 from rei.runtime.collector import DataCollector, MonitorConfig, SampleSink
@@ -67,6 +69,8 @@ class RunRecord:
     measurements: dict[str, Any] = field(default_factory=dict)
     wall_seconds: float = 0.0
     """Wall-clock time of the loop (never written into the outputs)."""
+    cpu_seconds: float = 0.0
+    """Processor time of the loop, all threads (never written into the outputs)."""
     steps: int = 0
 
 
@@ -84,12 +88,12 @@ def static_map(manifest: WorldManifest) -> tuple[MapObstacle, ...]:
     obstacles = []
     for body in manifest.walls + tuple(o for o in manifest.objects if o.fixed):
         fp = body.footprint
-        if hasattr(fp, "radius"):
+        if isinstance(fp, Cylinder):
             obstacles.append(MapObstacle(body.name, body.role, body.x, body.y, body.yaw,
-                                         "cylinder", radius=fp.radius))  # type: ignore[union-attr]
-        else:
+                                         "cylinder", radius=fp.radius))
+        elif isinstance(fp, Box):
             obstacles.append(MapObstacle(body.name, body.role, body.x, body.y, body.yaw, "box",
-                                         fp.size_x, fp.size_y))  # type: ignore[union-attr]
+                                         fp.size_x, fp.size_y))
     return tuple(obstacles)
 
 
@@ -145,7 +149,7 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
     plane = laser_spec.mount_z
     seen = [b for b in manifest.objects if b.height > plane]
     static_seen = [b for b in seen if b.fixed]
-    moving_seen = [b for b in seen if not b.fixed]
+    [b for b in seen if not b.fixed]
     walls = merge_wall_tiles(tuple(w for w in manifest.walls if w.height > plane),
                              manifest.tile_size)
     statics = shapes_of(static_seen, np.array([(b.x, b.y, b.yaw) for b in static_seen]))
@@ -181,6 +185,7 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
     min_laser = math.inf
     steps = 0
     wall_start = wallclock.perf_counter()
+    cpu_start = wallclock.process_time()
     guard = GuardedController(controller, config.watchdog)
     world = BulletWorld(manifest, config.physics_rate)
     try:
@@ -300,7 +305,8 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
         "incomplete": outcome == "interrupted",
     }
     return RunRecord(outcome, reason, now, tasks, measurements,
-                     wallclock.perf_counter() - wall_start, steps)
+                     wallclock.perf_counter() - wall_start,
+                     wallclock.process_time() - cpu_start, steps)
 
 
 def summary_of(record: RunRecord, mission: ConcreteMission, controller: str,

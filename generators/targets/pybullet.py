@@ -102,7 +102,8 @@ def build_manifest(world: ConcreteWorld, source_name: str, room_file: str) -> tu
     robot_type = world.robot.type
     if robot_type.drive is None or robot_type.laser is None:
         raise GenerationError(f"robot type '{robot_type.name}' expected a drive and a laser in "
-                              f"the catalogue, found {'no drive' if robot_type.drive is None else 'no laser'}")
+                              f"the catalogue, found "
+                              f"{'no drive' if robot_type.drive is None else 'no laser'}")
     robot_path = f"urdf/{robot_type.name}.urdf"
     urdfs[robot_path] = (robot_type, False)
     robot = _body(world.robot, robot_path, False, tile)
@@ -126,7 +127,8 @@ def build_manifest(world: ConcreteWorld, source_name: str, room_file: str) -> tu
 @dataclass(frozen=True)
 class PybulletTarget:
     name: str = "pybullet"
-    description: str = "the world as URDF files per body type and a world.json manifest for pybullet"
+    description: str = ("the world as URDF files per body type and a world.json manifest "
+                        "for pybullet")
     accepts: tuple[str, ...] = (".room", ".mission")
     loader: jinja2.BaseLoader | None = field(default=None, compare=False)
 

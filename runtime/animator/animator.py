@@ -1,4 +1,4 @@
-"""The animator: moves humans and dynamic objects along their splines by velocity (thesis 4.2.2, 6.2.2).
+"""The animator: moves humans and dynamic objects along splines by velocity (thesis 4.2.2, 6.2.2).
 
 Each physics step sets the body's planar velocity to the spline's displacement over the step,
 (r(t + dt) - r(t)) / dt, plus a bounded pull back towards r(t) so a body that was pushed or

@@ -41,7 +41,7 @@ class CatmullRom:
         self._times: list[float] = t.tolist()
         self._coef = [((float(a[0]), float(a[1])), (float(b[0]), float(b[1])),
                        (float(c[0]), float(c[1])), (float(d[0]), float(d[1])))
-                      for a, b, c, d in zip(self.a, self.b, self.c, self.d)]
+                      for a, b, c, d in zip(self.a, self.b, self.c, self.d, strict=False)]
 
     @property
     def duration(self) -> float:

@@ -8,7 +8,7 @@ import pybullet or change the run: it only observes.
 
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 

@@ -13,8 +13,9 @@ from __future__ import annotations
 
 import json
 import os
+from collections.abc import Iterator
 from pathlib import Path
-from typing import IO, Any, Iterator
+from typing import IO, Any
 
 import numpy as np
 
@@ -102,7 +103,7 @@ class TraceWriter:
     @staticmethod
     def _changed(new: np.ndarray, old: np.ndarray | None) -> list[list[Any]]:
         if old is None or old.shape != new.shape:
-            rows = range(len(new))
+            rows: list[int] = list(range(len(new)))
         else:
             rows = np.nonzero((new != old).any(axis=1))[0].tolist()
         return [[i, *new[i].tolist()] for i in rows]
@@ -182,12 +183,12 @@ def _samples(lines: Iterator[tuple[int, str]], n: int, path: Path) -> Iterator[S
                 s = b["scan"]
                 scan = LaserScan(s["angle_min"], s["angle_increment"], s["range_min"],
                                  s["range_max"], np.array(s["ranges"], dtype=float))
-            belief = RobotBelief(tuple(b["odom"]), tuple(b["odom_twist"]),  # type: ignore[arg-type]
+            belief = RobotBelief(tuple(b["odom"]), tuple(b["odom_twist"]),
                                  b["laser_min"], scan, NavState(b["nav_state"]), b["task"])
             events = tuple(MissionEvent(e["kind"], e["time"], e["task"], e["index"], e["reason"])
                            for e in d["events"])
-            yield Sample(d["seq"], d["time"], tuple(d["robot_pose"]),  # type: ignore[arg-type]
-                         tuple(d["robot_twist"]), poses.copy(), twists.copy(),  # type: ignore[arg-type]
+            yield Sample(d["seq"], d["time"], tuple(d["robot_pose"]),
+                         tuple(d["robot_twist"]), poses.copy(), twists.copy(),
                          belief, events)
         except (KeyError, IndexError, TypeError, ValueError) as exc:
             raise TraceError(f"{path}:{lineno}: damaged sample line ({exc})") from None

@@ -15,8 +15,9 @@ import json
 import math
 import os
 import sys
+from collections.abc import Sequence
 from pathlib import Path
-from typing import IO, Sequence
+from typing import IO
 
 from rei.lang.cli_support import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_RUN_ERROR
 from rei.runtime.collector import SampleSink, TraceWriter, load_monitor_config
@@ -31,7 +32,7 @@ SUMMARY = "summary.json"
 LOG = "run.log"
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     parser = sub.add_parser(
         "run", help="run a mission in the simulator and record its trace and summary",
         description="Check and generate what the mission needs, run it headless in pybullet "
@@ -135,11 +136,13 @@ def run(args: argparse.Namespace) -> int:
                                args.duration, args.watchdog, args.physics_rate, args.odom_drift,
                                progress=progress)
     rtf = record.duration / record.wall_seconds if record.wall_seconds > 0 else math.inf
+    cpu_rtf = record.duration / record.cpu_seconds if record.cpu_seconds > 0 else math.inf
     m = summary.measurements
     print(f"{summary.mission}: {summary.outcome} ({summary.reason}) after "
           f"{summary.duration:.1f} s simulated, {m['tasks_succeeded']} task(s) succeeded, "
           f"{m['tasks_failed']} failed, {m['collisions']} collision(s); "
-          f"{rtf:.0f}x real time; outputs in {args.output}", file=sys.stderr)
+          f"{rtf:.0f}x real time ({cpu_rtf:.0f}x per CPU second); outputs in {args.output}",
+          file=sys.stderr)
     if summary.outcome == "error":
         print(f"rei run: error: {summary.reason}", file=sys.stderr)
         return EXIT_RUN_ERROR

@@ -98,7 +98,8 @@ class MissionExecutor:
         self._current = None
         return MissionEvent("task_success" if ok else "task_fail", time, goal.name, index, reason)
 
-    def abandon(self, time: float, reason: str, truth: tuple[float, float, float]) -> list[MissionEvent]:
+    def abandon(self, time: float, reason: str,
+                truth: tuple[float, float, float]) -> list[MissionEvent]:
         """End the mission early (time limit, error, interruption): fail the running task."""
         events: list[MissionEvent] = []
         if self.finished:

@@ -1,4 +1,4 @@
-"""The robot under test: the controller protocol, built-in controllers and the conformance checker."""
+"""The robot under test: controller protocol, built-in controllers, conformance checker."""
 
 from rei.runtime.robot.conformance import check_controller
 from rei.runtime.robot.protocol import (

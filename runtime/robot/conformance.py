@@ -60,7 +60,8 @@ def _drive(controller: Controller, ctx: ControllerContext, steps: int, t0: float
         if not cmd.finite:
             problems.append(f"step() returned a non-finite command {cmd}")
             return t
-        if abs(cmd.linear) > ctx.drive.max_linear + 1e-9 or abs(cmd.angular) > ctx.drive.max_angular + 1e-9:
+        if (abs(cmd.linear) > ctx.drive.max_linear + 1e-9
+                or abs(cmd.angular) > ctx.drive.max_angular + 1e-9):
             problems.append(f"step() exceeded the drive limits: {cmd}")
         trace.append(cmd)
         pose[0] += cmd.linear * math.cos(pose[2]) * DT
@@ -125,5 +126,6 @@ def check_controller(controller: Controller, steps: int = 600) -> list[str]:
         runs.append(trace)
     if runs[0] != runs[1]:
         problems.append("two runs after reset() with the same observations gave different "
-                        "commands (state leaks across reset or the controller is not deterministic)")
+                        "commands (state leaks across reset or the controller is not "
+                        "deterministic)")
     return problems

@@ -137,7 +137,7 @@ def legal_transition(old: NavState, new: NavState) -> bool:
 
 
 def observable_transition(old: NavState, new: NavState) -> bool:
-    """Whether ``new`` can be seen after ``old`` one call later (pending may pass through active)."""
+    """Whether ``new`` may be seen one call after ``old`` (pending may pass through active)."""
     return legal_transition(old, new) or (
         old == NavState.PENDING and new in _ALLOWED[NavState.ACTIVE])
 

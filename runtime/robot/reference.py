@@ -46,7 +46,7 @@ BLOCKED_AFTER = 30.0
 FINAL_APPROACH = 0.35
 """Metres from the goal where the rollouts give way to a direct approach."""
 REPLAN_AFTER = 3.0
-"""Seconds without an admissible forward motion before the path is replanned around what the laser sees."""
+"""Seconds without an admissible motion before replanning around what the laser sees."""
 
 
 def clearance_field(points: np.ndarray, ctx: ControllerContext) -> np.ndarray:
@@ -124,7 +124,7 @@ class ReferenceNavigator:
             graph.add_weighted_edges_from(
                 ((p0, p1), (q0, q1), c) for p0, p1, q0, q1, c in
                 zip(a[:, 0].tolist(), a[:, 1].tolist(), b[:, 0].tolist(), b[:, 1].tolist(),
-                    w.tolist()))
+                    w.tolist(), strict=False))
         self._graph = graph
         self._free_cells = idx
 
@@ -231,7 +231,8 @@ class ReferenceNavigator:
             seg = np.hypot(*np.diff(path, axis=0).T)
             self._tail = np.concatenate((np.cumsum(seg[::-1])[::-1], [0.0]))
         i = self._index
-        return math.hypot(path[i, 0] - self._pose[0], path[i, 1] - self._pose[1]) + float(self._tail[i])
+        here = math.hypot(path[i, 0] - self._pose[0], path[i, 1] - self._pose[1])
+        return here + float(self._tail[i])
 
     # -- control ---------------------------------------------------------------------------
 
@@ -265,7 +266,8 @@ class ReferenceNavigator:
             if abs(err) < 0.05:
                 tracker.succeed()
                 return STOP
-            return VelocityCommand(0.0, float(np.clip(2.0 * err, -0.6 * self._wmax, 0.6 * self._wmax)))
+            turn = float(np.clip(2.0 * err, -0.6 * self._wmax, 0.6 * self._wmax))
+            return VelocityCommand(0.0, turn)
         remaining = self._advance((x, y))
         if remaining < self._best_remaining - 0.1:
             self._best_remaining = remaining
@@ -380,7 +382,7 @@ class ReferenceNavigator:
         wy = y + s * points[:, 0] + c * points[:, 1]
         grow = int(math.ceil((self._radius + 0.05) / RESOLUTION))
         blocked: set[tuple[int, int]] = set()
-        for px, py in zip(wx, wy):
+        for px, py in zip(wx, wy, strict=False):
             ci, cj = self._cell(float(px), float(py))
             for di in range(-grow, grow + 1):
                 for dj in range(-grow, grow + 1):

@@ -1,4 +1,4 @@
-"""Choosing the robot under test by name (`reference`, `teleop`, `teleop:circle`) or `module:Class`."""
+"""Choosing the robot under test: `reference`, `teleop`, `teleop:circle`, or `module:Class`."""
 
 from __future__ import annotations
 

@@ -12,7 +12,8 @@ from __future__ import annotations
 import math
 import queue
 import threading
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 from rei.runtime.robot.protocol import (
     Controller,
@@ -93,16 +94,19 @@ class GuardedController:
     def feedback(self) -> GoalFeedback:
         fb = self._call("feedback", self.controller.feedback)
         if not isinstance(fb, GoalFeedback):
-            self._broken = f"controller feedback() returned {type(fb).__name__}, expected GoalFeedback"
+            self._broken = (f"controller feedback() returned {type(fb).__name__}, "
+                            f"expected GoalFeedback")
             raise ControllerFault(self._broken)
-        return fb  # type: ignore[no-any-return]
+        return fb
 
     def step(self, observation: Observation) -> VelocityCommand:
         cmd = self._call("step", self.controller.step, observation)
         if not isinstance(cmd, VelocityCommand):
-            self._broken = f"controller step() returned {type(cmd).__name__}, expected a VelocityCommand"
+            self._broken = (f"controller step() returned {type(cmd).__name__}, "
+                            f"expected a VelocityCommand")
             raise ControllerFault(self._broken)
         if not (math.isfinite(cmd.linear) and math.isfinite(cmd.angular)):
-            self._broken = f"controller step() sent a non-finite command ({cmd.linear}, {cmd.angular})"
+            self._broken = (f"controller step() sent a non-finite command "
+                            f"({cmd.linear}, {cmd.angular})")
             raise ControllerFault(self._broken)
         return cmd

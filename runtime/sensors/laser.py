@@ -39,7 +39,7 @@ def merge_wall_tiles(walls: tuple[BodySpec, ...], tile: float) -> np.ndarray:
     for j in sorted(rows):
         cells = sorted(set(rows[j]))
         start = prev = cells[0]
-        for i in cells[1:] + [None]:  # type: ignore[list-item]
+        for i in [*cells[1:], None]:
             if i is not None and i == prev + 1:
                 prev = i
                 continue
@@ -53,7 +53,7 @@ def merge_wall_tiles(walls: tuple[BodySpec, ...], tile: float) -> np.ndarray:
 def shapes_of(bodies: list[BodySpec], poses: np.ndarray) -> ShapeSet:
     """Boxes and circles of bodies at the given (N, 3) poses."""
     boxes, circles = [], []
-    for body, (x, y, yaw) in zip(bodies, poses):
+    for body, (x, y, yaw) in zip(bodies, poses, strict=False):
         fp = body.footprint
         if isinstance(fp, Cylinder):
             circles.append((x, y, fp.radius))

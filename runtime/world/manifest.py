@@ -111,13 +111,13 @@ def load_manifest(folder: str | Path) -> WorldManifest:
                        f"{data.get('version')!r} (regenerate the world with this REI)")
     try:
         robot = _body(data["robot"], "robot")
-        d, l = data["robot"]["drive"], data["robot"]["laser"]
+        d, las = data["robot"]["drive"], data["robot"]["laser"]
         drive = DriveSpec(_num(d["max_linear"], "drive"), _num(d["max_angular"], "drive"),
                           _num(d["wheel_separation"], "drive"), _num(d["wheel_radius"], "drive"))
-        laser = LaserSpec(int(l["beams"]), _num(l["min_range"], "laser"),
-                          _num(l["max_range"], "laser"), _num(l["rate"], "laser"),
-                          _num(l["fov"], "laser"), _num(l["mount"][0], "laser"),
-                          _num(l["mount"][1], "laser"), _num(l["mount"][2], "laser"))
+        laser = LaserSpec(int(las["beams"]), _num(las["min_range"], "laser"),
+                          _num(las["max_range"], "laser"), _num(las["rate"], "laser"),
+                          _num(las["fov"], "laser"), _num(las["mount"][0], "laser"),
+                          _num(las["mount"][1], "laser"), _num(las["mount"][2], "laser"))
         walls = tuple(_body(w, f"walls[{i}]") for i, w in enumerate(data["walls"]))
         objects = tuple(_body(o, f"objects[{i}]") for i, o in enumerate(data["objects"]))
         floors = tuple((str(f[0]), _num(f[1], "floors"), _num(f[2], "floors"))

@@ -37,10 +37,11 @@ def test_world_loads_in_direct_mode_with_every_body_in_place(mission_file: Path,
     world = mission.world
     manifest = load_manifest(tmp_path)
     with BulletWorld(manifest, 100.0) as sim:
-        assert p.getNumBodies(physicsClientId=sim.client) == len(world.walls) + len(world.objects) + 1
-        for bid, wall in zip(sim.wall_ids, world.walls):
+        bodies = p.getNumBodies(physicsClientId=sim.client)
+        assert bodies == len(world.walls) + len(world.objects) + 1
+        for bid, wall in zip(sim.wall_ids, world.walls, strict=False):
             assert sim.pose(bid)[:2] == pytest.approx((wall.x, wall.y), abs=1e-6)
-        for bid, obj in zip(sim.object_ids, world.objects):
+        for bid, obj in zip(sim.object_ids, world.objects, strict=False):
             x, y, _ = sim.pose(bid)
             assert (x, y) == pytest.approx((obj.pose.x, obj.pose.y), abs=1e-6)
             z = p.getBasePositionAndOrientation(bid, physicsClientId=sim.client)[0][2]

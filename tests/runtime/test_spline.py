@@ -14,7 +14,7 @@ def test_spline_passes_through_every_vertex_at_its_time() -> None:
     t = np.array([0.0, 8.0, 20.0, 28.0, 40.0])
     p = np.array([[5.0, -1.0], [5.0, -3.0], [2.0, -3.0], [2.0, -1.0], [5.0, -1.0]])
     spline = CatmullRom(t, p, loop=True)
-    for ti, pi in zip(t[:-1], p[:-1]):
+    for ti, pi in zip(t[:-1], p[:-1], strict=False):
         assert spline.position(float(ti)) == pytest.approx(tuple(pi), abs=1e-12)
     # A loop repeats: one period later it is at the same place.
     assert spline.position(45.0) == pytest.approx(spline.position(5.0), abs=1e-9)

@@ -25,7 +25,8 @@ from rei.runtime.messages import (
 
 def _header() -> StreamHeader:
     return StreamHeader(SCHEMA_VERSION, "w", "m", 7, 10.0,
-                        ObservedObject("bot", "static", "turtlebot3_waffle", Box(0.281, 0.306), 0.141),
+                        ObservedObject("bot", "static", "turtlebot3_waffle",
+                                       Box(0.281, 0.306), 0.141),
                         (ObservedObject("wall_1", "wall", "wall", Box(1.0, 1.0), 1.2),
                          ObservedObject("walker", "human", "human", Cylinder(0.25), 1.75)),
                         1.0, (("a", 0.0, 0.0), ("b", 1.0, 0.0)))
@@ -54,7 +55,7 @@ def test_write_read_roundtrip_is_exact(tmp_path: Path) -> None:
     assert header == _header()
     back = list(read)
     assert len(back) == len(samples)
-    for a, b in zip(samples, back):
+    for a, b in zip(samples, back, strict=False):
         assert (a.seq, a.time, a.robot_pose, a.robot_twist, a.events) == \
                (b.seq, b.time, b.robot_pose, b.robot_twist, b.events)
         assert np.array_equal(a.poses, b.poses) and np.array_equal(a.twists, b.twists)
