@@ -8,6 +8,7 @@ same specification. This module must never import the runtime's host or write fi
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -180,11 +181,34 @@ def _uses_distance(e: vm.Expr) -> bool:
     return any(_uses_distance(c) for c in _children(e))
 
 
-def _pyrepr(value: Any) -> str:
+def _pyrepr(value: Any, indent: int = 8, width: int = 96) -> str:
+    """Python source for a value; records too long for one line get one field per line."""
     if isinstance(value, float):
-        if math.isinf(value):
-            return "math.inf"
-        return repr(value)
+        return "math.inf" if math.isinf(value) else repr(value)
+    flat = _flat(value)
+    if indent + len(flat) <= width:
+        return flat
+    pad = " " * (indent + 4)
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        fields = [f"{pad}{f.name}={_pyrepr(getattr(value, f.name), indent + 4, width)},"
+                  for f in dataclasses.fields(value)]
+        return f"{type(value).__name__}(\n" + "\n".join(fields) + f"\n{' ' * indent})"
+    if isinstance(value, tuple):
+        items = [f"{pad}{_pyrepr(v, indent + 4, width)}," for v in value]
+        return "(\n" + "\n".join(items) + f"\n{' ' * indent})"
+    return flat
+
+
+def _flat(value: Any) -> str:
+    if isinstance(value, float):
+        return "math.inf" if math.isinf(value) else repr(value)
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        inner = ", ".join(f"{f.name}={_flat(getattr(value, f.name))}"
+                          for f in dataclasses.fields(value))
+        return f"{type(value).__name__}({inner})"
+    if isinstance(value, tuple):
+        inner = ", ".join(_flat(v) for v in value)
+        return f"({inner},)" if len(value) == 1 else f"({inner})"
     return repr(value)
 
 

@@ -155,7 +155,10 @@ class _Linker:
             valid = [p for p in parts if p is not None]
             condition: m.Expr = valid[0] if len(valid) == 1 else m.BoolOp("and", tuple(valid))
             linked[name] = m.Query(name, param, condition, self.span(tx))
-        for cycle in nx.simple_cycles(graph):
+        order = list(tx_queries)
+        for found in sorted(nx.simple_cycles(graph), key=lambda c: sorted(map(order.index, c))):
+            at = min(range(len(found)), key=lambda i: order.index(found[i]))
+            cycle = found[at:] + found[:at]  # start where the reader meets it first
             first = tx_queries[cycle[0]]
             self.error(first, "VEPL-CYCLE", "expected queries that do not find each other in a "
                                             f"circle, found {' -> '.join(cycle + cycle[:1])}")

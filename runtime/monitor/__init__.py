@@ -6,6 +6,18 @@ the monitor's part of the run summary. It must never import the simulator: live 
 replayed traces go through exactly the same code.
 """
 
-from rei.runtime.monitor.host import AutomataHost, MonitorSink, generate_automata
+from __future__ import annotations
+
+from typing import Any
 
 __all__ = ["AutomataHost", "MonitorSink", "generate_automata"]
+
+
+def __getattr__(name: str) -> Any:
+    # The host joins the monitor and the evaluator, which reads the monitor's records:
+    # importing it lazily keeps `rei.runtime.monitor.automata` importable on its own.
+    if name in __all__:
+        from rei.runtime.monitor import host  # noqa: PLC0415
+
+        return getattr(host, name)
+    raise AttributeError(name)

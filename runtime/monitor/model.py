@@ -22,7 +22,7 @@ from rei.runtime.messages import MissionEvent, Sample, StreamHeader
 from rei.runtime.monitor.automata import QueryInputs
 from rei.runtime.monitor.geometry import FootprintSet
 
-FAR_AWAY = 1e6
+FAR_AWAY = 1e3
 """Distances and laser readings of the baseline before the first sample: nothing is near,
 so a run that starts close to an object enters CLOSE with a FAR -> CLOSE transition."""
 PROBLEM_KINDS = ("non_finite", "out_of_order", "duplicate", "missing", "malformed")
@@ -175,7 +175,9 @@ def interpolate(a: QueryInputs, b: QueryInputs, f: float) -> QueryInputs:
 
 
 def crossings(before: list[np.ndarray], after: list[np.ndarray]) -> list[float]:
-    """Sorted distinct fractions in (0, 1) where a comparison margin changes sign."""
+    """Sorted distinct fractions in [0, 1] where a comparison margin changes sign (a
+    crossing that rounds to the sample itself still counts: the state before it must be
+    visited)."""
     found: set[float] = set()
     for m0, m1 in zip(before, after):
         m0 = np.broadcast_to(m0, np.shape(m1)) if np.shape(m0) != np.shape(m1) else m0
@@ -188,7 +190,7 @@ def crossings(before: list[np.ndarray], after: list[np.ndarray]) -> list[float]:
         b = np.asarray(m1)[flipped]
         with np.errstate(divide="ignore", invalid="ignore"):
             f = a / (a - b)
-        found.update(float(v) for v in f[np.isfinite(f) & (f > 0) & (f < 1)])
+        found.update(float(v) for v in f[np.isfinite(f) & (f >= 0) & (f <= 1)])
     return sorted(found)
 
 

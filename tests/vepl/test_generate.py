@@ -1,0 +1,44 @@
+"""The `rx` target: a readable, importable, deterministic module of RxPY event automata."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from rei.generators.targets import check_target, get_target
+from rei.generators.targets.rx import render_module
+from rei.lang.cli import main as rei_gen
+from rei.lang.vepl import DEFAULT_VEPL, load_vepl
+from rei.runtime.monitor.automata import load_generated
+
+
+def test_target_conforms_and_accepts_vepl() -> None:
+    target = get_target("rx")
+    assert check_target(target) == []
+    assert target.accepts == (".vepl",)
+
+
+def test_generate_command_writes_an_importable_module(tmp_path: Path) -> None:
+    assert rei_gen(["generate", str(DEFAULT_VEPL), "--target", "rx", "-o", str(tmp_path)]) == 0
+    path = tmp_path / "automata.py"
+    text = path.read_text(encoding="utf-8")
+    assert text.startswith('"""Event automata of the .vepl specification')
+    assert "(notAtomicFarFromObject -> atomicCloseToObject){+}[1000]" in text
+    assert max(len(line) for line in text.splitlines()) <= 130
+    module = load_generated(path)
+    assert module.SPEC_NAME == "default"
+    assert {s.name for s in module.SIGNALS} >= {"SIG_GEOM_FAR_TRANSIT_CLOSE"}
+    assert module.DISTANCE_CUTOFF == 0.5
+
+
+def test_generation_is_deterministic() -> None:
+    spec = load_vepl()
+    assert render_module(spec, "default.vepl") == render_module(load_vepl(), "default.vepl")
+
+
+def test_hysteresis_generates_relaxed_thresholds(tmp_path: Path) -> None:
+    path = tmp_path / "h.vepl"
+    path.write_text("parameters { hysteresis = 0.1 }\n"
+                    "query close(o: object) { distance(robot, o) < 0.5 }\n", encoding="utf-8")
+    text = render_module(load_vepl(path), "h.vepl")
+    assert "< 0.5 + HYSTERESIS" in text
+    assert "DISTANCE_CUTOFF = 0.6" in text
