@@ -15,7 +15,7 @@ from pathlib import Path
 from rei.lang.cli_support import EXIT_RUN_ERROR
 from rei.runtime.collector.trace import read_trace, read_trace_end
 from rei.runtime.evaluator.summary import merge_summary, write_summary
-from rei.runtime.monitor import MonitorSink
+from rei.runtime.monitor import MonitorSink, generate_automata
 from rei.runtime.monitor.errors import MonitorError
 from rei.runtime.results import RESULTS_VERSION, RunSummary
 
@@ -37,13 +37,21 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def replay(trace: Path, vepl: Path | None, out_dir: Path) -> RunSummary:
     """Monitor ``trace`` into ``out_dir``; the summary (also written as summary.json)."""
+    # The specification is checked and generated before the trace is opened: a bad .vepl
+    # is reported without touching the trace.
+    automata = generate_automata(vepl, Path(out_dir) / "automata")
     header, samples = read_trace(trace)
-    sink = MonitorSink(vepl, out_dir)
-    sink.start(header)
+    sink = MonitorSink(vepl, out_dir, automata=automata)
     last = 0.0
-    for sample in samples:
-        sink.feed(sample)
-        last = sample.time
+    try:
+        sink.start(header)
+        for sample in samples:
+            sink.feed(sample)
+            last = sample.time
+    finally:
+        close = getattr(samples, "close", None)
+        if close is not None:
+            close()
     end = read_trace_end(trace)
     end_time, outcome, reason = end if end is not None else (last, "interrupted",
                                                              "the trace has no end line")
