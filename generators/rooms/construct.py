@@ -173,27 +173,37 @@ def _choose_goals(params: RoomParameters, floors: set[Cell], rng: random.Random)
     reach = params.spacing - 1e-9
     # Only floors with some floor far enough away can lead on to a next goal.
     coords = np.asarray(ordered, dtype=float)
-    gaps = coords[:, None, :] - coords[None, :, :]
-    farthest = np.sqrt((gaps ** 2).sum(axis=2).max(axis=1))
-    onward = [c for c, far in zip(ordered, farthest.tolist(), strict=True) if far >= reach]
-    if not onward:
+    # The farthest floor from any point is a vertex of the floors' convex hull, and a hull
+    # vertex lacks a floor neighbour on a horizontal and on a vertical side.
+    corners = np.asarray([c for c in ordered
+                          if ((c[0] - 1, c[1]) not in floors or (c[0] + 1, c[1]) not in floors)
+                          and ((c[0], c[1] - 1) not in floors or (c[0], c[1] + 1) not in floors)],
+                         dtype=float)
+    gaps = coords[:, None, :] - corners[None, :, :]
+    can_go_on = np.sqrt((gaps ** 2).sum(axis=2).max(axis=1)) >= reach
+    onward_idx = np.flatnonzero(can_go_on).tolist()
+    if not onward_idx:
         raise AttemptFailed("spacing", f"no two floors {params.spacing:g} m apart")
-    goals = [onward[rng.randrange(len(onward))]]
+    chosen = [onward_idx[rng.randrange(len(onward_idx))]]
     for k in range(params.goals - 1):
-        prev = goals[-1]
-        pool = onward if k < params.goals - 2 else ordered
-        far = [c for c in pool if c not in goals and math.dist(c, prev) >= reach]
+        prev = coords[chosen[-1]]
+        ok = np.hypot(coords[:, 0] - prev[0], coords[:, 1] - prev[1]) >= reach
+        if k < params.goals - 2:
+            ok &= can_go_on
+        ok[chosen] = False
+        far = np.flatnonzero(ok).tolist()
         if not far:
             raise AttemptFailed("spacing",
-                                f"no floor {params.spacing:g} m from goal {len(goals)}")
-        goals.append(far[rng.randrange(len(far))])
-    return goals
+                                f"no floor {params.spacing:g} m from goal {len(chosen)}")
+        chosen.append(far[rng.randrange(len(far))])
+    return [ordered[i] for i in chosen]
 
 
 def _human(params: RoomParameters, index: int, floors: set[Cell], outside: CellMask,
            taken: set[Cell], robot: Cell, base_route: list[Cell], rng: random.Random
            ) -> tuple[HumanPlan, set[Cell]]:
     ordered = sorted(floors)
+    convex = params.shape == "rect"
     for _ in range(HUMAN_TRIES):
         vertices: list[Cell] = []
         if params.crossing == "cross" and len(base_route) > 2:
@@ -222,7 +232,10 @@ def _human(params: RoomParameters, index: int, floors: set[Cell], outside: CellM
                 cand = ordered[rng.randrange(len(ordered))]
                 if math.dist(cand, prev) < HUMAN_MIN_STEP:
                     continue
-                if not disc_touches(polyline([prev, cand], False, CHECK_STEP), outside):
+                # In a rectangle every chord between floor centres keeps 0.5 m from the
+                # walls; other shapes need the check.
+                if convex or not disc_touches(polyline([prev, cand], False, CHECK_STEP),
+                                              outside):
                     vertices.append(cand)
                     break
             else:
