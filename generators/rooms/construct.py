@@ -36,7 +36,6 @@ from rei.generators.rooms.descriptors import (
 from rei.generators.rooms.geometry import (
     Cell,
     CellMask,
-    bfs_distances,
     bfs_route,
     catmull_rom,
     disc_touches,
@@ -328,9 +327,3 @@ def construct(params: RoomParameters, facts: CatalogueFacts, rng: random.Random)
     return RoomPlan(params, grid_rows(params, floors), frozenset(floors), robot, heading,
                     tuple(objects), tuple(humans), tuple(goals), tuple(route), descriptors)
 
-
-def reachable_in_order(plan: RoomPlan) -> bool:
-    """Independent re-check on the 4-connected floor graph (the checker's own notion)."""
-    free = set(plan.floors) - {o.cell for o in plan.objects}
-    dist = bfs_distances(free, plan.robot)
-    return all(g in dist for g in plan.goals)

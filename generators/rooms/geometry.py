@@ -227,21 +227,6 @@ def bfs_route(free: set[Cell], stops: Sequence[Cell]) -> list[Cell] | None:
     return cells
 
 
-def bfs_distances(free: set[Cell], start: Cell) -> dict[Cell, int]:
-    dist = {start: 0}
-    frontier = [start]
-    while frontier:
-        nxt = []
-        for i, j in frontier:
-            d = dist[(i, j)] + 1
-            for n in ((i + 1, j), (i - 1, j), (i, j + 1), (i, j - 1)):
-                if n in free and n not in dist:
-                    dist[n] = d
-                    nxt.append(n)
-        frontier = nxt
-    return dist
-
-
 def stays_connected(free: set[Cell], cell: Cell) -> bool:
     """Whether removing ``cell`` from the 4-connected set ``free`` keeps its free neighbours
     connected to each other (so the whole free set stays one component)."""

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
 from rei.generators.errors import GenerationError
 
@@ -166,10 +166,6 @@ def _float(option: str, text: str, low: float, high: float, low_open: bool = Tru
     return value
 
 
-def static_types(catalogue_names: tuple[str, ...]) -> tuple[str, ...]:
-    return catalogue_names
-
-
 def parse_row(levels: Mapping[str, str], static_names: tuple[str, ...]) -> RoomParameters:
     """Parse one level per factor; ParameterError names the option when a level is bad."""
     size = levels["size"].lower().split("x")
@@ -256,6 +252,3 @@ def refuse_impossible(params: RoomParameters) -> None:
         raise ParameterError("humans", f"at most {(floors - params.goals) // 2} humans in a "
                                        f"{w}x{h} room", f"{params.humans}")
 
-
-def parameter_names() -> tuple[str, ...]:
-    return tuple(f.name for f in fields(RoomParameters) if f.name != "levels")

@@ -25,9 +25,9 @@ from rei.generators.rooms.descriptors import DESCRIPTOR_NAMES
 from rei.generators.rooms.design import Strategy, SuiteDesign, derived_seed, design_suite
 from rei.generators.rooms.space import (
     FACTOR_NAMES,
+    ParameterError,
     ParameterSpace,
     RoomParameters,
-    floor_count,
     parse_row,
     refuse_impossible,
 )
@@ -98,7 +98,6 @@ def check_pair(room_path: Path, room_src: str, mission_path: Path, mission_src: 
 def rows_of(request: SuiteRequest) -> tuple[SuiteDesign, list[tuple[int, RoomParameters]]]:
     """The design and, per room, its design row and parsed parameters (refusals raised here)."""
     if request.count is not None and request.count <= 0:
-        from rei.generators.rooms.space import ParameterError
         raise ParameterError("count", "a whole number of rooms of at least 1",
                              f"{request.count}")
     design, count = design_suite(request.space, request.strategy, request.count, request.seed,
@@ -213,6 +212,3 @@ def write_suite(suite: Suite, out_dir: Path, coverage: str, times: StageTimes | 
         times.write += time.perf_counter() - t0
     return written
 
-
-def floors_of(params: RoomParameters) -> int:
-    return floor_count(params)
