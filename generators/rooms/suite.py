@@ -165,7 +165,8 @@ def generate(request: SuiteRequest, out_dir: Path, times: StageTimes | None = No
             (option, reason), times_seen = max(reasons.items(), key=lambda kv: (kv[1], kv[0]))
             raise GenerationError(
                 f"--{option}: expected a room that can be built within "
-                f"{request.max_attempts} attempts, found in {times_seen} of them: {reason} "
+                f"{request.max_attempts} attempts, found every attempt failing; most often "
+                f"({times_seen} times): {reason} "
                 f"(room {index + 1}: {levels}; fewer objects, humans or goals, a smaller "
                 f"--spacing or a larger --size make it possible)")
     return Suite(request, design, tuple(pairs))

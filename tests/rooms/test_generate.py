@@ -72,7 +72,7 @@ def _assert_valid_pair(room_path: Path, mission_path: Path) -> None:
     assert len(floors) == len(set(floors))
 
 
-@settings(max_examples=12, deadline=None,
+@settings(max_examples=25, deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(preset=st.sampled_from(["small", "medium", "large"]),
        seed=st.integers(min_value=0, max_value=2**31),
