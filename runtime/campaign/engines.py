@@ -126,22 +126,24 @@ class DaskEngine:
                                 f"scheduler ({exc})") from exc
         try:
             futures = []
-            by_key: dict[str, RunSpec] = {}
+            by_key: dict[str, tuple[RunSpec, Path]] = {}
             for spec in specs:
+                folder = work_dir(spec)
                 # pure=False: a repeat is a new experiment even with equal arguments;
                 # retries=0: a run that killed its worker is a result, not something to hide.
-                future = client.submit(execute_run_remote, spec, self.timeout, pure=False,
+                future = client.submit(execute_run_remote, spec, str(folder), self.timeout,
+                                       pure=False,
                                        key=f"rei-run-{spec.run_id}-{uuid.uuid4().hex[:8]}")
                 futures.append(future)
-                by_key[future.key] = spec
+                by_key[future.key] = (spec, folder)
             for future in distributed.as_completed(futures, loop=client.loop):
-                spec = by_key[future.key]
+                spec, folder = by_key[future.key]
                 try:
                     result: RunResult = future.result()
                 except Exception as exc:  # noqa: BLE001  (a lost worker is one run's outcome)
                     result = RunResult(spec.run_id, "crashed", None, 0.0, None,
                                        f"the Dask worker failed: {type(exc).__name__}: {exc}")
-                yield spec, work_dir(spec), result
+                yield spec, folder, result
         finally:
             client.close()
 

@@ -131,19 +131,31 @@ def _kill(process: subprocess.Popen[bytes]) -> None:
     process.wait()
 
 
-def execute_run_remote(spec: RunSpec, timeout: float | None = None,
+def execute_run_remote(spec: RunSpec, work_dir: str, timeout: float | None = None,
                        runner: Sequence[str] | None = None) -> RunResult:
-    """The Dask task: run in a private temporary folder and bring the files back.
+    """The Dask task: run in a private folder on the worker, then deliver the run's files.
 
-    The campaign's folder may not exist on the worker's machine, so the result carries the
-    run folder's files and the campaign process stays the only writer of the store.
+    The campaign process creates ``work_dir`` (unique and fresh) before submitting. When this
+    machine sees it (the same machine, or a shared file system) the files are moved into it;
+    when it has gone meanwhile (the campaign was killed and resumed, which discards unfinished
+    attempts) they are dropped; otherwise the result carries them back. Either way only the
+    campaign process records runs, and a run orphaned by a killed campaign cannot write into
+    a resumed one.
     """
+    import shutil  # noqa: PLC0415
     import tempfile  # noqa: PLC0415
 
+    program = runner if runner is not None else DEFAULT_RUNNER
+    target = Path(work_dir)
+    shared = target.is_dir()
     with tempfile.TemporaryDirectory(prefix="rei-run-") as tmp:
         work = Path(tmp) / spec.run_id
-        result = execute_run(spec, work, timeout=timeout,
-                             runner=runner if runner is not None else DEFAULT_RUNNER)
+        result = execute_run(spec, work, timeout=timeout, runner=program)
+        if shared:
+            if target.is_dir():
+                for entry in sorted(work.iterdir()):
+                    shutil.move(entry, target / entry.name)
+            return result
         files = {p.relative_to(work).as_posix(): p.read_bytes()
                  for p in sorted(work.rglob("*")) if p.is_file()}
     return RunResult(result.run_id, result.status, result.exit_code, result.wall_time,

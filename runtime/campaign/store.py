@@ -175,9 +175,8 @@ class CampaignStore:
         return plan, data, _read_records(root, plan)
 
     def close(self) -> None:
-        partial = self.root / RUNS / PARTIAL
-        if partial.is_dir() and not any(partial.iterdir()):
-            partial.rmdir()
+        """Release the folder; attempts that did not finish are discarded (they run again)."""
+        self._discard_partial()
         self._lock.close()
 
     def __enter__(self) -> CampaignStore:

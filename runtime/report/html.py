@@ -17,7 +17,7 @@ from rei.runtime.report import plots
 from rei.runtime.report.data import CampaignData
 from rei.runtime.report.tables import (
     execution_summary,
-    group_success,
+    group_success_table,
     mission_success,
     signal_counts,
     success_table,
@@ -54,9 +54,8 @@ def render_html(data: CampaignData, rerun: dict[str, str]) -> str:
     records = list(data.records)
     failures = [r for r in records if not r.passed]
     missions = mission_success(records)
-    groups = group_success(records)
     tables = [execution_summary(records)]
-    if len({r.spec.group for r in records}) > 1 or any(r.spec.parameters for r in records):
+    if len({r.spec.group for r in records}) > 1:
         tables.append(execution_summary(records, key=lambda r: r.spec.group,
                                         label="Group"))
     maps = []
@@ -73,7 +72,7 @@ def render_html(data: CampaignData, rerun: dict[str, str]) -> str:
         failed=len(failures), flaky=[m for m in missions if m.flaky],
         repeat=data.plan.repeat, seed=data.plan.seed,
         failures=failures, rerun=rerun, mission_of=by_mission,
-        success_tables=[success_table(missions, "Mission"), success_table(groups, "Group")],
+        success_tables=[success_table(missions, "Mission"), group_success_table(records)],
         summary_tables=tables, signal_table=signal_counts(records),
         utility_plot=plots.utility_over_time(data),
         signal_plot=plots.signal_distribution(records),

@@ -86,7 +86,8 @@ def descriptors(records: Sequence[RunRecord]) -> list[str]:
             if isinstance(value, (int, float)) and not isinstance(value, bool) and \
                     math.isfinite(value):
                 names.setdefault(key, set()).add(float(value))
-    skip = {"seed", "index"}
+    # Bookkeeping columns of a suite index are numbers too, but no difficulty.
+    skip = {"seed", "index", "design_row", "attempts", "rejected", "repeat"}
     return sorted(k for k, v in names.items() if len(v) > 1 and k not in skip)
 
 

@@ -86,10 +86,27 @@ def signal_counts(records: Sequence[RunRecord],
 
 
 def success_table(rates: Sequence[SuccessRate], label: str) -> Table:
+    """Per mission: the rate over its repeats, labelled flaky when the repeats disagree."""
     rows = tuple((r.key, r.runs, r.passed, r.rate, f"[{r.low:.2f}, {r.high:.2f}]",
                   "flaky" if r.flaky else "") for r in rates)
     return Table(f"Success rate per {label.lower()} (Wilson 95 % interval)",
                  (label, "Runs", "Passed", "Success rate", "95 % interval", "Label"), rows)
+
+
+def group_success_table(records: Sequence[RunRecord]) -> Table:
+    """Per group: the rate over all its runs, and how many of its missions are flaky (a group
+    of different missions that disagree is not flaky; its missions' repeats may be)."""
+    flaky: dict[str, int] = {}
+    mission_group = {by_mission(r): r.spec.group for r in records}
+    for rate in mission_success(records):
+        if rate.flaky:
+            group = mission_group[rate.key]
+            flaky[group] = flaky.get(group, 0) + 1
+    rows = tuple((r.key, r.runs, r.passed, r.rate, f"[{r.low:.2f}, {r.high:.2f}]",
+                  flaky.get(r.key, 0)) for r in group_success(records))
+    return Table("Success rate per group (Wilson 95 % interval)",
+                 ("Group", "Runs", "Passed", "Success rate", "95 % interval",
+                  "Flaky missions"), rows)
 
 
 def mission_success(records: Sequence[RunRecord]) -> list[SuccessRate]:

@@ -186,3 +186,61 @@ def test_crashed_and_hung_runs_are_recorded_and_the_campaign_goes_on(tmp_path: P
     assert by_id["broken.r00"].status == "crashed"
     assert "exit status 2, no summary.json" in by_id["broken.r00"].message
     assert by_id["simple_wall.r00"].status == "ran"
+
+
+@pytest.mark.slow
+def test_ctrl_c_stops_the_campaign_and_the_same_command_finishes_it(tmp_path: Path) -> None:
+    require_rei_run()
+    out = tmp_path / "campaign"
+    argv = campaign_argv(out, "--workers", "2", "--no-report", repeat=4)
+    # As a terminal's Ctrl-C does: SIGINT to the whole foreground process group.
+    process = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                               text=True, start_new_session=True)
+    deadline = time.monotonic() + SAFETY_LIMIT
+    while recorded(out) < 2 and process.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    os.killpg(process.pid, signal.SIGINT)
+    _, err = process.communicate(timeout=SAFETY_LIMIT)
+    assert process.returncode == 130, err
+    assert "Run the same command again" in err
+    assert "Traceback" not in err
+    done = recorded(out)
+    assert 2 <= done < 8
+    assert not list((out / "runs" / ".partial").glob("*"))
+    resumed = subprocess.run(argv, capture_output=True, text=True, timeout=SAFETY_LIMIT)
+    assert f"{done} of 8 runs already recorded" in resumed.stderr
+    assert resumed.returncode == 1
+    plan = plan_campaign(MISSIONS, repeat=4, seed=5, duration=2.0)
+    assert [r.spec.run_id for r in CampaignStore.read(out)[2]] == [s.run_id for s in plan.runs]
+
+
+@pytest.mark.slow
+def test_demo_generates_runs_and_reports(tmp_path: Path) -> None:
+    require_rei_run()
+    done = subprocess.run([sys.executable, "-m", "rei.runtime.cli", "demo", "-o",
+                           str(tmp_path), "--count", "2", "--repeat", "1", "--workers", "2"],
+                          capture_output=True, text=True, timeout=SAFETY_LIMIT)
+    assert done.returncode == 0, done.stderr
+    report = tmp_path / "campaign" / "report.html"
+    assert report.as_uri() in done.stdout
+    assert len(CampaignStore.read(tmp_path / "campaign")[2]) == 2
+    assert (tmp_path / "suite" / "index.csv").is_file()
+
+
+@pytest.mark.slow
+def test_a_worker_without_the_campaign_folder_sends_the_run_files_back(tmp_path: Path) -> None:
+    require_rei_run()
+    from rei.runtime.campaign.execute import execute_run_remote  # noqa: PLC0415
+
+    plan = plan_campaign([EXAMPLES / "simple_wall"], duration=2.0)
+    (spec,) = plan.runs
+    result = execute_run_remote(spec, str(tmp_path / "not-on-this-machine" / spec.run_id))
+    assert result.status == "ran"
+    assert {"summary.json", "trace.jsonl", "run.log"} <= set(result.files)
+    assert not (tmp_path / "not-on-this-machine").exists()
+    with CampaignStore.open(tmp_path / "campaign", plan, {}) as store:
+        record = store.record(spec, result, store.new_work_dir(spec.run_id))
+        assert record is not None and record.summary is not None
+        run_dir = store.run_dir(spec.run_id)
+    assert (run_dir / "summary.json").read_bytes() == result.files["summary.json"]
+    assert json.loads((run_dir / "summary.json").read_text())["seed"] == spec.seed

@@ -13,7 +13,7 @@ from lxml import etree
 from rei.runtime.campaign import CampaignStore
 from rei.runtime.cli import main
 from rei.runtime.report import build_report, execution_summary, signal_counts
-from rei.runtime.report.tables import group_success, mission_success
+from rei.runtime.report.tables import group_success, group_success_table, mission_success
 from tests.campaign.records import write_campaign
 from tests.conftest import require_tool
 
@@ -61,6 +61,9 @@ def test_success_rates_per_mission_and_group(campaign: Path) -> None:
     flaky = sorted(r.key for r in mission_success(records) if r.flaky)
     assert flaky == ["navigation", "small_dense"]
     assert [(g.key, g.passed, g.runs) for g in group_success(records)] == [("examples", 7, 12)]
+    table = group_success_table(records)
+    assert table.columns[-1] == "Flaky missions"
+    assert table.rows == (("examples", 12, 7, 7 / 12, "[0.32, 0.81]", 2),)
 
 
 def test_junit_has_a_suite_per_mission_and_a_case_per_requirement(campaign: Path) -> None:

@@ -1,0 +1,89 @@
+"""`rei demo -o DIR`: generate a small room suite, run a campaign on it, write the report.
+
+The README's first command: everything on the embedded defaults (catalogue, default .vepl,
+reference controller), a couple of minutes on two cores. It uses `rei-gen rooms` when that
+generator is installed and the bundled examples otherwise. Exit status 0 when the campaign
+finished (failed runs are results to look at, not a failure of the demo), 2 for bad input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import io
+import os
+import sys
+from pathlib import Path
+
+from rei.lang.cli_support import EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_OK
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    parser = sub.add_parser(
+        "demo", help="generate a small suite, run a campaign on it and write its report",
+        description="Generate a small suite of rooms and missions with `rei-gen rooms`, run "
+                    "every mission --repeat times in parallel with `rei campaign`, and write "
+                    "DIR/campaign/report.html. Run it again to resume an interrupted demo.")
+    parser.add_argument("-o", "--output", type=Path, required=True, metavar="DIR",
+                        help="folder for the suite (DIR/suite) and the campaign (DIR/campaign)")
+    parser.add_argument("--count", type=int, default=6, metavar="N",
+                        help="rooms to generate (default 6)")
+    parser.add_argument("--repeat", type=int, default=2, metavar="K",
+                        help="runs per mission (default 2)")
+    parser.add_argument("--preset", choices=("small", "medium", "large"), default="small",
+                        help="room class of the suite (default small)")
+    parser.add_argument("--seed", type=int, default=0, metavar="S", help="seed (default 0)")
+    parser.add_argument("--workers", type=int, default=None, metavar="N",
+                        help="runs at once (default: number of CPUs)")
+    parser.set_defaults(func=run)
+
+
+def generate_suite(out: Path, count: int, preset: str, seed: int) -> list[Path]:
+    """The suite's index, generated with `rei-gen rooms`; the bundled examples without it."""
+    index = out / "index.csv"
+    if index.is_file():
+        return [index]  # resuming: the same seed gave these files, keep them
+    try:
+        from rei.lang.cli import main as rei_gen  # noqa: PLC0415
+        from rei.lang.commands import rooms  # noqa: F401, PLC0415
+    except ImportError:
+        print(f"rei demo: `rei-gen rooms` is not installed; using {EXAMPLES}", file=sys.stderr)
+        return [EXAMPLES]
+    report = io.StringIO()
+    with contextlib.redirect_stdout(report):  # the coverage report is in DIR/suite/coverage.txt
+        status = rei_gen(["rooms", "-o", str(out), "--count", str(count), "--preset", preset,
+                          "--seed", str(seed)])
+    if status != EXIT_OK or not index.is_file():
+        sys.stderr.write(report.getvalue())
+        raise SystemExit(status or EXIT_BAD_INPUT)
+    return [index]
+
+
+def run(args: argparse.Namespace) -> int:
+    from rei.runtime.campaign import LocalEngine, plan_campaign, run_campaign  # noqa: PLC0415
+    from rei.runtime.campaign.provenance import collect  # noqa: PLC0415
+    from rei.runtime.commands.campaign import finish  # noqa: PLC0415
+
+    out: Path = args.output
+    print(f"1/3 generating {args.count} {args.preset} rooms into {out / 'suite'}",
+          file=sys.stderr)
+    inputs = generate_suite(out / "suite", args.count, args.preset, args.seed)
+    plan = plan_campaign(inputs, repeat=args.repeat, seed=args.seed)
+    engine = LocalEngine(args.workers or os.cpu_count() or 1)
+    print(f"2/3 running {len(plan.runs)} runs on {engine.workers} worker(s) into "
+          f"{out / 'campaign'}", file=sys.stderr)
+    provenance = collect(["rei", *sys.argv[1:]], engine.describe(), None, None)
+    try:
+        run_campaign(plan, out / "campaign", engine, provenance)
+    except KeyboardInterrupt:
+        print("rei demo: interrupted; run the same command again to finish", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    print("3/3 writing the report", file=sys.stderr)
+    finish(out / "campaign")
+    report = (out / "campaign" / "report.html").resolve()
+    print(f"\nOpen the report: {report.as_uri()}")
+    print(f"Re-run any failure with the command listed in it; rebuild it with "
+          f"`rei report {out / 'campaign'}`.")
+    return EXIT_OK
