@@ -39,7 +39,11 @@ class Target(Protocol):
     name: str
     description: str
     accepts: tuple[str, ...]
-    """File suffixes this target generates from, e.g. ('.room', '.mission')."""
+    """File suffixes this target generates from, e.g. ('.room', '.mission').
+
+    A target may also have ``options: tuple[str, ...]``, the `--option` keys it reads; when
+    every chosen target declares them, `rei-gen generate` refuses keys none of them reads.
+    """
 
     def generate(self, request: GenerationRequest) -> OutputTree:
         """Every file of the artifact, relative to the output folder; deterministic."""
