@@ -51,12 +51,15 @@ def catmull_rom(points: Sequence[tuple[float, float]], loop: bool,
 
 def polyline(points: Sequence[tuple[float, float]], loop: bool,
              step: float = SAMPLE_STEP) -> np.ndarray:
+    """Points along the straight control polygon, at most ``step`` apart."""
     p = np.asarray(list(points) + ([points[0]] if loop else []), dtype=float)
-    out = []
-    for a, b in zip(p[:-1], p[1:], strict=False):
-        count = max(2, int(math.ceil(float(np.hypot(*(b - a))) / step)) + 1)
-        out.append(a + (b - a) * np.linspace(0.0, 1.0, count)[:, None])
-    return np.vstack(out) if out else p
+    if len(p) < 2:
+        return p
+    a, b = p[:-1], p[1:]
+    count = max(2, int(math.ceil(float(np.hypot(*(b - a).T).max()) / step)) + 1)
+    t = np.linspace(0.0, 1.0, count)[:-1][None, :, None]
+    seg = a[:, None, :] + (b - a)[:, None, :] * t
+    return np.vstack([seg.reshape(-1, 2), p[-1:]])
 
 
 class CellMask:
