@@ -23,7 +23,7 @@ import numpy as np
 
 from rei.catalogue import Box, Cylinder
 from rei.generators.concrete import ConcreteMission
-from rei.runtime.animator import Animated, planar_command, spline_of
+from rei.runtime.animator import Animated, Animator, spline_of
 from rei.runtime.collector import DataCollector, MonitorConfig, SampleSink
 from rei.runtime.errors import RunError
 from rei.runtime.messages import SCHEMA_VERSION, LaserScan, MissionEvent, NavState, StreamHeader
@@ -191,6 +191,7 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
     try:
         animated = [Animated(world.object_ids[i], spline_of(b.trajectory), b.role == "human")
                     for i, b in enumerate(manifest.objects) if b.trajectory is not None]
+        animator = Animator(animated, config.physics_rate)
         collector.start()
         scan: LaserScan | None = None
         scan_time: float | None = None
@@ -259,10 +260,10 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
                     next_progress = now + 1.0
                 if final:
                     break
-                for item in animated:
-                    vx, vy, wz = planar_command(item, now, 1.0 / config.physics_rate,
-                                                world.pose(item.body))
-                    world.set_planar_velocity(item.body, vx, vy, wz)
+                if k % every_control == 0 and animated:
+                    animator.correct(k, [world.pose(item.body) for item in animated])
+                for body, vx, vy, wz in animator.commands(k):
+                    world.set_planar_velocity(body, vx, vy, wz)
                 world.drive_robot(cmd.linear, cmd.angular, truth[2])
                 world.step()
         except ControllerFault as fault:

@@ -1,8 +1,9 @@
 """The animator: moves humans and dynamic objects along splines by velocity (thesis 4.2.2, 6.2.2).
 
 Each physics step sets the body's planar velocity to the spline's displacement over the step,
-(r(t + dt) - r(t)) / dt, plus a bounded pull back towards r(t) so a body that was pushed or
-held up by a contact (the robot, a wall) rejoins its path instead of walking a parallel one.
+(r(t + dt) - r(t)) / dt, plus a bounded pull back towards r(t) (refreshed at the control rate)
+so a body that was pushed or held up by a contact (the robot, a wall) rejoins its path
+instead of walking a parallel one.
 The body is never teleported, so collisions with the robot are real contacts. Humans turn to
 face their direction of motion. Loops repeat; open trajectories stop at their last vertex.
 This module must never decide anything about the robot or the mission.
@@ -39,20 +40,50 @@ def spline_of(trajectory: Trajectory) -> CatmullRom:
     return CatmullRom(pts[:, 0], pts[:, 1:3], trajectory.loop)
 
 
-def planar_command(item: Animated, time: float, dt: float,
-                   pose: tuple[float, float, float]) -> tuple[float, float, float]:
-    """(vx, vy, wz) that moves the body along its spline from ``time`` to ``time + dt``."""
-    x0, y0 = item.spline.position(time)
-    x1, y1 = item.spline.position(time + dt)
-    vx, vy = (x1 - x0) / dt, (y1 - y0) / dt
-    ex, ey = x0 - pose[0], y0 - pose[1]
-    err = math.hypot(ex, ey)
-    if err > 1e-9:
-        pull = min(CATCH_UP_GAIN * err, MAX_CATCH_UP) / err
-        vx += ex * pull
-        vy += ey * pull
-    wz = 0.0
-    if item.face_motion and math.hypot(x1 - x0, y1 - y0) > 1e-6:
-        heading = math.atan2(y1 - y0, x1 - x0)
-        wz = math.remainder(heading - pose[2], math.tau) / TURN_TIME
-    return vx, vy, wz
+class Animator:
+    """Drives every animated body: the curve's displacement each physics step, plus a pull
+    back to the curve and a turn towards the walking direction, refreshed at the control rate.
+
+    Splitting the two keeps the per-step work to one spline evaluation per body (the end of
+    one step's displacement is the start of the next), while the feedback, which only needs
+    to be stable, runs ten times less often.
+    """
+
+    def __init__(self, items: list[Animated], physics_rate: float) -> None:
+        self.items = items
+        self.rate = physics_rate
+        self._feedback = [(0.0, 0.0, 0.0)] * len(items)
+        self._ahead: list[tuple[int, tuple[float, float]] | None] = [None] * len(items)
+
+    def correct(self, step: int, poses: list[tuple[float, float, float]]) -> None:
+        """Refresh each body's pull back to its curve from its ground-truth pose."""
+        time = step / self.rate
+        for k, (item, pose) in enumerate(zip(self.items, poses, strict=True)):
+            x0, y0 = item.spline.position(time)
+            ex, ey = x0 - pose[0], y0 - pose[1]
+            err = math.hypot(ex, ey)
+            cx = cy = 0.0
+            if err > 1e-9:
+                pull = min(CATCH_UP_GAIN * err, MAX_CATCH_UP) / err
+                cx, cy = ex * pull, ey * pull
+            wz = 0.0
+            vx, vy = item.spline.velocity(time)
+            if item.face_motion and math.hypot(vx, vy) > 1e-3:
+                wz = math.remainder(math.atan2(vy, vx) - pose[2], math.tau) / TURN_TIME
+            self._feedback[k] = (cx, cy, wz)
+
+    def commands(self, step: int) -> list[tuple[int, float, float, float]]:
+        """(body, vx, vy, wz) moving each body along its curve from ``step`` to ``step + 1``."""
+        out = []
+        dt = 1.0 / self.rate
+        for k, item in enumerate(self.items):
+            ahead = self._ahead[k]
+            if ahead is not None and ahead[0] == step:
+                x0, y0 = ahead[1]
+            else:
+                x0, y0 = item.spline.position(step / self.rate)
+            x1, y1 = item.spline.position((step + 1) / self.rate)
+            self._ahead[k] = (step + 1, (x1, y1))
+            cx, cy, wz = self._feedback[k]
+            out.append((item.body, (x1 - x0) / dt + cx, (y1 - y0) / dt + cy, wz))
+        return out

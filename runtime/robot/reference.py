@@ -28,8 +28,8 @@ from rei.runtime.robot.protocol import (
     VelocityCommand,
 )
 
-RESOLUTION = 0.1
-"""Metres per planning cell."""
+RESOLUTION = 0.2
+"""Metres per planning cell: a tile of 1 m holds 5, so a 1 m passage keeps free centres."""
 COMFORT = 0.45
 """Metres from obstacles below which cells cost more."""
 LOOKAHEAD = 0.6
@@ -49,19 +49,35 @@ REPLAN_AFTER = 3.0
 """Seconds without an admissible motion before replanning around what the laser sees."""
 
 
-def clearance_field(points: np.ndarray, ctx: ControllerContext) -> np.ndarray:
-    """Distance from each (G, 2) point to the nearest obstacle surface of the static map."""
-    best = np.full(len(points), np.inf)
+def clearance_field(xs: np.ndarray, ys: np.ndarray, ctx: ControllerContext,
+                    reach: float) -> np.ndarray:
+    """Distance from each grid point (xs[i], ys[j]) to the nearest obstacle of the static map.
+
+    Each obstacle only updates the cells within ``reach`` of its bounding circle, so the cost
+    grows with the number of obstacles, not with obstacles x cells; beyond ``reach`` the
+    field holds ``reach`` (far enough for every use).
+    """
+    best = np.full((len(xs), len(ys)), reach)
+    res_x = xs[1] - xs[0] if len(xs) > 1 else 1.0
+    res_y = ys[1] - ys[0] if len(ys) > 1 else 1.0
     for ob in ctx.obstacles:
-        rel = points - (ob.x, ob.y)
+        r = (ob.radius if ob.shape == "cylinder" else math.hypot(ob.size_x, ob.size_y) / 2) + reach
+        i0 = max(int((ob.x - r - xs[0]) / res_x), 0)
+        i1 = min(int((ob.x + r - xs[0]) / res_x) + 2, len(xs))
+        j0 = max(int((ob.y - r - ys[0]) / res_y), 0)
+        j1 = min(int((ob.y + r - ys[0]) / res_y) + 2, len(ys))
+        if i0 >= i1 or j0 >= j1:
+            continue
+        rx = xs[i0:i1, None] - ob.x
+        ry = ys[None, j0:j1] - ob.y
         if ob.shape == "cylinder":
-            d = np.hypot(rel[:, 0], rel[:, 1]) - ob.radius
+            d = np.hypot(rx, ry) - ob.radius
         else:
             c, s = math.cos(ob.yaw), math.sin(ob.yaw)
-            qx = np.abs(c * rel[:, 0] + s * rel[:, 1]) - ob.size_x / 2
-            qy = np.abs(-s * rel[:, 0] + c * rel[:, 1]) - ob.size_y / 2
+            qx = np.abs(c * rx + s * ry) - ob.size_x / 2
+            qy = np.abs(-s * rx + c * ry) - ob.size_y / 2
             d = np.hypot(np.maximum(qx, 0), np.maximum(qy, 0)) + np.minimum(np.maximum(qx, qy), 0)
-        best = np.minimum(best, d)
+        np.minimum(best[i0:i1, j0:j1], d, out=best[i0:i1, j0:j1])
     return best
 
 
@@ -101,8 +117,7 @@ class ReferenceNavigator:
         nx_, ny_ = int(math.ceil((x1 - x0) / RESOLUTION)), int(math.ceil((y1 - y0) / RESOLUTION))
         xs = x0 + (np.arange(nx_) + 0.5) * RESOLUTION
         ys = y0 + (np.arange(ny_) + 0.5) * RESOLUTION
-        gx, gy = np.meshgrid(xs, ys, indexing="ij")
-        clear = clearance_field(np.stack((gx.ravel(), gy.ravel()), axis=1), ctx).reshape(nx_, ny_)
+        clear = clearance_field(xs, ys, ctx, COMFORT + 0.1)
         self._origin = (x0, y0)
         self._shape = (nx_, ny_)
         self._clear = clear
@@ -204,17 +219,17 @@ class ReferenceNavigator:
         b = self._nearest_free(self._cell(goal.x, goal.y))
         if a is None or b is None:
             return None
-        blocked = blocked or set()
-
-        def weight(u: tuple[int, int], v: tuple[int, int], data: dict[str, float]) -> float | None:
-            return None if v in blocked or u in blocked else data["weight"]
+        graph = self._graph
+        if blocked:
+            # A view hides what the laser saw for this plan without copying the graph.
+            graph = nx.restricted_view(self._graph, [c for c in blocked if c not in (a, b)], [])
 
         def h(u: tuple[int, int], v: tuple[int, int]) -> float:
             return math.hypot(u[0] - v[0], u[1] - v[1])
 
         try:
-            cells = nx.astar_path(self._graph, a, b, heuristic=h, weight=weight)
-        except nx.NetworkXNoPath:
+            cells = nx.astar_path(graph, a, b, heuristic=h, weight="weight")
+        except (nx.NetworkXNoPath, nx.NodeNotFound):
             return None
         pts = [(self._origin[0] + (i + 0.5) * RESOLUTION, self._origin[1] + (j + 0.5) * RESOLUTION)
                for i, j in cells]

@@ -55,6 +55,8 @@ class BulletWorld:
         self.free_ids = [bid for bid, b in zip(self.object_ids, manifest.objects, strict=False)
                          if not b.fixed and b.trajectory is None]
         self.moving_index = [i for i, b in enumerate(manifest.objects) if not b.fixed]
+        self._fixed_poses = np.array([(b.x, b.y, b.yaw) for b in manifest.objects],
+                                     dtype=float).reshape(-1, 3)
 
     def _load(self, body: BodySpec) -> int:
         path = Path(self.manifest.folder) / body.urdf
@@ -121,15 +123,12 @@ class BulletWorld:
 
     def object_states(self) -> tuple[np.ndarray, np.ndarray]:
         """(N, 3) poses and twists of manifest.objects, in order."""
-        n = len(self.object_ids)
-        poses = np.empty((n, 3))
-        twists = np.zeros((n, 3))
-        for i, (bid, body) in enumerate(zip(self.object_ids, self.manifest.objects, strict=False)):
-            if body.fixed:
-                poses[i] = (body.x, body.y, body.yaw)
-            else:
-                poses[i] = self.pose(bid)
-                twists[i] = self.twist(bid)
+        poses = self._fixed_poses.copy()
+        twists = np.zeros_like(poses)
+        for i in self.moving_index:
+            bid = self.object_ids[i]
+            poses[i] = self.pose(bid)
+            twists[i] = self.twist(bid)
         return poses, twists
 
     def ray_scan(self, origin: tuple[float, float, float], angles: np.ndarray,

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from rei.runtime.animator import Animated, CatmullRom, planar_command
+from rei.runtime.animator import Animated, Animator, CatmullRom
 
 
 def test_spline_passes_through_every_vertex_at_its_time() -> None:
@@ -46,18 +46,22 @@ def test_velocity_is_the_derivative_of_position() -> None:
         assert s.velocity(time) == pytest.approx(numeric, abs=1e-5)
 
 
-def test_velocity_command_follows_the_curve_and_pulls_back_a_displaced_body() -> None:
+def test_animator_follows_the_curve_and_pulls_back_a_displaced_body() -> None:
     s = CatmullRom(np.array([0.0, 10.0]), np.array([[0.0, 0.0], [10.0, 0.0]]), loop=False)
-    item = Animated(0, s, face_motion=True)
+    animator = Animator([Animated(7, s, face_motion=True)], physics_rate=100.0)
+    step = 500  # t = 5 s
     on_path = s.position(5.0)
-    vx, vy, _ = planar_command(item, 5.0, 0.01, (on_path[0], on_path[1], 0.0))
-    assert vx == pytest.approx(s.velocity(5.0)[0], rel=1e-3) and vy == pytest.approx(0.0)
-    # Pushed 0.3 m to the side, it walks back towards the path.
-    _, vy, _ = planar_command(item, 5.0, 0.01, (on_path[0], on_path[1] + 0.3, 0.0))
-    assert vy < 0
-    # A human turns to face where it walks.
-    _, _, wz = planar_command(item, 5.0, 0.01, (on_path[0], on_path[1], math.pi / 2))
-    assert wz < 0
+    animator.correct(step, [(on_path[0], on_path[1], 0.0)])
+    [(body, vx, vy, wz)] = animator.commands(step)
+    assert body == 7 and vx == pytest.approx(s.velocity(5.005)[0], rel=1e-3)
+    assert vy == pytest.approx(0.0) and wz == pytest.approx(0.0)
+    # Pushed 0.3 m to the side and turned, it walks back to the path and turns to face it.
+    animator.correct(step, [(on_path[0], on_path[1] + 0.3, math.pi / 2)])
+    [(_, _, vy, wz)] = animator.commands(step)
+    assert vy < 0 and wz < 0
+    # The displacements of consecutive steps add up to the curve exactly.
+    total = sum(animator.commands(k)[0][1] for k in range(100, 200)) / 100.0
+    assert total == pytest.approx(s.position(2.0)[0] - s.position(1.0)[0])
 
 
 def test_spline_refuses_vertices_out_of_time_order() -> None:
