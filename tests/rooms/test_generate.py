@@ -209,3 +209,28 @@ def test_every_preset_systematic_suite_checks_clean(tmp_path: Path, preset: str)
     assert suite.design.design == ("full" if space.grid_size <= 256 else "pairwise")
     for pair in suite.pairs:
         _assert_valid_pair(tmp_path / pair.room_file, tmp_path / pair.mission_file)
+
+
+@pytest.mark.parametrize("strategy", ["random", "systematic"])
+@pytest.mark.parametrize("preset", ["small", "medium", "large"])
+def test_generated_missions_generate_every_target(tmp_path: Path, preset: str,
+                                                  strategy: str) -> None:
+    suite = generate(SuiteRequest(preset_space(preset), strategy, 1, 12), tmp_path)  # type: ignore[arg-type]
+    write_suite(suite, tmp_path, coverage_report(suite))
+    mission = tmp_path / suite.pairs[0].mission_file
+    assert rei_gen(["generate", "--target", "all", "-o", str(tmp_path / "out"),
+                    str(mission)]) == 0
+    assert any((tmp_path / "out").rglob("*"))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("preset", ["small", "medium"])
+def test_generated_mission_runs_with_rei_run(tmp_path: Path, preset: str) -> None:
+    runtime_cli = pytest.importorskip("rei.runtime.cli")
+    suite = generate(SuiteRequest(preset_space(preset), "random", 1, 4), tmp_path)
+    write_suite(suite, tmp_path, coverage_report(suite))
+    out = tmp_path / "run"
+    status = runtime_cli.main(["run", str(tmp_path / suite.pairs[0].mission_file), "-o",
+                               str(out), "--duration", "5", "--quiet"])
+    assert status in (0, 1)  # a mission cut short by --duration is a failed verdict, not an error
+    assert (out / "summary.json").is_file()
