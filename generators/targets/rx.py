@@ -40,6 +40,8 @@ class _QueryCode:
     signature: str
     strict: str
     relaxed: str | None
+    shaped: bool
+    """The condition already has the domain's shape (it reads the parameter)."""
 
     def shape(self, expr: str) -> str:
         """Object/floor/task queries return an array over their domain; others a boolean."""
@@ -49,6 +51,8 @@ class _QueryCode:
         if self.kinds:
             mask = " | ".join(f"w.kind({k!r})" for k in self.kinds)
             mask = f"({mask}) & " if len(self.kinds) > 1 else f"{mask} & "
+        if self.shaped:
+            return f"{mask}{expr}"
         return f"{mask}np.broadcast_to({expr}, (w.n_{self.domain},))"
 
 
@@ -98,7 +102,7 @@ class _Writer:
             return f"~{self.code(e.operand, relaxed, not positive)}"
         if isinstance(e, vm.Find):
             ref = f"q[{e.query!r}]"
-            inner = ref if e.arg is not None else f"np.any({ref})"
+            inner = ref if e.arg is not None else f"{ref}.any()"
             return f"~{inner}" if e.negated else inner
         raise GenerationError(f"cannot generate code for {e!r}")
 
@@ -132,6 +136,14 @@ def _children(e: vm.Expr) -> tuple[vm.Expr, ...]:
     if isinstance(e, vm.Call):
         return e.args
     return ()
+
+
+def _reads_parameter(e: vm.Expr) -> bool:
+    if isinstance(e, vm.Var) or (isinstance(e, vm.Find) and e.arg is not None):
+        return True
+    if isinstance(e, vm.Call) and not e.user:
+        return True  # distance(robot, o), on(robot, f), state(t): arrays over the domain
+    return any(_reads_parameter(c) for c in _children(e))
 
 
 def _measured(e: vm.Expr) -> bool:
@@ -250,7 +262,8 @@ def render_module(spec: vm.Specification, source_name: str) -> str:
         w.margins(q.condition, margins)
         queries.append(_QueryCode(q.name, q.param.domain if q.param else "",
                                   q.param.kinds if q.param else (),
-                                  _signature(q, source_name), strict, relaxed))
+                                  _signature(q, source_name), strict, relaxed,
+                                  q.param is not None and _reads_parameter(q.condition)))
     complex_events = [
         {"name": c.name, "text": c.text, "context": c.context,
          "context_text": "strict immediate" if c.context == "strict" else c.context,

@@ -54,6 +54,8 @@ class RequirementChecker:
         self.queries = queries
         self.states = {r.name: [_ClauseState(c) for c in r.clauses] for r in requirements}
         self.query_held: dict[str, float] = {}
+        """The last time each watched query was seen holding (now, while it holds)."""
+        self.holding: set[str] = set()
 
     def watched_events(self) -> set[str]:
         names: set[str] = set()
@@ -77,6 +79,7 @@ class RequirementChecker:
             return
         for t in st.pending:
             if now > t + c.window:
+                st.pending = []  # decided: later triggers cannot change a failed clause
                 st.decide("fail", t + c.window, f"{c.trigger} at t={t:g} s was not followed "
                           f"by {' or '.join(c.targets)} within {c.window * 1000:g} ms",
                           absence=True, span=(t, t + c.window))
@@ -106,16 +109,27 @@ class RequirementChecker:
                                       if c.window is not None and time > t + c.window]
                     if name == c.trigger:
                         window = c.window if c.window is not None else 0.0
-                        held = max((self.query_held.get(q, -math.inf) for q in c.targets
+                        held = max((time if q in self.holding else
+                                    self.query_held.get(q, -math.inf) for q in c.targets
                                     if q in self.queries), default=-math.inf)
                         if held < time - window and st.last_target < time:
                             st.pending.append(time)
 
+    def waiting(self) -> bool:
+        """True while a ``whenever`` trigger waits for its answer."""
+        return any(st.pending and st.status is None for states in self.states.values()
+                   for st in states)
+
     def on_step(self, time: float, holding: dict[str, bool]) -> None:
-        """After each evaluation step: which watched queries hold now."""
+        """After an evaluation step where a watched query changed (or while a trigger
+        waits): which watched queries hold now."""
         for q, held in holding.items():
+            if held or q in self.holding:
+                self.query_held[q] = time  # held until now
             if held:
-                self.query_held[q] = time
+                self.holding.add(q)
+            else:
+                self.holding.discard(q)
         for states in self.states.values():
             for st in states:
                 c = st.clause

@@ -2,8 +2,9 @@
 
 Footprints are convex or simple polygons (boxes become four corners) or circles. The
 distance is between the shapes, not their centres: the smallest boundary-to-boundary
-distance when apart, and 0 or negative when they overlap (minus that boundary distance
-when one shape reaches into the other). Objects whose centres are so far away that no
+distance when apart, and 0 or negative when they overlap: minus the depth of the deepest
+vertex of either polygon inside the other (0 when only edges cross); for a circle, the
+signed distance of its centre to the robot's boundary minus its radius. Objects whose centres are so far away that no
 threshold of the specification can be crossed get a cheap lower bound instead (the broad
 phase), which decides every comparison against those thresholds the same way. This
 module must never import the simulator or keep state between calls.
@@ -46,14 +47,14 @@ def _transform(local: np.ndarray, poses: np.ndarray) -> np.ndarray:
 
 def _point_segment(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Distances from points p to segments a-b (broadcast over leading axes)."""
-    ab = b - a
-    ap = p - a
-    denom = np.einsum("...i,...i->...", ab, ab)
-    t = np.einsum("...i,...i->...", ap, ab) / np.where(denom > 0, denom, 1.0)
-    t = np.clip(t, 0.0, 1.0)
-    closest = a + t[..., None] * ab
-    d = p - closest
-    return np.sqrt(np.einsum("...i,...i->...", d, d))
+    px, py = p[..., 0], p[..., 1]
+    ax, ay = a[..., 0], a[..., 1]
+    abx, aby = b[..., 0] - ax, b[..., 1] - ay
+    apx, apy = px - ax, py - ay
+    denom = abx * abx + aby * aby
+    t = (apx * abx + apy * aby) / np.where(denom > 0, denom, 1.0)
+    np.clip(t, 0.0, 1.0, out=t)
+    return np.hypot(apx - t * abx, apy - t * aby)
 
 
 def _cross(o: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -75,6 +76,23 @@ def _inside(points: np.ndarray, poly: np.ndarray, poly_next: np.ndarray) -> np.n
     return (crossings % 2) == 1
 
 
+def _inner_radius(poly: np.ndarray) -> float:
+    """Radius of the largest disc about the origin inside a polygon (0 if outside)."""
+    nxt = np.roll(poly, -1, axis=0)
+    if not _inside(np.zeros(2), poly, nxt):
+        return 0.0
+    return float(np.min(_point_segment(np.zeros(2), poly, nxt)))
+
+
+@dataclass
+class _WorldCache:
+    """World vertices of the polygon footprints at the last poses seen (most objects stand
+    still, so most samples reuse them)."""
+
+    poses: np.ndarray | None = None
+    world: np.ndarray | None = None
+
+
 @dataclass(frozen=True)
 class FootprintSet:
     """The robot's and every observed object's footprint, prepared once per run."""
@@ -91,6 +109,13 @@ class FootprintSet:
     """(N,) circumradius of every object (broad phase)."""
     robot_bound: float = 0.0
     count: int = 0
+    inner_radius: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    """(N,) radius of a disc about each object's origin inside its footprint."""
+    robot_half: tuple[float, float] | None = None
+    """Half extents when the robot is a box (the fast path), else None."""
+    poly_half: np.ndarray | None = None
+    """(P, 2) half extents when every polygon footprint is a box, else None."""
+    cache: _WorldCache = field(default_factory=_WorldCache, compare=False, repr=False)
 
     @staticmethod
     def build(robot: Footprint, objects: list[Footprint], tile: float) -> FootprintSet:
@@ -117,9 +142,34 @@ class FootprintSet:
             padded[j, len(p):] = p[-1]
         robot_bound = rrad if rpoly is None else float(np.max(np.hypot(rpoly[:, 0],
                                                                         rpoly[:, 1])))
+        inner = np.zeros(len(objects))
+        inner[cidx] = crad
+        for j, i in enumerate(pidx):
+            inner[i] = _inner_radius(polys[j])
+        if isinstance(robot, Tile):
+            robot = Box(tile, tile)
+        robot_half = robot.half_extents() if isinstance(robot, Box) else None
+        boxes = [Box(tile, tile) if isinstance(fp, Tile) else fp for fp in objects]
+        halves = [fp.half_extents() for fp in boxes if isinstance(fp, Box)]
+        poly_half = np.array(halves).reshape(-1, 2) if len(halves) == len(pidx) else None
         return FootprintSet(rpoly, rrad, np.array(pidx, dtype=np.intp), padded,
                             np.array(cidx, dtype=np.intp), np.array(crad), bound, robot_bound,
-                            len(objects))
+                            len(objects), inner_radius=inner, robot_half=robot_half,
+                            poly_half=poly_half)
+
+    def nearest(self, distance: np.ndarray, exact: np.ndarray, group: np.ndarray,
+                robot_pose: tuple[float, float, float], poses: np.ndarray) -> float:
+        """The exact smallest footprint distance within ``group`` (a boolean mask), where
+        ``distance`` is exact only where ``exact`` is set and a lower bound elsewhere."""
+        rx, ry, _ = robot_pose
+        centre = np.hypot(poses[:, 0] - rx, poses[:, 1] - ry)
+        robot_inner = self.robot_radius if self.robot_polygon is None else _inner_radius(
+            self.robot_polygon)
+        upper = np.where(exact, distance, centre - self.inner_radius - robot_inner)
+        bound = float(upper[group].min())
+        candidates = group & ~exact & (distance <= bound)
+        refined = self.refine(distance.copy(), candidates, robot_pose, poses)
+        return float(refined[group].min())
 
     def robot_inradius(self) -> float:
         if self.robot_polygon is None:
@@ -131,32 +181,71 @@ class FootprintSet:
     def distances(self, robot_pose: tuple[float, float, float], poses: np.ndarray,
                   cutoff: float = math.inf) -> np.ndarray:
         """(N,) robot-to-object footprint distances; beyond ``cutoff`` a lower bound."""
-        out = np.empty(self.count)
         if self.count == 0:
+            return np.empty(0)
+        rx, ry, _ = robot_pose
+        out = np.hypot(poses[:, 0] - rx, poses[:, 1] - ry)
+        out -= self.bound_radius
+        out -= self.robot_bound
+        return self.refine(out, out <= cutoff, robot_pose, poses)
+
+    def refine(self, out: np.ndarray, wanted: np.ndarray,
+               robot_pose: tuple[float, float, float], poses: np.ndarray) -> np.ndarray:
+        """Exact distances into ``out`` for the objects in the boolean mask ``wanted``."""
+        if not wanted.any():
             return out
         rx, ry, ryaw = robot_pose
-        centre = np.hypot(poses[:, 0] - rx, poses[:, 1] - ry)
-        lower = centre - self.bound_radius - self.robot_bound
-        out[:] = lower
-        rp = np.array(robot_pose, dtype=np.float64)[None, :]
-        robot_world = None if self.robot_polygon is None else _transform(
-            self.robot_polygon[None], rp)[0]
+        robot_world = None
+        if self.robot_polygon is not None and (self.robot_half is None
+                                               or self.poly_half is None):
+            rp = np.array(robot_pose, dtype=np.float64)[None, :]
+            robot_world = _transform(self.robot_polygon[None], rp)[0]
+        elif self.robot_polygon is not None:
+            robot_world = self.robot_polygon  # only its presence matters on the fast path
         if len(self.circle_index):
-            ci = self.circle_index
-            out[ci] = self._to_circles(robot_world, (rx, ry), poses[ci, :2], self.circle_radius)
+            ci = self.circle_index[wanted[self.circle_index]]
+            if len(ci):
+                sel = np.searchsorted(self.circle_index, ci)
+                out[ci] = self._to_circles(robot_world, (rx, ry), poses[ci, :2],
+                                           self.circle_radius[sel], ryaw)
         if len(self.poly_index):
-            near = self.poly_index[lower[self.poly_index] <= cutoff]
+            near = self.poly_index[wanted[self.poly_index]]
             if len(near):
-                sel = np.searchsorted(self.poly_index, near)
-                world = _transform(self.poly_local[sel], poses[near])
-                out[near] = self._to_polygons(robot_world, (rx, ry), world)
+                world = self._world(poses)[np.searchsorted(self.poly_index, near)]
+                if self.robot_half is not None and self.poly_half is not None:
+                    mask = np.zeros(self.count, dtype=bool)
+                    mask[near] = True
+                    out[near] = self._boxes(robot_pose, mask, poses, world)
+                else:
+                    out[near] = self._to_polygons(robot_world, (rx, ry), world)
         return out
 
+    def _world(self, poses: np.ndarray) -> np.ndarray:
+        c = self.cache
+        if c.poses is None or c.world is None or c.poses.shape != poses.shape:
+            c.world = _transform(self.poly_local, poses[self.poly_index])
+        else:
+            moved = np.flatnonzero((c.poses[self.poly_index] != poses[self.poly_index]).any(
+                axis=1))
+            if len(moved):
+                c.world[moved] = _transform(self.poly_local[moved],
+                                            poses[self.poly_index[moved]])
+        c.poses = poses.copy()
+        return c.world
+
     def _to_circles(self, robot_world: np.ndarray | None, centre: tuple[float, float],
-                    centres: np.ndarray, radii: np.ndarray) -> np.ndarray:
+                    centres: np.ndarray, radii: np.ndarray, yaw: float) -> np.ndarray:
         if robot_world is None:
             return np.hypot(centres[:, 0] - centre[0], centres[:, 1] - centre[1]) - (
                 radii + self.robot_radius)
+        if self.robot_half is not None:
+            c, s = math.cos(yaw), math.sin(yaw)
+            relx, rely = centres[:, 0] - centre[0], centres[:, 1] - centre[1]
+            signed, _ = _box_distance(c * relx + s * rely, c * rely - s * relx,
+                                      *self.robot_half)
+            inside = (np.abs(c * relx + s * rely) < self.robot_half[0]) & (
+                np.abs(c * rely - s * relx) < self.robot_half[1])
+            return np.where(inside, -signed, signed) - radii
         a = robot_world[None, :, :]
         b = np.roll(robot_world, -1, axis=0)[None, :, :]
         boundary = _point_segment(centres[:, None, :], a, b).min(axis=1)
@@ -175,17 +264,63 @@ class FootprintSet:
         r = robot_world
         rn = np.roll(r, -1, axis=0)
         # object vertices against robot edges, robot vertices against object edges
-        d1 = _point_segment(world[:, :, None, :], r[None, None], rn[None, None])
-        d2 = _point_segment(r[None, None, :, :], world[:, :, None, :], nxt[:, :, None, :])
-        boundary = np.minimum(d1.min(axis=(1, 2)), d2.min(axis=(1, 2)))
-        # proper edge crossings
+        v1 = _point_segment(world[:, :, None, :], r[None, None], rn[None, None]).min(axis=2)
+        v2 = _point_segment(r[None, None, :, :], world[:, :, None, :],
+                            nxt[:, :, None, :]).min(axis=1)
+        boundary = np.minimum(v1.min(axis=1), v2.min(axis=1))
+        inside1 = _inside(world, r[None, None], rn[None, None])
+        inside2 = _inside(np.broadcast_to(r, (len(world), *r.shape)), world[:, None],
+                          nxt[:, None])
+        # proper edge crossings (two footprints can overlap with no vertex inside)
         a, b = world[:, :, None, :], nxt[:, :, None, :]
         c, d = r[None, None, :, :], rn[None, None, :, :]
         o1, o2 = _cross(a, b, c), _cross(a, b, d)
         o3, o4 = _cross(c, d, a), _cross(c, d, b)
         crossing = (((o1 > 0) & (o2 < 0)) | ((o1 < 0) & (o2 > 0))) & (
             ((o3 > 0) & (o4 < 0)) | ((o3 < 0) & (o4 > 0)))
-        overlap = crossing.any(axis=(1, 2))
-        overlap |= _inside(np.broadcast_to(r[0], (len(world), 2)), world, nxt)
-        overlap |= _inside(world[:, 0, :], r[None], rn[None])
-        return np.where(overlap, -boundary, boundary)
+        overlap = crossing.any(axis=(1, 2)) | inside1.any(axis=1) | inside2.any(axis=1)
+        depth = np.maximum(np.where(inside1, v1, 0.0).max(axis=1),
+                           np.where(inside2, v2, 0.0).max(axis=1))
+        return np.where(overlap, -depth, boundary)
+
+    def _boxes(self, robot_pose: tuple[float, float, float], wanted: np.ndarray,
+               poses: np.ndarray, world: np.ndarray) -> np.ndarray:
+        """The same distances as ``_to_polygons`` for a box robot and box objects, computed
+        in each box's own frame (fewer operations: the hot path of rooms of walls)."""
+        assert self.robot_half is not None and self.poly_half is not None
+        hx, hy = self.robot_half
+        rx, ry, ryaw = robot_pose
+        c, s = math.cos(ryaw), math.sin(ryaw)
+        # object corners in the robot's frame
+        relx, rely = world[..., 0] - rx, world[..., 1] - ry
+        lx, ly = c * relx + s * rely, c * rely - s * relx
+        v1, in1 = _box_distance(lx, ly, hx, hy)
+        # robot corners in each object's frame
+        corners = self.robot_polygon
+        assert corners is not None
+        wx = c * corners[:, 0] - s * corners[:, 1] + rx
+        wy = s * corners[:, 0] + c * corners[:, 1] + ry
+        oc = np.cos(poses[wanted, 2])[:, None]
+        os_ = np.sin(poses[wanted, 2])[:, None]
+        qx, qy = wx[None, :] - poses[wanted, 0:1], wy[None, :] - poses[wanted, 1:2]
+        ox, oy = oc * qx + os_ * qy, oc * qy - os_ * qx
+        half = self.poly_half[np.searchsorted(self.poly_index, np.flatnonzero(wanted))]
+        v2, in2 = _box_distance(ox, oy, half[:, 0:1], half[:, 1:2])
+        boundary = np.minimum(v1.min(axis=1), v2.min(axis=1))
+        separated = (lx.min(axis=1) >= hx) | (lx.max(axis=1) <= -hx) | (
+            ly.min(axis=1) >= hy) | (ly.max(axis=1) <= -hy) | (
+            ox.min(axis=1) >= half[:, 0]) | (ox.max(axis=1) <= -half[:, 0]) | (
+            oy.min(axis=1) >= half[:, 1]) | (oy.max(axis=1) <= -half[:, 1])
+        depth = np.maximum(np.where(in1, v1, 0.0).max(axis=1),
+                           np.where(in2, v2, 0.0).max(axis=1))
+        return np.where(separated, boundary, -depth)
+
+
+def _box_distance(x: np.ndarray, y: np.ndarray, hx: float | np.ndarray, hy: float | np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Distance of points to the boundary of the box |x| <= hx, |y| <= hy, and inside flags."""
+    dx = np.abs(x) - hx
+    dy = np.abs(y) - hy
+    inside = (dx < 0) & (dy < 0)
+    outside = np.hypot(np.maximum(dx, 0.0), np.maximum(dy, 0.0))
+    return np.where(inside, np.minimum(-dx, -dy), outside), inside

@@ -72,7 +72,7 @@ class AutomataHost:
         self.log = SignalLog({s.name: s.utility for s in module.SIGNALS})
         self.checker = RequirementChecker(module.REQUIREMENTS, set(self.domains))
         self.watched_queries = sorted(self.checker.watched_queries())
-        self.sink_signal: Callable[[Occurrence], None] | None = None
+        self._last_holding: tuple[bool, ...] = ()
         for name in sorted(self.checker.watched_events()):
             if name in self.events:
                 self.events[name].subscribe(
@@ -115,7 +115,11 @@ class AutomataHost:
         if self.first_time is None:
             self.first_time = s.time
         self.samples += 1
-        self.scheduler.advance_to(s.time)  # NOT windows that closed before this sample fire
+        # NOT windows that closed before this sample fire now. Only timers need the clock
+        # (they are scheduled at absolute times), so an empty queue is not advanced: that
+        # keeps the common sample free of the scheduler's bookkeeping.
+        if self.scheduler._queue:  # noqa: SLF001  (reactivex 6.1 VirtualTimeScheduler)
+            self.scheduler.advance_to(s.time)
         w = self.model.observe(s)
         w.functions = self.functions
         q = self.module.evaluate_queries(w, self.prev_q)
@@ -137,14 +141,18 @@ class AutomataHost:
         self.prev_inputs = w
 
     def _changed(self, q: dict[str, Any]) -> bool:
+        prev = self.prev_q
         for name, new in q.items():
-            old = self.prev_q[name]
-            if np.shape(old) != np.shape(new) or not np.array_equal(old, new):
+            old = prev[name]
+            if old.shape != new.shape or old.tobytes() != new.tobytes():
                 return True
         return False
 
     def _holding(self, q: dict[str, Any], time: float) -> None:
-        self.checker.on_step(time, {n: bool(np.any(q[n])) for n in self.watched_queries})
+        holding = tuple(bool(q[n].any()) for n in self.watched_queries)
+        if holding != self._last_holding or self.checker.waiting():
+            self.checker.on_step(time, dict(zip(self.watched_queries, holding)))
+            self._last_holding = holding
 
     def _step(self, q: dict[str, Any], time: float) -> None:
         """Emit the query events between ``self.prev_q`` and ``q``, lost before found."""
@@ -163,7 +171,7 @@ class AutomataHost:
                     for i in np.flatnonzero(changed):
                         self._emit(spec.name, time, (names[i],))
             else:
-                now_any, was_any = bool(np.any(new)), bool(np.any(old))
+                now_any, was_any = bool(new.any()), bool(old.any())
                 if spec.found and now_any and not was_any:
                     self._emit(spec.name, time, self._objects(domain, new))
                 elif not spec.found and was_any and not now_any:
@@ -204,8 +212,6 @@ class AutomataHost:
         return {
             "min_distance_to_human": None if math.isinf(m.min_distance_to_human)
             else m.min_distance_to_human,
-            "min_distance_to_object": None if math.isinf(m.min_distance_to_object)
-            else m.min_distance_to_object,
             "path_length": m.path_length,
             "time_to_goal": goals,
             "samples": self.samples,

@@ -76,6 +76,7 @@ class RuntimeModel:
                 masks.setdefault(key, np.zeros(len(header.objects), dtype=bool))[i] = True
         self.kind_masks = masks
         self.human_mask = masks.get("human", np.zeros(len(header.objects), dtype=bool))
+        self._any_human = bool(self.human_mask.any())
         self.floor_names = tuple(f[0] for f in header.floors)
         self._floor_xy = np.array([(f[1], f[2]) for f in header.floors], dtype=float).reshape(
             -1, 2)
@@ -88,7 +89,6 @@ class RuntimeModel:
         self.mission_ended: float | None = None
         self.path_length = 0.0
         self.min_distance_to_human = math.inf
-        self.min_distance_to_object = math.inf
         self._last_xy: tuple[float, float] | None = None
 
     # ---- per sample -----------------------------------------------------------------------
@@ -104,12 +104,15 @@ class RuntimeModel:
         """The query inputs of an accepted sample (and the run's measurements updated)."""
         x, y, _ = s.robot_pose
         distance = self.footprints.distances(s.robot_pose, s.poses, self.cutoff)
-        if len(distance):
-            self.min_distance_to_object = min(self.min_distance_to_object,
-                                              float(distance.min()))
-            if self.human_mask.any():
+        if self._any_human:
+            humans = distance[self.human_mask]
+            # refine only when a human might beat the run's minimum so far
+            if float(humans.min()) < self.min_distance_to_human:
+                exact = distance <= self.cutoff
                 self.min_distance_to_human = min(self.min_distance_to_human,
-                                                 float(distance[self.human_mask].min()))
+                                                 self.footprints.nearest(
+                                                     distance, exact, self.human_mask,
+                                                     s.robot_pose, s.poses))
         if self._last_xy is not None:
             self.path_length += math.hypot(x - self._last_xy[0], y - self._last_xy[1])
         self._last_xy = (x, y)
@@ -203,8 +206,9 @@ def check_sample(s: Sample, header: StreamHeader) -> str | None:
         return "malformed"
     scalars = (s.time, *s.robot_pose, *s.robot_twist, *s.belief.odom, *s.belief.odom_twist,
                s.belief.laser_min)
-    if not all(math.isfinite(v) for v in scalars):
+    if not all(map(math.isfinite, scalars)):
         return "non_finite"
-    if not (np.isfinite(poses).all() and np.isfinite(twists).all()):
+    # x * 0 is 0 for every finite x and NaN for inf and NaN: one reduction per array
+    if (poses * 0.0).sum() != 0.0 or (twists * 0.0).sum() != 0.0:
         return "non_finite"
     return None

@@ -45,17 +45,23 @@ def _place(points: np.ndarray, pose: tuple[float, float, float]) -> list[tuple[f
 
 def reference(robot: list[tuple[float, float]], other: list[tuple[float, float]] | None,
               centre: tuple[float, float], radius: float) -> float:
-    """Plain-Python signed footprint distance (negative: overlap depth proxy)."""
+    """Plain-Python signed footprint distance (negative: depth of the deepest vertex)."""
     redges = list(zip(robot, robot[1:] + robot[:1]))
     if other is None:
         boundary = min(_seg_point(centre, a, b) for a, b in redges)
         return -boundary - radius if _inside(centre, robot) else boundary - radius
     oedges = list(zip(other, other[1:] + other[:1]))
-    boundary = min(min(_seg_point(p, a, b) for p in other for a, b in redges),
-                   min(_seg_point(p, a, b) for p in robot for a, b in oedges))
+    v1 = [min(_seg_point(p, a, b) for a, b in redges) for p in other]
+    v2 = [min(_seg_point(p, a, b) for a, b in oedges) for p in robot]
+    inside1 = [_inside(p, robot) for p in other]
+    inside2 = [_inside(p, other) for p in robot]
     overlap = any(_segments_cross(a, b, c, d) for a, b in redges for c, d in oedges) or \
-        _inside(robot[0], other) or _inside(other[0], robot)
-    return -boundary if overlap else boundary
+        any(inside1) or any(inside2)
+    if not overlap:
+        return min(v1 + v2)
+    # the deepest vertex of either polygon inside the other (0 if only edges cross)
+    return -max([v for v, i in zip(v1, inside1) if i] + [v for v, i in zip(v2, inside2) if i]
+                + [0.0])
 
 
 coord = st.floats(-3, 3, allow_nan=False)
@@ -63,7 +69,7 @@ angle = st.floats(-math.pi, math.pi, allow_nan=False)
 size = st.floats(0.05, 1.5, allow_nan=False)
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=200, deadline=None)
 @given(robot_pose=st.tuples(coord, coord, angle), sizes=st.tuples(size, size),
        shapes=st.lists(st.tuples(st.sampled_from(["box", "circle", "poly"]), size, size,
                                  st.tuples(coord, coord, angle)), min_size=1, max_size=6))
@@ -82,6 +88,7 @@ def test_vectorised_distances_match_the_scalar_reference(
                                              b * math.sin(k * 2 * math.pi / 5))
                                             for k in range(5))))
     fs = FootprintSet.build(robot_fp, footprints, 1.0)
+    assert (fs.poly_half is not None) == all(k != "poly" for k, *_ in shapes)
     poses = np.array([p for *_, p in shapes])
     got = fs.distances(robot_pose, poses)
     robot_local, _ = local_shape(robot_fp, 1.0)
@@ -92,6 +99,17 @@ def test_vectorised_distances_match_the_scalar_reference(
         other = None if local is None else _place(local, tuple(poses[i]))
         expected = reference(robot, other, (poses[i][0], poses[i][1]), radius)
         assert math.isclose(got[i], expected, abs_tol=1e-9), (i, fp, got[i], expected)
+
+
+@settings(max_examples=200, deadline=None)
+@given(robot_pose=st.tuples(coord, coord, angle), sizes=st.tuples(size, size),
+       shapes=st.lists(st.tuples(st.sampled_from(["box", "circle"]), size, size,
+                                 st.tuples(coord, coord, angle)), min_size=1, max_size=6))
+def test_box_fast_path_matches_the_scalar_reference(
+        robot_pose: tuple[float, float, float], sizes: tuple[float, float],
+        shapes: list[tuple[str, float, float, tuple[float, float, float]]]) -> None:
+    test_vectorised_distances_match_the_scalar_reference.hypothesis.inner_test(  # type: ignore[attr-defined]
+        robot_pose, sizes, shapes)
 
 
 def test_known_distances() -> None:

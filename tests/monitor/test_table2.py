@@ -12,12 +12,14 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from rei.lang.vepl import load_vepl
 from rei.runtime.monitor.geometry import FootprintSet
 
 from tests.monitor.helpers import default_automata, geom, monitor
 from tests.monitor.streams import ROBOT, drive, header, human, sample, straight, wall
 
-EPS_CLOSE, EPS_COLLISION = 0.5, 0.05
+_PARAMETERS = load_vepl().parameters
+EPS_CLOSE, EPS_COLLISION = _PARAMETERS["eps_close"], _PARAMETERS["eps_collision"]
 FAR_AWAY = 1e3
 FAR, CLOSE, COLLISION = "FAR", "CLOSE", "COLLISION"
 SIGNAL = {(FAR, CLOSE): "SIG_GEOM_FAR_TRANSIT_CLOSE", (CLOSE, FAR): "SIG_GEOM_CLOSE_TRANSIT_FAR",
@@ -74,7 +76,7 @@ def automata(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 NEAR = st.sampled_from([EPS_COLLISION, EPS_CLOSE, EPS_COLLISION - 1e-9, EPS_CLOSE + 1e-9,
-                        0.0, -0.05, 0.3, 2.0])
+                        0.0, -0.05, (EPS_CLOSE + EPS_COLLISION) / 2, 2.0])
 DIST = st.one_of(NEAR, st.floats(-0.1, 1.0, allow_nan=False))
 
 
