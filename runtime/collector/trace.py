@@ -127,8 +127,9 @@ class TraceWriter:
                        "task": b.task},
             "events": [_event_json(e) for e in sample.events],
         }
-        self._poses, self._twists = sample.poses.copy(), sample.twists.copy()
         self._file.write(_dumps(line) + "\n")
+        # Only what was written is the base of the next sample's changed rows.
+        self._poses, self._twists = sample.poses.copy(), sample.twists.copy()
 
     def finish(self, end_time: float, outcome: str, reason: str) -> None:
         if self._file is None:

@@ -68,6 +68,16 @@ class Interrupting(_Base):
         raise KeyboardInterrupt
 
 
+class Slow(_Base):
+    """Drives slowly in wall-clock time (10 ms per step), so a test can interrupt it."""
+
+    def step(self, observation: Observation) -> VelocityCommand:
+        if self.tracker.state.value == "pending":
+            self.tracker.accept()
+        threading.Event().wait(0.01)
+        return VelocityCommand(0.05, 0.1)
+
+
 class Idle(_Base):
     """Accepts goals and never moves: every task times out."""
 

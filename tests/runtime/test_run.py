@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -112,6 +114,27 @@ def test_an_interrupted_run_leaves_consistent_outputs_marked_incomplete(tmp_path
     assert summary["outcome"] == "interrupted" and summary["measurements"]["incomplete"] is True
     header, rows = read_trace(tmp_path / "trace.jsonl")
     assert [e.kind for s in rows for e in s.events][-1] == "end"
+
+
+@pytest.mark.slow
+def test_ctrl_c_leaves_consistent_outputs_marked_incomplete(tmp_path: Path) -> None:
+    proc = subprocess.Popen([sys.executable, "-m", "rei.runtime.cli", "run", str(NAVIGATION),
+                             "-o", str(tmp_path), "--controller", "tests.runtime.faulty:Slow",
+                             "--quiet"], cwd=REPO, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
+    partial = tmp_path / "trace.jsonl.partial"
+    # Interrupt once the run is under way (the partial trace has a few samples).
+    while proc.poll() is None and (not partial.exists() or partial.stat().st_size < 20000):
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    assert proc.wait() == 130
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["outcome"] == "interrupted" and summary["measurements"]["incomplete"]
+    header, rows = read_trace(tmp_path / "trace.jsonl")
+    samples = list(rows)
+    assert [s.seq for s in samples] == list(range(len(samples)))
+    assert samples[-1].events[-1].kind == "end"
+    assert read_trace_end(tmp_path / "trace.jsonl")[1] == "interrupted"  # type: ignore[index]
 
 
 def test_tasks_fail_on_timeout_and_on_false_success(tmp_path: Path) -> None:
