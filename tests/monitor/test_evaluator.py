@@ -109,3 +109,51 @@ def test_same_stream_same_log(tmp_path: Path, automata: Path) -> None:
     monitor(h, samples, tmp_path / "a", automata=automata)
     monitor(h, samples, tmp_path / "b", automata=automata)
     assert (tmp_path / "a/events.csv").read_bytes() == (tmp_path / "b/events.csv").read_bytes()
+
+
+def test_user_functions_registered_from_python(tmp_path: Path) -> None:
+    spec = tmp_path / "fn.vepl"
+    spec.write_text("""function clearance(o)
+query tight(o: object) { clearance(o) < 0.3 }
+queryEvent tightening(o) as tight(o) found
+signal SIG_TIGHT on tightening utility -1
+requirement NEVER_TIGHT { never SIG_TIGHT }
+""", encoding="utf-8")
+
+    def clearance(w: object, objects: object) -> object:
+        # an external check function: the footprint distance, reported by the user's code
+        return w.distance  # type: ignore[attr-defined]
+
+    h, samples = drive([wall("w", 2.0, 0.0)], straight(0.0, 1.3, 14))
+    from rei.runtime.monitor import MonitorSink
+    from rei.runtime.monitor.errors import MonitorError
+
+    with pytest.raises(MonitorError, match="clearance"):
+        MonitorSink(spec, tmp_path / "missing").start(h)
+    sink = MonitorSink(spec, tmp_path / "out", functions={"clearance": clearance})
+    sink.start(h)
+    for s in samples:
+        sink.feed(s)
+    sink.finish(samples[-1].time, "completed", "")
+    assert sink.result is not None
+    assert sink.result.signal_counts == {"SIG_TIGHT": 1}
+    assert sink.result.verdicts[0].status == "fail"
+
+
+def test_hysteresis_band_stops_chattering(tmp_path: Path) -> None:
+    # the robot wobbles by 1 cm around ε_close: without a band every wobble is a transition
+    x0 = 1.5 - 0.281 / 2 - 0.25
+    poses = [(x0 + (0.01 if i % 2 else -0.01), 0.0, 0.0) for i in range(20)]
+    h, samples = drive([wall("w", 2.0, 0.0)], poses)
+    counts = {}
+    for band in ("0.0", "0.05"):
+        spec = tmp_path / f"h{band}.vepl"
+        spec.write_text(f"""parameters {{ eps_close = 0.25  hysteresis = {band} }}
+query close(o: object) {{ distance(robot, o) < eps_close }}
+queryEvent entering() as close found
+signal SIG_ENTER on entering utility -2
+""", encoding="utf-8")
+        rows, _ = monitor(h, samples, tmp_path / band, vepl=spec)
+        counts[band] = len(rows)
+    assert counts["0.0"] == 10
+    assert counts["0.05"] == 1
