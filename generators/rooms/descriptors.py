@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 from functools import lru_cache
 
 import numpy as np
@@ -156,12 +156,17 @@ def _rasterise(scene: Scene) -> _Raster:
 
 def robot_route(scene: Scene) -> list[Cell]:
     """The robot's shortest route through the goals in order (and back for cycles > 1)."""
-    blocked = {o.cell for o in scene.obstacles}
+    # Searched in room-corner coordinates so that ties between equally short routes are
+    # broken the same way in every frame.
+    di = min(i for i, _ in scene.floors)
+    dj = max(j for _, j in scene.floors)
+    blocked = {(o.cell[0] - di, o.cell[1] - dj) for o in scene.obstacles}
+    free = {(i - di, j - dj) for i, j in scene.floors} - blocked
     stops = list(scene.goals) + ([scene.goals[0]] if scene.cycles > 1 else [])
-    cells = fast_route({c for c in scene.floors if c not in blocked}, stops)
+    cells = fast_route(free, [(i - di, j - dj) for i, j in stops])
     if cells is None:
         raise UnreachableGoals("goals are not reachable in order")
-    return cells
+    return [(i + di, j + dj) for i, j in cells]
 
 
 def _path_points(cells: Sequence[Cell], tile: float) -> tuple[np.ndarray, float]:
@@ -176,9 +181,29 @@ def _path_points(cells: Sequence[Cell], tile: float) -> tuple[np.ndarray, float]
     return np.stack([np.interp(at, s, pts[:, 0]), np.interp(at, s, pts[:, 1])], axis=1), total
 
 
+def _normalised(scene: Scene, cells: list[Cell]) -> tuple[Scene, list[Cell]]:
+    di = min(i for i, _ in scene.floors)
+    dj = max(j for _, j in scene.floors)
+
+    def shift(c: Cell) -> Cell:
+        return (c[0] - di, c[1] - dj)
+
+    moved = replace(
+        scene,
+        floors=frozenset(shift(c) for c in scene.floors),
+        obstacles=tuple(replace(o, cell=shift(o.cell)) for o in scene.obstacles),
+        goals=tuple(shift(c) for c in scene.goals),
+        trajectories=tuple((tuple(shift(c) for c in v), loop)
+                           for v, loop in scene.trajectories))
+    return moved, [shift(c) for c in cells]
+
+
 def describe(scene: Scene, route_cells: Sequence[Cell] | None = None) -> Descriptors:
     """The descriptors of one scene; ``route_cells`` when the caller already has the route."""
     cells = list(route_cells) if route_cells is not None else robot_route(scene)
+    # Work in cells relative to the room's corner: the same room in another frame (a
+    # generator's grid, a layout rooted at the robot) then gives bit-identical numbers.
+    scene, cells = _normalised(scene, cells)
     raster = _rasterise(scene)
     points, length = _path_points(cells, scene.tile)
     occ = raster.occupied

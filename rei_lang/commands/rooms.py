@@ -37,8 +37,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "option takes a comma-separated list of levels and replaces the preset's "
                     "levels. Same seed and version give byte-identical files.",
     )
-    parser.add_argument("-o", "--output", type=Path, required=True, metavar="DIR",
+    parser.add_argument("-o", "--output", type=Path, default=None, metavar="DIR",
                         help="folder to write into (created if missing)")
+    parser.add_argument("--describe", nargs="+", type=Path, default=None, metavar="MISSION",
+                        help="instead of generating: print the difficulty descriptors of "
+                             "existing .mission files (hand-written or edited) as CSV")
     parser.add_argument("--count", type=int, default=None, metavar="N",
                         help="rooms to generate (default: the design's rows for systematic, "
                              "10 for random)")
@@ -67,6 +70,11 @@ def run(args: argparse.Namespace) -> int:
     from rei.generators.rooms.space import ParameterError, preset_space
     from rei.lang import __version__
 
+    if args.describe is not None:
+        return describe_missions(args.describe)
+    if args.output is None:
+        raise ParameterError("output", "-o DIR, the folder to write the suite into",
+                             "no -o option")
     if args.max_grid <= 0:
         raise ParameterError("max-grid", "a whole number of at least 1", f"{args.max_grid}")
     if not args.prefix.isidentifier():
@@ -92,4 +100,37 @@ def run(args: argparse.Namespace) -> int:
         print(report, end="")
     print(f"{len(suite.pairs)} room(s) and mission(s) written to {args.output} "
           f"(index.csv, coverage.txt)", file=sys.stderr)
+    return EXIT_OK
+
+
+def describe_missions(paths: list[Path]) -> int:
+    """Descriptors of existing missions, one CSV row each; invalid files exit 2."""
+    import csv
+
+    from rei.generators.rooms import describe, scene_of_documents
+    from rei.generators.rooms.descriptors import DESCRIPTOR_NAMES, UnreachableGoals
+    from rei.lang.errors import Diagnostic, LanguageError, Span
+    from rei.lang.workspace import Workspace, load_mission
+
+    wrong = [Diagnostic(Span.point(str(path)), "INPUT-KIND",
+                        f"--describe: expected a .mission file, found "
+                        f"'{path.suffix or path.name}'")
+             for path in paths if path.suffix != ".mission"]
+    if wrong:
+        raise LanguageError(wrong)
+    workspace = Workspace()
+    rows = []
+    for path in paths:
+        doc = load_mission(path, workspace)
+        try:
+            values = describe(scene_of_documents(doc.room, doc)).as_row()
+        except UnreachableGoals:
+            raise LanguageError([Diagnostic(Span.point(str(path)), "GOAL-UNREACHABLE",
+                                            "expected goals reachable in order by the robot, "
+                                            "found a leg without a path")]) from None
+        assert doc.mission is not None
+        rows.append((str(path), doc.mission.room_path, *values.values()))
+    writer = csv.writer(sys.stdout, lineterminator="\n")
+    writer.writerow(("mission", "room", *DESCRIPTOR_NAMES))
+    writer.writerows(rows)
     return EXIT_OK

@@ -234,3 +234,52 @@ def test_generated_mission_runs_with_rei_run(tmp_path: Path, preset: str) -> Non
                                str(out), "--duration", "5", "--quiet"])
     assert status in (0, 1)  # a mission cut short by --duration is a failed verdict, not an error
     assert (out / "summary.json").is_file()
+
+
+def test_describe_prints_the_descriptors_of_existing_missions(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    suite = generate(_suite("medium", 21, 2), tmp_path)
+    write_suite(suite, tmp_path, coverage_report(suite))
+    missions = [str(tmp_path / p.mission_file) for p in suite.pairs]
+    assert rei_gen(["rooms", "--describe", *missions]) == 0
+    rows = list(csv.DictReader(capsys.readouterr().out.splitlines()))
+    for row, pair in zip(rows, suite.pairs, strict=True):
+        expected = pair.plan.descriptors.as_row()
+        assert {k: row[k] for k in expected} == expected
+    assert rei_gen(["rooms", "--describe", str(tmp_path / suite.pairs[0].room_file)]) == 2
+    assert "expected a .mission file" in capsys.readouterr().err
+
+
+@settings(max_examples=20, deadline=None)
+@given(seed=st.integers(0, 10_000), di=st.integers(-50, 50), dj=st.integers(-50, 50))
+def test_descriptors_do_not_depend_on_the_frame(seed: int, di: int, dj: int) -> None:
+    from dataclasses import replace
+
+    from rei.generators.rooms.descriptors import Scene
+
+    suite = generate(_suite("medium", seed, 1), Path("unused"))
+    plan = suite.pairs[0].plan
+    doc_free = describe(_plan_scene(plan))
+
+    def shift(c: tuple[int, int]) -> tuple[int, int]:
+        return (c[0] + di, c[1] + dj)
+
+    scene: Scene = _plan_scene(plan)
+    moved = replace(scene, floors=frozenset(shift(c) for c in scene.floors),
+                    obstacles=tuple(replace(o, cell=shift(o.cell)) for o in scene.obstacles),
+                    goals=tuple(shift(c) for c in scene.goals),
+                    trajectories=tuple((tuple(shift(c) for c in v), loop)
+                                       for v, loop in scene.trajectories))
+    assert describe(moved) == doc_free == plan.descriptors
+
+
+def _plan_scene(plan):  # type: ignore[no-untyped-def]
+    from rei.catalogue import default_catalogue
+    from rei.generators.rooms.descriptors import Obstacle, Scene
+
+    catalogue = default_catalogue()
+    return Scene(1.0, plan.floors,
+                 tuple(Obstacle(o.cell, catalogue.get(o.type).footprint, o.heading)
+                       for o in plan.objects),
+                 plan.goals, plan.params.cycles,
+                 tuple((h.vertices, h.loop) for h in plan.humans), len(plan.humans))
