@@ -90,6 +90,8 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
     if physics_rate <= 0 or odom_drift < 0 or (watchdog is not None and watchdog <= 0):
         raise RunError("--physics-rate and --watchdog expected positive numbers, --odom-drift "
                        "a non-negative one")
+    if mission_path.suffix != ".mission":
+        raise RunError(f"expected a .mission file to run, found '{mission_path}'")
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
     except OSError as exc:

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import importlib
+import os
+import sys
 
 from rei.lang.suggest import did_you_mean
 from rei.runtime.errors import RunError
@@ -28,6 +30,10 @@ def make_controller(spec: str) -> Controller:
         return TeleopController(script)
     if ":" in spec:
         module_name, _, attr = spec.partition(":")
+        # Like `python -m`, a user's controller module is found from the current folder too
+        # (the `rei` console script alone would only search the installed packages).
+        if os.getcwd() not in sys.path:
+            sys.path.append(os.getcwd())
         try:
             module = importlib.import_module(module_name)
         except ImportError as exc:
