@@ -65,7 +65,9 @@ class _Writer:
         self.h = hysteresis
 
     def code(self, e: vm.Expr, relaxed: bool, positive: bool = True) -> str:
-        c = lambda x, pos=positive: self.code(x, relaxed, pos)  # noqa: E731
+        def c(x: vm.Expr) -> str:
+            return self.code(x, relaxed, positive)
+
         if isinstance(e, vm.Num):
             return repr(e.value)
         if isinstance(e, vm.Measure):

@@ -29,7 +29,8 @@ NAMED_STATES = {"mission_state": m.MISSION_STATES,
 ROBOT = "robot"
 
 Kind = str
-"""'num', 'bool', 'task_state', 'mission_state', 'nav_state', 'state_name', 'robot', 'var:DOMAIN'."""
+"""'num', 'bool', 'task_state', 'mission_state', 'nav_state', 'state_name', 'robot' or
+'var:DOMAIN'."""
 
 
 class _Linker:
@@ -146,7 +147,7 @@ class _Linker:
             self.current = name
             self.finds: list[str] = []
             parts = [self._constraint(c) for c in tx.constraints]
-            for part, c in zip(parts, tx.constraints):
+            for part, c in zip(parts, tx.constraints, strict=False):
                 if part is not None and self.kind_of(part) != "bool":
                     self.error(c, "VEPL-TYPE", f"query '{name}': expected a condition (true or "
                                                f"false), found a {self.kind_of(part)} value")
@@ -233,7 +234,7 @@ class _Linker:
             if any(o is None for o in operands):
                 return None
             result = operands[0]
-            for op, right in zip(e.ops, operands[1:]):
+            for op, right in zip(e.ops, operands[1:], strict=False):
                 assert result is not None and right is not None
                 for side in (result, right):
                     if self.kind_of(side) != "num":
@@ -264,7 +265,7 @@ class _Linker:
                 self.error(e, "VEPL-TYPE", f"'{op}': expected conditions, found a "
                                            f"{self.kind_of(p)} value")
                 return None
-        return m.BoolOp(op, tuple(valid))  # type: ignore[arg-type]
+        return m.BoolOp(op, tuple(valid))
 
     def _comparison(self, e: Any) -> m.Expr | None:
         operands = [self._expr(o) for o in e.operands]
@@ -274,7 +275,7 @@ class _Linker:
         if any(o is None for o in operands):
             return None
         parts: list[m.Expr] = []
-        for op, left, right in zip(e.ops, operands, operands[1:]):
+        for op, left, right in zip(e.ops, operands, operands[1:], strict=False):
             assert left is not None and right is not None
             lk, rk = self.kind_of(left), self.kind_of(right)
             if lk in ("task_state", *NAMED_STATES):
@@ -320,8 +321,9 @@ class _Linker:
         if expected is not None and kinds != expected:
             shown = {"robot": "robot", "var:object": "an object parameter",
                      "var:floor": "a floor parameter", "var:task": "a task parameter"}
-            self.error(e, "VEPL-TYPE", f"'{name}': expected ({', '.join(shown[k] for k in expected)})"
-                                       f", found ({', '.join(shown.get(k, 'a ' + k) for k in kinds)})")
+            wanted = ", ".join(shown[k] for k in expected)
+            got = ", ".join(shown.get(k, "a " + k) for k in kinds)
+            self.error(e, "VEPL-TYPE", f"'{name}': expected ({wanted}), found ({got})")
             return None
         return m.Call(name, tuple(typed), user=name not in BUILTINS)
 
@@ -389,7 +391,7 @@ class _Linker:
                        f"that ends in NOT (absence needs a deadline), found none")
             return None
         raw = (tx.event_context or "immediate").split()
-        context: m.ContextKind = "strict" if raw[0] == "strict" else raw[0]  # type: ignore[assignment]
+        context: m.ContextKind = "strict" if raw[0] == "strict" else raw[0]
         start, end = tx.pattern._tx_position, tx.pattern._tx_position_end
         text = " ".join(self.source.text[start:end].split())
         return m.ComplexEvent(tx.name, pattern, context, text, self.span(tx))

@@ -58,7 +58,7 @@ def replay(trace: Path, vepl: Path | None, out_dir: Path) -> RunSummary:
     sink.finish(end_time, outcome, reason)
     assert sink.result is not None
     base = RunSummary(RESULTS_VERSION, header.mission, header.world, header.seed, "replay",
-                      outcome, reason, sink.result.duration, 0.0, {}, ())  # type: ignore[arg-type]
+                      outcome, reason, sink.result.duration, 0.0, {}, ())
     summary = merge_summary(base, sink.result)
     write_summary(summary, out_dir)
     return summary

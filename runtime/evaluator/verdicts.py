@@ -12,8 +12,8 @@ evidence never turns into a pass. A verdict is data, never an exception.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 from rei.lang.vepl import model as vm
 from rei.runtime.monitor.automata import RequirementSpec

@@ -19,9 +19,10 @@ clock or import the simulator.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from functools import reduce
-from typing import Any, Callable, Iterable
+from typing import Any
 
 import reactivex as rx
 from reactivex import Observable, abc

@@ -4,9 +4,10 @@ Footprints are convex or simple polygons (boxes become four corners) or circles.
 distance is between the shapes, not their centres: the smallest boundary-to-boundary
 distance when apart, and 0 or negative when they overlap: minus the depth of the deepest
 vertex of either polygon inside the other (0 when only edges cross); for a circle, the
-signed distance of its centre to the robot's boundary minus its radius. Objects whose centres are so far away that no
-threshold of the specification can be crossed get a cheap lower bound instead (the broad
-phase), which decides every comparison against those thresholds the same way. This
+signed distance of its centre to the robot's boundary minus its radius. Objects whose
+centres are so far away that no threshold of the specification can be crossed get a
+cheap lower bound instead (the broad phase), which decides every comparison against
+those thresholds the same way. This
 module must never import the simulator or keep state between calls.
 """
 

@@ -13,9 +13,10 @@ counted and skipped. This module must never read the wall clock or import the si
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from types import ModuleType
-from typing import Any, Callable, Mapping
+from typing import Any
 
 import numpy as np
 from reactivex.scheduler import VirtualTimeScheduler
@@ -29,8 +30,13 @@ from rei.runtime.messages import Sample, StreamHeader
 from rei.runtime.monitor.automata import QueryEventSpec, QueryInputs, load_generated
 from rei.runtime.monitor.cep import Occurrence
 from rei.runtime.monitor.errors import MonitorError
-from rei.runtime.monitor.model import RuntimeModel, SampleProblems, check_sample, crossings, \
-    interpolate
+from rei.runtime.monitor.model import (
+    RuntimeModel,
+    SampleProblems,
+    check_sample,
+    crossings,
+    interpolate,
+)
 
 UserFunction = Callable[..., Any]
 FINISHED = ("completed", "failed")
@@ -127,7 +133,7 @@ class AutomataHost:
             before = self.module.margins(self.prev_inputs)
             after = self.module.margins(w)
             fractions = crossings(before, after)
-            for lo, hi in zip(fractions, fractions[1:]):
+            for lo, hi in zip(fractions, fractions[1:], strict=False):
                 step = interpolate(self.prev_inputs, w, (lo + hi) / 2)
                 self._step(self.module.evaluate_queries(step, self.prev_q), s.time)
             q = self.module.evaluate_queries(w, self.prev_q)
@@ -151,7 +157,7 @@ class AutomataHost:
     def _holding(self, q: dict[str, Any], time: float) -> None:
         holding = tuple(bool(q[n].any()) for n in self.watched_queries)
         if holding != self._last_holding or self.checker.waiting():
-            self.checker.on_step(time, dict(zip(self.watched_queries, holding)))
+            self.checker.on_step(time, dict(zip(self.watched_queries, holding, strict=False)))
             self._last_holding = holding
 
     def _step(self, q: dict[str, Any], time: float) -> None:
@@ -194,8 +200,8 @@ class AutomataHost:
 
     def finish(self, end_time: float, outcome: str, reason: str = "") -> MonitorResult:
         end = max(end_time, self.last_time) if math.isfinite(end_time) else self.last_time
-        if math.isfinite(end) and end > self.scheduler._clock:  # noqa: SLF001
-            self.scheduler.advance_to(end)
+        if math.isfinite(end) and self.scheduler._queue:  # noqa: SLF001  (see feed)
+            self.scheduler.advance_to(end)  # windows still open at the end close now
         end = end if math.isfinite(end) else 0.0
         finished = outcome in FINISHED
         verdicts = self.checker.verdicts(end, self.problems, finished,

@@ -182,7 +182,7 @@ def crossings(before: list[np.ndarray], after: list[np.ndarray]) -> list[float]:
     crossing that rounds to the sample itself still counts: the state before it must be
     visited)."""
     found: set[float] = set()
-    for m0, m1 in zip(before, after):
+    for m0, m1 in zip(before, after, strict=False):
         m0 = np.broadcast_to(m0, np.shape(m1)) if np.shape(m0) != np.shape(m1) else m0
         if np.shape(m0) != np.shape(m1):
             continue

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Sequence
 
 from rei.runtime.evaluator.signal_log import SignalRow, read_csv
 from rei.runtime.evaluator.summary import MonitorResult

@@ -12,7 +12,6 @@ import pytest
 from rei.runtime.evaluator.summary import merge_summary, write_summary
 from rei.runtime.messages import MissionEvent
 from rei.runtime.results import RESULTS_VERSION, RunSummary
-
 from tests.monitor.helpers import default_automata, monitor
 from tests.monitor.streams import drive, human, straight, wall
 

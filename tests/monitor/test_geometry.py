@@ -32,7 +32,7 @@ def _segments_cross(a: tuple[float, float], b: tuple[float, float], c: tuple[flo
 
 def _inside(p: tuple[float, float], poly: list[tuple[float, float]]) -> bool:
     inside = False
-    for (x1, y1), (x2, y2) in zip(poly, poly[1:] + poly[:1]):
+    for (x1, y1), (x2, y2) in zip(poly, poly[1:] + poly[:1], strict=False):
         if (y1 > p[1]) != (y2 > p[1]) and p[0] < x1 + (p[1] - y1) * (x2 - x1) / (y2 - y1):
             inside = not inside
     return inside
@@ -46,11 +46,11 @@ def _place(points: np.ndarray, pose: tuple[float, float, float]) -> list[tuple[f
 def reference(robot: list[tuple[float, float]], other: list[tuple[float, float]] | None,
               centre: tuple[float, float], radius: float) -> float:
     """Plain-Python signed footprint distance (negative: depth of the deepest vertex)."""
-    redges = list(zip(robot, robot[1:] + robot[:1]))
+    redges = list(zip(robot, robot[1:] + robot[:1], strict=False))
     if other is None:
         boundary = min(_seg_point(centre, a, b) for a, b in redges)
         return -boundary - radius if _inside(centre, robot) else boundary - radius
-    oedges = list(zip(other, other[1:] + other[:1]))
+    oedges = list(zip(other, other[1:] + other[:1], strict=False))
     v1 = [min(_seg_point(p, a, b) for a, b in redges) for p in other]
     v2 = [min(_seg_point(p, a, b) for a, b in oedges) for p in robot]
     inside1 = [_inside(p, robot) for p in other]
@@ -60,7 +60,8 @@ def reference(robot: list[tuple[float, float]], other: list[tuple[float, float]]
     if not overlap:
         return min(v1 + v2)
     # the deepest vertex of either polygon inside the other (0 if only edges cross)
-    return -max([v for v, i in zip(v1, inside1) if i] + [v for v, i in zip(v2, inside2) if i]
+    return -max([v for v, i in zip(v1, inside1, strict=True) if i]
+                + [v for v, i in zip(v2, inside2, strict=True) if i]
                 + [0.0])
 
 

@@ -13,7 +13,6 @@ from rei.runtime.commands.run import run_into
 from rei.runtime.evaluator.signal_log import read_csv
 from rei.runtime.monitor import MonitorSink
 from rei.runtime.monitor.geometry import FootprintSet
-
 from tests.conftest import EXAMPLES
 from tests.monitor.helpers import geom
 from tests.monitor.test_table2 import EPS_CLOSE, table2

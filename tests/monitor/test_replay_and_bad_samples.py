@@ -13,7 +13,6 @@ import pytest
 from rei.runtime.cli import main as rei
 from rei.runtime.collector.trace import write
 from rei.runtime.messages import MissionEvent
-
 from tests.monitor.helpers import default_automata, monitor
 from tests.monitor.streams import drive, human, straight, wall
 

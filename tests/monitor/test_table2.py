@@ -14,7 +14,6 @@ from hypothesis import strategies as st
 
 from rei.lang.vepl import load_vepl
 from rei.runtime.monitor.geometry import FootprintSet
-
 from tests.monitor.helpers import default_automata, geom, monitor
 from tests.monitor.streams import ROBOT, drive, header, human, sample, straight, wall
 
@@ -51,9 +50,9 @@ def table2(times: list[float], traces: list[list[float]]) -> list[tuple[float, s
     out: list[tuple[float, str]] = []
     state = FAR
     before = [FAR_AWAY] * len(traces[0])
-    for t, now in zip(times, traces):
+    for t, now in zip(times, traces, strict=False):
         fractions = set()
-        for d0, d1 in zip(before, now):
+        for d0, d1 in zip(before, now, strict=False):
             for thr in (EPS_CLOSE, EPS_COLLISION):
                 m0, m1 = d0 - thr, d1 - thr
                 if (m0 < 0 or (m0 == 0 and math.copysign(1, m0) < 0)) != (m1 < 0):
@@ -61,8 +60,10 @@ def table2(times: list[float], traces: list[list[float]]) -> list[tuple[float, s
                     if 0 <= f <= 1:
                         fractions.add(f)
         ordered = sorted(fractions)
-        points = [(lo + hi) / 2 for lo, hi in zip(ordered, ordered[1:])]
-        for ds in [[d0 + f * (d1 - d0) for d0, d1 in zip(before, now)] for f in points] + [now]:
+        points = [(lo + hi) / 2 for lo, hi in zip(ordered, ordered[1:], strict=False)]
+        steps = [[d0 + f * (d1 - d0) for d0, d1 in zip(before, now, strict=True)]
+                 for f in points]
+        for ds in [*steps, now]:
             new = state_of(ds)
             out.extend((t, SIGNAL[p]) for p in path(state, new))
             state = new

@@ -146,7 +146,8 @@ def test_syntax_error_is_located() -> None:
     assert diagnostics_of("query q( { }\n")[0][0] == "SYNTAX"
 
 
-def test_rei_gen_check_accepts_the_default_and_rejects_the_corpus(capsys: pytest.CaptureFixture[str]) -> None:
+def test_rei_gen_check_accepts_the_default_and_rejects_the_corpus(
+        capsys: pytest.CaptureFixture[str]) -> None:
     assert rei_gen(["check", str(DEFAULT_VEPL)]) == 0
     assert rei_gen(["check", str(CORPUS / "VEPL-ORDER.vepl")]) == 2
     assert "VEPL-ORDER" in capsys.readouterr().out
