@@ -64,6 +64,16 @@ class CatmullRom:
         (ax, ay), (bx, by), (cx, cy), (dx, dy) = self._coef[i]
         return (((ax * s + bx) * s + cx) * s + dx, ((ay * s + by) * s + cy) * s + dy)
 
+    def positions(self, times: np.ndarray) -> np.ndarray:
+        """(N, 2) positions at many times at once (the same curve as ``position``)."""
+        t0, span = self.t[0], self.t[-1] - self.t[0]
+        rel = times - t0
+        rel = np.mod(rel, span) if self.loop else np.clip(rel, 0.0, span)
+        tt = t0 + rel
+        i = np.clip(np.searchsorted(self.t, tt, side="right") - 1, 0, len(self.t) - 2)
+        s = (tt - self.t[i])[:, None]
+        return ((self.a[i] * s + self.b[i]) * s + self.c[i]) * s + self.d[i]
+
     def velocity(self, time: float) -> tuple[float, float]:
         i, s, ended = self._local(time)
         if ended:

@@ -67,3 +67,13 @@ def test_animator_follows_the_curve_and_pulls_back_a_displaced_body() -> None:
 def test_spline_refuses_vertices_out_of_time_order() -> None:
     with pytest.raises(ValueError):
         CatmullRom(np.array([0.0, 0.0]), np.array([[0.0, 0.0], [1.0, 1.0]]), loop=False)
+
+
+@pytest.mark.parametrize("loop", [True, False])
+def test_vectorised_positions_equal_single_ones(loop: bool) -> None:
+    s = CatmullRom(np.array([0.0, 3.0, 7.0, 9.0]),
+                   np.array([[0.0, 0.0], [1.0, 2.0], [4.0, 2.0], [0.0, 0.0]]), loop=loop)
+    times = np.linspace(-1.0, 25.0, 301)
+    many = s.positions(times)
+    for t, row in zip(times, many, strict=True):
+        assert tuple(row) == pytest.approx(s.position(float(t)), abs=1e-12)
