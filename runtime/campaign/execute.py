@@ -25,7 +25,8 @@ from rei.runtime.results import RunSummary
 
 RunStatus = Literal["ran", "crashed", "hung", "interrupted"]
 """ran: `rei run` wrote a summary; crashed: it ended without one (or with a broken one);
-hung: the watchdog killed it; interrupted: stopped by the user (not recorded, runs again)."""
+hung: the watchdog killed it; interrupted: stopped by the user — Ctrl-C, or kill -9 of the run
+from outside the campaign — so it is not recorded and runs again when the campaign resumes."""
 
 DEFAULT_RUNNER: tuple[str, ...] = (sys.executable, "-m", "rei.runtime.cli")
 """The program that runs one mission; `run MISSION -o DIR ...` is appended."""
@@ -114,8 +115,13 @@ def execute_run(spec: RunSpec, work_dir: Path, *, timeout: float | None = None,
             _kill(process)  # the campaign is stopping: never leave a run behind
             raise
     wall = time.monotonic() - started
-    if code in (EXIT_INTERRUPTED, -signal.SIGINT):
+    if code in (EXIT_INTERRUPTED, -signal.SIGINT, -signal.SIGTERM):
         return RunResult(spec.run_id, "interrupted", code, wall, None, "interrupted")
+    if code == -signal.SIGKILL:
+        # Nothing in a run sends itself SIGKILL: a user (or the OOM killer) stopped it. It is
+        # absent, not failed, and the next session of the same command runs it again.
+        return RunResult(spec.run_id, "interrupted", code, wall, None,
+                         "killed (SIGKILL) from outside the campaign")
     summary, problem = _read_summary(work_dir / "summary.json")
     if summary is None:
         detail = _tail(work_dir / "campaign-stderr.txt")

@@ -160,9 +160,9 @@ def _expand(inputs: list[Path]) -> list[_MissionEntry]:
             entries.append(_MissionEntry(given.resolve(), _key(given.resolve()),
                                          given.resolve().parent.name, {}))
         else:
-            found = "another kind of file" if given.exists() else "nothing"
+            what = "another kind of file" if given.exists() else "nothing"
             raise CampaignError(f"{given}: expected a .mission file, a folder or a suite index "
-                                f".csv, found {found}")
+                                f".csv, found {what}")
     return entries
 
 
