@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from rei.catalogue import Box, Cylinder
+from rei.lang.vepl import load_vepl
 from rei.runtime.collector.trace import read_trace, write
 from rei.runtime.messages import (
     SCHEMA_VERSION,
@@ -82,8 +83,7 @@ def scenario(n_objects: int, n_samples: int, seed: int = 0) -> tuple[StreamHeade
 class HandWrittenMonitor:
     """The same patterns without the DSL: what one would write by hand."""
 
-    def __init__(self, header: StreamHeader, eps_close: float = 0.5,
-                 eps_collision: float = 0.05) -> None:
+    def __init__(self, header: StreamHeader, eps_close: float, eps_collision: float) -> None:
         self.fs = FootprintSet.build(header.robot.footprint,
                                      [o.footprint for o in header.objects], header.tile_size)
         self.inradius = self.fs.robot_inradius()
@@ -151,7 +151,8 @@ def bench(n_objects: int, n_samples: int, work: Path) -> dict[str, float]:
     replay = time.process_time() - start
 
     start = time.process_time()
-    hand = HandWrittenMonitor(header)
+    parameters = load_vepl().parameters
+    hand = HandWrittenMonitor(header, parameters["eps_close"], parameters["eps_collision"])
     for s in samples:
         hand.feed(s)
     handwritten = time.process_time() - start
