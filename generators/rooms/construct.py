@@ -262,14 +262,13 @@ def construct(params: RoomParameters, facts: CatalogueFacts, rng: random.Random)
     floors = floor_plan(params, rng)
     w, h = params.width, params.height
     box = {(c, -r) for r in range(-1, h + 3) for c in range(-1, w + 3)}
-    outside = box - floors
+    outside = CellMask(box - floors)
     goals = _choose_goals(params, floors, rng)
     robot = goals[0]
 
     stops = goals + ([goals[0]] if params.cycles > 1 else [])
     crossing_wanted = params.crossing == "cross" and params.humans > 0
     base = (bfs_route(floors, stops) if crossing_wanted else None) or [robot]
-    outside = CellMask(outside)
     reserved: set[Cell] = set(goals)
     humans: list[HumanPlan] = []
     taken = {robot}
