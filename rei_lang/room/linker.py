@@ -101,6 +101,11 @@ def _legend(linker: _Linker, grid: Any) -> dict[str, tuple[str, str | None, str 
     return legend
 
 
+_GRID_NEIGHBOURS = ((Side.TOP, -1, 0), (Side.RIGHT, 0, 1), (Side.BOTTOM, 1, 0),
+                    (Side.LEFT, 0, -1))
+"""A grid's first row is its top: the top neighbour is one row up."""
+
+
 def _expand_grid(linker: _Linker, grid: Any, floors: dict[str, FloorDecl],
                  walls: dict[str, WallDecl]) -> GridDecl:
     legend = _legend(linker, grid)
@@ -117,12 +122,14 @@ def _expand_grid(linker: _Linker, grid: Any, floors: dict[str, FloorDecl],
         start = found if found >= 0 else grid._tx_position
         pos = start + len(row) + 2
         row_spans.append(span_at(linker.source, start, pos))
-    kinds: dict[tuple[int, int], tuple[str, str, str | None]] = {}
+    kinds: dict[tuple[int, int], tuple[str, str, str | None, Span]] = {}
     named_used: dict[str, Span] = {}
     for r, row in enumerate(rows):
+        line, col0 = row_spans[r].line, row_spans[r].col + 1
         for c, sym in enumerate(row):
-            cell_span = Span(gspan.file, row_spans[r].line, row_spans[r].col + 1 + c,
-                             row_spans[r].line, row_spans[r].col + 2 + c)
+            if sym in " _" and legend.get(sym, ("",))[0] == "empty":
+                continue  # the common case of an empty cell, without building its span
+            cell_span = Span(gspan.file, line, col0 + c, line, col0 + c + 1)
             if sym not in legend:
                 known = "".join(sorted(legend))
                 linker.error(cell_span, "GRID-SYMBOL",
@@ -140,19 +147,16 @@ def _expand_grid(linker: _Linker, grid: Any, floors: dict[str, FloorDecl],
                                  f"found it again (first at line {named_used[cell_name].line})")
                     continue
                 named_used[cell_name] = cell_span
-            kinds[(r, c)] = (kind, name, type_name)
+            kinds[(r, c)] = (kind, name, type_name, cell_span)
             linker.declare(name, cell_span)
     names = {rc: v[1] for rc, v in kinds.items()}
-    for (r, c), (kind, name, type_name) in kinds.items():
+    for (r, c), (kind, name, type_name, cell_span) in kinds.items():
         cell = GridCell(grid.name, r, c)
-        cell_span = Span(gspan.file, row_spans[r].line, row_spans[r].col + 1 + c,
-                         row_spans[r].line, row_spans[r].col + 2 + c)
         if kind == "wall":
             walls.setdefault(name, WallDecl(name, type_name or "wall", cell_span, cell))
             continue
         links: list[tuple[Side, NameRef]] = []
-        for side, (dr, dc) in ((Side.TOP, (-1, 0)), (Side.RIGHT, (0, 1)),
-                               (Side.BOTTOM, (1, 0)), (Side.LEFT, (0, -1))):
+        for side, dr, dc in _GRID_NEIGHBOURS:
             other = names.get((r + dr, c + dc))
             if other is not None:
                 links.append((side, NameRef(other, cell_span)))

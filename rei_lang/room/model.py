@@ -31,8 +31,8 @@ class Side(Enum):
 
     @property
     def opposite(self) -> Side:
-        return {Side.TOP: Side.BOTTOM, Side.BOTTOM: Side.TOP,
-                Side.LEFT: Side.RIGHT, Side.RIGHT: Side.LEFT}[self]
+        dx, dy = self.value
+        return Side((-dx, -dy))
 
     @property
     def keyword(self) -> str:
