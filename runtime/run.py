@@ -212,7 +212,9 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
                 all_poses[moving_rows] = poses[moving_index]
                 all_twists[moving_rows] = twists[moving_index]
             fb_state, task = nav_view
-            collector.sample(t, truth, world.twist(world.robot_id), all_poses, all_twists,
+            # Each sample owns its arrays: sinks may keep samples (the monitor's windows).
+            collector.sample(t, truth, world.twist(world.robot_id), all_poses.copy(),
+                             all_twists.copy(),
                              odom.pose, odom.twist, scan, scan_time, fb_state, task)
 
         nav_view: tuple[NavState, str | None] = (NavState.IDLE, None)

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from rei.runtime.cli import main
-from rei.runtime.collector import read_trace
+from rei.runtime.collector import SampleList, read_trace
 from rei.runtime.collector.trace import read_trace_end
 from rei.runtime.commands.run import run_into
 from tests.conftest import EXAMPLES, REPO
@@ -187,3 +187,18 @@ def test_the_reference_navigator_completes_every_example_without_collision(
     summary, _ = run_into(EXAMPLES / example / f"{example}.mission", tmp_path)
     assert summary.outcome == "completed", summary.measurements["tasks"]
     assert summary.measurements["collisions"] == 0
+
+
+def test_an_attached_sink_sees_exactly_the_recorded_stream(tmp_path: Path) -> None:
+    sink = SampleList()
+    run_into(NAVIGATION, tmp_path, duration=4.0, sinks=[sink])
+    header, rows = read_trace(tmp_path / "trace.jsonl")
+    recorded = list(rows)
+    assert sink.header == header and sink.end is not None and sink.end[1] == "timeout"
+    assert len(sink.samples) == len(recorded)
+    for live, replayed in zip(sink.samples, recorded, strict=True):
+        assert (live.seq, live.time, live.robot_pose, live.events) == \
+               (replayed.seq, replayed.time, replayed.robot_pose, replayed.events)
+        assert np.array_equal(live.poses, replayed.poses)
+        assert np.array_equal(live.twists, replayed.twists)
+        assert live.belief.laser_min == replayed.belief.laser_min

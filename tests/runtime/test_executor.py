@@ -1,0 +1,72 @@
+"""The mission executor on its own: events, failure reasons and cycles (thesis 4.3.2, 6.1.4)."""
+
+from __future__ import annotations
+
+from rei.generators.concrete import ConcreteGoal
+from rei.runtime.messages import NavState
+from rei.runtime.mission import MissionExecutor
+from rei.runtime.robot import GoalFeedback, GoalTracker, NavGoal
+
+
+class ScriptedClient:
+    """Ends each goal the way a script says: 'ok', 'abort' or 'hang' (never ends)."""
+
+    def __init__(self, script: list[str]) -> None:
+        self.script = script
+        self.tracker = GoalTracker()
+        self.sent: list[str] = []
+
+    def send_goal(self, goal: NavGoal) -> None:
+        self.tracker.send(goal)
+        self.tracker.accept()
+        self.sent.append(goal.name)
+        what = self.script[len(self.sent) - 1]
+        if what == "ok":
+            self.tracker.succeed()
+        elif what == "abort":
+            self.tracker.abort("blocked")
+
+    def cancel_goal(self) -> None:
+        self.tracker.cancel()
+
+    def feedback(self) -> GoalFeedback:
+        return self.tracker.feedback()
+
+
+def _goal(name: str, x: float) -> ConcreteGoal:
+    return ConcreteGoal(name, name, x, 0.0, None, 0.3, 5.0)
+
+
+def test_events_reasons_and_cycles() -> None:
+    goals = (_goal("a", 0.0), _goal("b", 2.0))
+    tasks = goals * 2  # cycles 2
+    client = ScriptedClient(["ok", "abort", "hang", "ok"])
+    executor = MissionExecutor(tasks)
+    events = []
+    time = 0.0
+    while not executor.finished and time < 30:
+        events += executor.tick(time, client, (0.0, 0.0, 0.0))
+        time = round(time + 0.5, 1)
+    kinds = [(e.kind, e.task, e.index) for e in events]
+    assert kinds == [("begin", None, None),
+                     ("task_start", "a", 0), ("task_success", "a", 0),
+                     ("task_start", "b", 1), ("task_fail", "b", 1),
+                     ("task_start", "a", 2), ("task_fail", "a", 2),
+                     ("task_start", "b", 3), ("task_fail", "b", 3),
+                     ("end", None, None)]
+    reasons = [r.reason for r in executor.results]
+    assert reasons[1] == "aborted: blocked"
+    assert reasons[2] == "timeout after 5 s"
+    assert client.tracker.state in (NavState.SUCCEEDED, NavState.PREEMPTED)
+    # The last goal was claimed, but the robot stands 2 m away: ground truth decides.
+    assert reasons[3].startswith("outside tolerance: the robot is 2.000 m")
+    assert client.sent == ["a", "b", "a", "b"]
+
+
+def test_abandon_fails_the_running_task_and_ends() -> None:
+    executor = MissionExecutor((_goal("a", 1.0),))
+    client = ScriptedClient(["hang"])
+    executor.tick(0.0, client, (0.0, 0.0, 0.0))
+    events = executor.abandon(1.0, "interrupted", (0.0, 0.0, 0.0))
+    assert [e.kind for e in events] == ["task_fail", "end"]
+    assert executor.finished and executor.abandon(2.0, "again", (0.0, 0.0, 0.0)) == []
