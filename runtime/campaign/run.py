@@ -56,10 +56,10 @@ def run_campaign(plan: CampaignPlan, root: Path, engine: CampaignEngine,
                     progress.update(record.passed)
         finally:
             progress.finish()
-            left = len(store.missing())
-            if left:
-                print(f"{left} of {len(plan.runs)} runs are not recorded (interrupted or killed);"
-                      f" run the same command again to run them", file=out)
             # Tables always match the records, also after Ctrl-C (they are rebuilt on resume).
             store.write_tables()
-        return CampaignResult(root, plan, tuple(store.records()), ran)
+        records = tuple(store.records())
+        if len(records) < len(plan.runs):
+            print(f"{len(plan.runs) - len(records)} of {len(plan.runs)} runs are not recorded "
+                  f"(killed from outside); run the same command again to run them", file=out)
+        return CampaignResult(root, plan, records, ran)

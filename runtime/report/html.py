@@ -24,6 +24,8 @@ from rei.runtime.report.tables import (
 )
 
 MAX_MAPS = 12
+MAX_FAILURES = 200
+"""Failures listed in full; the rest are in junit.xml and results.csv."""
 
 
 def _number(value: object) -> str:
@@ -71,7 +73,8 @@ def render_html(data: CampaignData, rerun: dict[str, str]) -> str:
         planned=len(data.plan.runs), recorded=len(records), passed=passed,
         failed=len(failures), flaky=[m for m in missions if m.flaky],
         repeat=data.plan.repeat, seed=data.plan.seed,
-        failures=failures, rerun=rerun, mission_of=by_mission,
+        failures=failures[:MAX_FAILURES], more_failures=max(0, len(failures) - MAX_FAILURES),
+        rerun=rerun, mission_of=by_mission,
         success_tables=[success_table(missions, "Mission"), group_success_table(records)],
         summary_tables=tables, signal_table=signal_counts(records),
         utility_plot=plots.utility_over_time(data),

@@ -36,13 +36,15 @@ def utility_over_time(data: CampaignData) -> str | None:
     missions = sorted({m for m, _ in lines})
     colours = {m: f"C{i % 10}" for i, m in enumerate(missions)}
     labelled: set[str] = set()
+    # Hundreds of runs as vector paths make a page of megabytes: raster the lines then.
+    raster = len(lines) > 100
     for mission, events in lines:
         t = [0.0] + [e.time for e in events]
         u = [0.0] + [e.total for e in events]
         label = mission if mission not in labelled and len(labelled) < MAX_LEGEND else None
         labelled.add(mission)
-        ax.step(t, u, where="post", color=colours[mission], alpha=0.75, linewidth=1.2,
-                label=label)
+        ax.step(t, u, where="post", color=colours[mission], alpha=0.75 if not raster else 0.3,
+                linewidth=1.2, label=label, rasterized=raster)
     ax.axhline(0, color="#888", linewidth=0.6)
     ax.set_xlabel("simulation time [s]")
     ax.set_ylabel("total utility")
