@@ -10,12 +10,14 @@ unreadable trace), 3 a monitor error.
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from rei.lang.cli_support import EXIT_RUN_ERROR
 from rei.runtime.collector.trace import read_trace, read_trace_end
 from rei.runtime.evaluator.summary import merge_summary, write_summary
 from rei.runtime.monitor import MonitorSink, generate_automata
+from rei.runtime.monitor.automata import load_generated
 from rei.runtime.monitor.errors import MonitorError
 from rei.runtime.results import RESULTS_VERSION, RunSummary
 
@@ -40,6 +42,11 @@ def replay(trace: Path, vepl: Path | None, out_dir: Path) -> RunSummary:
     # The specification is checked and generated before the trace is opened: a bad .vepl
     # is reported without touching the trace.
     automata = generate_automata(vepl, Path(out_dir) / "automata")
+    needed = sorted(load_generated(automata).FUNCTIONS)
+    if needed:
+        raise MonitorError(f"the specification expected the user function(s) "
+                           f"{', '.join(needed)}, found none registered (`rei replay` has no "
+                           f"way to register them; use MonitorSink(..., functions=...))")
     header, samples = read_trace(trace)
     sink = MonitorSink(vepl, out_dir, automata=automata)
     last = 0.0
@@ -68,7 +75,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         summary = replay(args.trace, args.vepl, args.output)
     except MonitorError as exc:
-        print(f"rei replay: error: {exc}")
+        print(f"rei replay: error: {exc}", file=sys.stderr)
         return EXIT_RUN_ERROR
     for v in summary.verdicts:
         print(f"{v.requirement}: {v.status} ({v.reason})")
