@@ -12,7 +12,6 @@ from pathlib import Path
 
 from rei.generators.targets.rx import render_module
 from rei.lang.vepl import load_vepl
-
 from tests.monitor.helpers import monitor
 from tests.monitor.streams import drive, straight, wall
 
