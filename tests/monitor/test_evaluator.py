@@ -156,3 +156,27 @@ signal SIG_ENTER on entering utility -2
         counts[band] = len(rows)
     assert counts["0.0"] == 10
     assert counts["0.05"] == 1
+
+
+def test_floor_and_navigation_queries(tmp_path: Path) -> None:
+    from dataclasses import replace as with_fields
+
+    from rei.runtime.messages import NavState
+
+    spec = tmp_path / "floors.vepl"
+    spec.write_text("""query onFloor(f: floor) { on(robot, f) }
+query navigating() { nav_state == active and speed > 0.1 }
+queryEvent entering(f) as onFloor(f) found
+queryEvent stopping() as navigating lost
+signal SIG_FLOOR on entering utility 0
+signal SIG_STOP on stopping utility 0
+""", encoding="utf-8")
+    h, samples = drive([wall("w", 10.0, 0.0)], straight(0.0, 2.0, 21))
+    h = with_fields(h, floors=(("a", 0.0, 0.0), ("b", 1.0, 0.0), ("c", 2.0, 0.0)))
+    moving = [with_fields(s, robot_twist=(1.0, 0.0, 0.0)) for s in samples[:15]]
+    stopped = [with_fields(s, belief=with_fields(s.belief, nav_state=NavState.SUCCEEDED))
+               for s in samples[15:]]
+    rows, _ = monitor(h, moving + stopped, tmp_path / "out", vepl=spec)
+    assert [(r.time, r.signal, r.objects) for r in rows] == [
+        (0.0, "SIG_FLOOR", ("a",)), (0.6, "SIG_FLOOR", ("b",)), (1.5, "SIG_STOP", ()),
+        (1.6, "SIG_FLOOR", ("c",))]
