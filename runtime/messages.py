@@ -54,7 +54,7 @@ class ObservedObject:
     """A body the monitor watches, with what the geometry queries need about it."""
 
     name: str
-    role: Literal["wall", "static", "dynamic", "human"]
+    role: Literal["wall", "static", "dynamic", "human", "robot"]
     type: str
     footprint: Footprint
     """In the object's own frame; walls carry a Box of the tile size."""

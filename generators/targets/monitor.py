@@ -32,6 +32,7 @@ class MonitorTarget:
     name: str = "monitor"
     description: str = "the monitor configuration: observed objects, data and sampling rate (JSON)"
     accepts: tuple[str, ...] = (".room", ".mission")
+    options: tuple[str, ...] = ("rate",)
 
     def generate(self, request: GenerationRequest) -> OutputTree:
         world = request.world

@@ -130,6 +130,7 @@ class PybulletTarget:
     description: str = ("the world as URDF files per body type and a world.json manifest "
                         "for pybullet")
     accepts: tuple[str, ...] = (".room", ".mission")
+    options: tuple[str, ...] = ()
     loader: jinja2.BaseLoader | None = field(default=None, compare=False)
 
     def generate(self, request: GenerationRequest) -> OutputTree:
