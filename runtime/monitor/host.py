@@ -114,6 +114,11 @@ class AutomataHost:
         problem = check_sample(s, self.header)
         if problem is not None:
             self.problems.add(problem, self.last_time if not math.isfinite(s.time) else s.time)
+            if math.isfinite(s.time):
+                # the geometry is unusable, the mission events are not: keep the
+                # mission and task states (and their signals) right
+                self.last_seq, self.last_time = s.seq, s.time
+                self._mission_events(s, self.prev_inputs)
             return
         if self.last_seq is not None and s.seq > self.last_seq + 1:
             self.problems.add("missing", s.time, s.seq - self.last_seq - 1)
@@ -141,10 +146,13 @@ class AutomataHost:
         elif self.watched_queries:
             self._holding(q, s.time)
         self.prev_q = q
+        self.prev_inputs = self._mission_events(s, w)
+
+    def _mission_events(self, s: Sample, w: QueryInputs) -> QueryInputs:
         for event in s.events:
             w = self.model.apply(event, w)
             self._step(self.module.evaluate_queries(w, self.prev_q), s.time)
-        self.prev_inputs = w
+        return w
 
     def _changed(self, q: dict[str, Any]) -> bool:
         prev = self.prev_q

@@ -117,3 +117,14 @@ def test_replay_without_a_needed_user_function_is_a_run_error(tmp_path: Path) ->
 
 def test_replay_of_a_missing_trace_is_bad_input(tmp_path: Path) -> None:
     assert rei(["replay", str(tmp_path / "nothing.jsonl"), "-o", str(tmp_path / "out")]) == 2
+
+
+def test_mission_events_of_a_bad_sample_still_count(tmp_path: Path, automata: Path) -> None:
+    events = {0: (MissionEvent("begin", 0.0),), 5: (MissionEvent("end", 0.5),)}
+    h, samples = drive([wall("w", 10.0, 0.0)], straight(0.0, 1.0, 6), events=events)
+    poses = samples[5].poses.copy()
+    poses[0, 1] = np.inf
+    samples[5] = replace(samples[5], poses=poses)
+    rows, result = monitor(h, samples, tmp_path, automata=automata)
+    assert [r.signal for r in rows] == ["SIG_MISSION_BEGIN", "SIG_MISSION_END"]
+    assert result.measurements["sample_problems"]["non_finite"] == 1
