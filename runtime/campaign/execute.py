@@ -94,7 +94,7 @@ def execute_run(spec: RunSpec, work_dir: Path, *, timeout: float | None = None,
         # The run stays in the campaign's process group on purpose: Ctrl-C, or kill -9 of the
         # whole command's group, stops the runs too instead of leaving orphans computing.
         process = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=out, stderr=err,
-                                   env={**os.environ, "PYTHONHASHSEED": "0"})
+                                   env=run_environment())
         try:
             code: int | None = None
             while code is None:
@@ -130,6 +130,18 @@ def execute_run(spec: RunSpec, work_dir: Path, *, timeout: float | None = None,
         return RunResult(spec.run_id, "crashed", code, wall, None,
                          f"{what}, {problem}" + (f": {detail}" if detail else ""))
     return RunResult(spec.run_id, "ran", code, wall, summary, "")
+
+
+THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+def run_environment() -> dict[str, str]:
+    """The environment of a run: one math-library thread per run unless the user chose
+    otherwise (parallel runs each spawning a thread per core would fight over the cores)."""
+    env = dict(os.environ)
+    for name in THREAD_VARIABLES:
+        env.setdefault(name, "1")
+    return env
 
 
 def _kill(process: subprocess.Popen[bytes]) -> None:
