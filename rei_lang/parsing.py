@@ -18,7 +18,7 @@ from textx.metamodel import TextXMetaModel
 from rei.lang.errors import Diagnostic, Span
 from rei.lang.source import SourceText
 
-LANGUAGES = ("room", "mission")
+LANGUAGES = ("room", "mission", "vepl")
 MAX_NESTING_MESSAGE = "the file nests deeper than the parser can follow"
 
 

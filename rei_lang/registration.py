@@ -39,6 +39,11 @@ room_language = LanguageDesc(
     description="REI context model: floors, walls, objects, humans and a robot",
     metamodel=lambda: _registered_metamodel("room"))
 
+vepl_language = LanguageDesc(
+    "rei-vepl", pattern="*.vepl",
+    description="REI monitoring specification: queries, event patterns, signals, requirements",
+    metamodel=lambda: _registered_metamodel("vepl"))
+
 mission_language = LanguageDesc(
     "rei-mission", pattern="*.mission",
     description="REI mission: an ordered list of navigation goals in a room",

@@ -77,6 +77,20 @@ RULES: tuple[Rule, ...] = (
          "thesis 4.1.2, 4.3.1"),
     Rule("GOAL-UNREACHABLE", "mission", "the robot's footprint can reach every goal from its "
          "start (path search on the floor graph without blocked floors)"),
+    Rule("VEPL-UNKNOWN", "vepl", "every referenced name is declared (queries, events, signals, "
+         "parameters, functions, states), with 'did you mean'"),
+    Rule("VEPL-ARITY", "vepl", "a query has at most one parameter; finds, query events and "
+         "function calls pass the declared number of arguments"),
+    Rule("VEPL-ORDER", "vepl", "an event is defined before a complex event, signal or "
+         "requirement uses it"),
+    Rule("VEPL-WINDOW", "vepl", "a time window is more than 0 and at most 1e9 ms"),
+    Rule("VEPL-TYPE", "vepl", "expressions combine the right kinds of values "
+         "(distance(robot, object), state(t) == STATE, conditions under and/or/not)"),
+    Rule("VEPL-NOT-WINDOW", "vepl", "a pattern that ends in NOT has a time window"),
+    Rule("VEPL-MULTIPLICITY", "vepl", "{n} is a whole number from 1 to 100"),
+    Rule("VEPL-CYCLE", "vepl", "queries do not find each other in a circle"),
+    Rule("VEPL-PARAM", "vepl", "eps_collision is below eps_close and the hysteresis band is "
+         "at least 0"),
 )
 
 RULE_IDS = frozenset(r.id for r in RULES)

@@ -11,9 +11,7 @@ mission completed, 1 a task failed or the time ran out, 2 invalid input, 3 a run
 from __future__ import annotations
 
 import argparse
-import json
 import math
-import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -22,6 +20,8 @@ from typing import IO
 from rei.lang.cli_support import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_RUN_ERROR
 from rei.runtime.collector import SampleSink, TraceWriter, load_monitor_config
 from rei.runtime.errors import RunError
+from rei.runtime.evaluator import merge_summary, write_summary
+from rei.runtime.monitor import MonitorSink, generate_automata
 from rei.runtime.results import RunSummary
 from rei.runtime.robot import BUILT_IN, make_controller
 from rei.runtime.run import RunConfig, RunRecord, generate_world, run_mission, summary_of
@@ -30,6 +30,7 @@ from rei.runtime.world import load_manifest
 TRACE = "trace.jsonl"
 SUMMARY = "summary.json"
 LOG = "run.log"
+EVENTS = "events.csv"
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -53,22 +54,13 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                         help="physics steps per simulated second (default 100)")
     parser.add_argument("--odom-drift", type=float, default=0.0, metavar="SIGMA",
                         help="relative odometry error per control tick (default 0: exact)")
+    parser.add_argument("--vepl", type=Path, default=None, metavar="FILE",
+                        help="monitoring specification: queries, event patterns, signals with "
+                             "utilities and requirements (default: REI's default.vepl)")
+    parser.add_argument("--no-monitor", action="store_true",
+                        help="record the trace only (monitor it later with `rei replay`)")
     parser.add_argument("--quiet", action="store_true", help="no progress display")
     parser.set_defaults(func=run)
-
-
-def write_atomic(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file, so a kill never leaves it torn."""
-    tmp = path.with_name(f".{path.name}.tmp")
-    with open(tmp, "w", encoding="utf-8", newline="\n") as handle:
-        handle.write(text)
-        handle.flush()
-        os.fsync(handle.fileno())
-    os.replace(tmp, path)
-
-
-def summary_text(summary: RunSummary) -> str:
-    return json.dumps(summary.to_json(), indent=2, sort_keys=True, allow_nan=False) + "\n"
 
 
 def _finite(name: str, value: float | None) -> None:
@@ -80,8 +72,11 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
              duration: float | None = None, watchdog: float | None = 5.0,
              physics_rate: float = 100.0, odom_drift: float = 0.0,
              sinks: Sequence[SampleSink] = (), progress: IO[str] | None = None,
+             vepl: Path | None = None, monitor: bool = True,
              ) -> tuple[RunSummary, RunRecord]:
-    """Everything `rei run` does; extra ``sinks`` (the monitor) see the same stream as the trace."""
+    """Everything `rei run` does: generate, run, monitor with the .vepl's automata (the
+    default specification unless ``vepl``; none when ``monitor`` is False), write outputs.
+    Extra ``sinks`` see the same stream as the trace and the monitor."""
     for name, value in (("--duration", duration), ("--watchdog", watchdog),
                         ("--physics-rate", physics_rate), ("--odom-drift", odom_drift)):
         _finite(name, value)
@@ -96,6 +91,10 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
         out_dir.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise RunError(f"cannot create the output folder '{out_dir}': {exc.strerror}") from None
+    # The specification is checked and generated first: a bad .vepl is reported (exit 2)
+    # before any world is built.
+    automata = generate_automata(vepl, out_dir / "automata") if monitor else None
+    monitor_sink = MonitorSink(vepl, out_dir, automata=automata) if monitor else None
     world_dir = out_dir / "world"
     mission = generate_world(mission_path, world_dir)
     manifest = load_manifest(world_dir)
@@ -103,7 +102,7 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
     robot = make_controller(controller)
     config = RunConfig(seed=seed, physics_rate=physics_rate, duration=duration,
                        watchdog=watchdog, odom_drift=odom_drift)
-    for stale in (out_dir / SUMMARY, out_dir / TRACE):
+    for stale in (out_dir / SUMMARY, out_dir / TRACE, out_dir / EVENTS):
         stale.unlink(missing_ok=True)
 
     def show(now: float, end: float) -> None:
@@ -123,12 +122,16 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
         log(f"mission {mission.name} in room {mission.world.name}, controller {controller}, "
             f"seed {seed}")
         record = run_mission(mission, manifest, monitor, robot,
-                             [TraceWriter(out_dir / TRACE), *sinks], config,
+                             [TraceWriter(out_dir / TRACE),
+                              *([monitor_sink] if monitor_sink is not None else []), *sinks],
+                             config,
                              progress=show if progress is not None else None, log=log)
     if progress is not None:
         progress.write("\n")
     summary = summary_of(record, mission, controller, seed)
-    write_atomic(out_dir / SUMMARY, summary_text(summary))
+    if monitor_sink is not None and monitor_sink.result is not None:
+        summary = merge_summary(summary, monitor_sink.result)
+    write_summary(summary, out_dir)
     return summary, record
 
 
@@ -136,7 +139,7 @@ def run(args: argparse.Namespace) -> int:
     progress = None if args.quiet or not sys.stderr.isatty() else sys.stderr
     summary, record = run_into(args.mission, args.output, args.controller, args.seed,
                                args.duration, args.watchdog, args.physics_rate, args.odom_drift,
-                               progress=progress)
+                               progress=progress, vepl=args.vepl, monitor=not args.no_monitor)
     rtf = record.duration / record.wall_seconds if record.wall_seconds > 0 else math.inf
     cpu_rtf = record.duration / record.cpu_seconds if record.cpu_seconds > 0 else math.inf
     m = summary.measurements
@@ -150,4 +153,10 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_RUN_ERROR
     if summary.outcome == "interrupted":
         return EXIT_INTERRUPTED
+    if not args.no_monitor:
+        for verdict in summary.verdicts:
+            print(f"  {verdict.requirement}: {verdict.status} ({verdict.reason})", file=sys.stderr)
+        print(f"  total utility {summary.total_utility:g}; events in "
+              f"{args.output / EVENTS}", file=sys.stderr)
+        return EXIT_OK if summary.passed else EXIT_FAILED
     return EXIT_OK if summary.outcome == "completed" else EXIT_FAILED

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -33,19 +34,30 @@ def merge_summary(base: RunSummary, result: MonitorResult) -> RunSummary:
                    measurements={**base.measurements, **result.measurements})
 
 
-def _clean(value: Any) -> Any:
+def json_ready(value: Any) -> Any:
     """JSON without NaN/inf: a measurement that never got a value is null."""
     if isinstance(value, float) and not math.isfinite(value):
         return None
     if isinstance(value, dict):
-        return {k: _clean(v) for k, v in value.items()}
+        return {k: json_ready(v) for k, v in value.items()}
     if isinstance(value, list | tuple):
-        return [_clean(v) for v in value]
+        return [json_ready(v) for v in value]
     return value
 
 
+def summary_text(summary: RunSummary) -> str:
+    """summary.json's text: sorted keys, no NaN or inf (an unset measurement is null)."""
+    return json.dumps(json_ready(summary.to_json()), indent=1, sort_keys=True,
+                      allow_nan=False) + "\n"
+
+
 def write_summary(summary: RunSummary, out_dir: str | Path) -> Path:
+    """Write summary.json through a temporary file, so a kill never leaves it torn."""
     path = Path(out_dir) / "summary.json"
-    path.write_text(json.dumps(_clean(summary.to_json()), indent=1, sort_keys=True,
-                               allow_nan=False) + "\n", encoding="utf-8")
+    tmp = path.with_name(".summary.json.tmp")
+    with open(tmp, "w", encoding="utf-8", newline="\n") as handle:
+        handle.write(summary_text(summary))
+        handle.flush()
+        os.fsync(handle.fileno())
+    os.replace(tmp, path)
     return path

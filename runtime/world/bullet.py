@@ -10,13 +10,32 @@ them stay real. This module must never decide what the robot does or judge the r
 from __future__ import annotations
 
 import math
+import os
+import sys
 from pathlib import Path
 
 import numpy as np
-import pybullet as p
 
 from rei.runtime.errors import RunError
 from rei.runtime.world.manifest import BodySpec, WorldManifest
+
+
+def _import_pybullet():  # type: ignore[no-untyped-def]
+    """pybullet prints its build time from C at import; keep REI's terminal output clean."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    try:
+        with open(os.devnull, "w") as devnull:
+            os.dup2(devnull.fileno(), 2)
+            import pybullet  # noqa: PLC0415
+
+        return pybullet
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+
+
+p = _import_pybullet()
 
 
 def _quat(yaw: float) -> tuple[float, float, float, float]:

@@ -12,9 +12,11 @@ from rei.lang.rules import RULE_IDS
 from rei.lang.workspace import Workspace
 
 CORPUS = Path(__file__).parent / "corpus"
+VEPL_CORPUS = Path(__file__).parent.parent / "vepl" / "corpus"
 MARK = re.compile(r"(?://|#)! ([A-Z-]+)")
-HELPERS = {"valid.room", "bad_types.toml"}
-CORPUS_FILES = sorted(p for p in CORPUS.iterdir() if p.name not in HELPERS)
+HELPERS = {"valid.room", "bad_types.toml", "__init__.py"}
+CORPUS_FILES = sorted(p for folder in (CORPUS, VEPL_CORPUS) for p in folder.iterdir()
+                      if p.name not in HELPERS and p.is_file())
 
 # Rules whose inputs cannot be written as a corpus file; tests/lang/test_input_edges.py covers them.
 COVERED_ELSEWHERE = {"INPUT-READ", "INPUT-KIND", "INPUT-EMPTY", "INPUT-SIZE", "INPUT-ENCODING",

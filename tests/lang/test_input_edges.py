@@ -106,3 +106,11 @@ def test_json_output(write, capsys) -> None:  # type: ignore[no-untyped-def]
     main(["check", "--format", "json", str(write("bad.room", "room r { }"))])
     [item] = json.loads(capsys.readouterr().out)
     assert item["rule"] == "ROBOT-COUNT" and item["line"] == 1 and item["severity"] == "error"
+
+
+def test_deeply_nested_vepl_expression_is_refused_cleanly(write) -> None:  # type: ignore[no-untyped-def]
+    depth = 3000
+    text = ("specification deep\nparameters { eps_close = 0.25 eps_collision = 0.02 }\n"
+            "query q() {\n  " + "(" * depth + " laser_min < 1 " + ")" * depth + "\n}\n")
+    [d] = Workspace().check(write("deep.vepl", text))
+    assert d.rule == "SYNTAX-DEPTH"
