@@ -46,9 +46,13 @@ def _stop(process: subprocess.Popen[bytes], grace: float) -> None:
 
 
 @contextlib.contextmanager
-def loopback_cluster(workers: int = 2, threads: int = 1, start_timeout: float = 90.0
-                     ) -> Iterator[str]:
-    """Start a scheduler and ``workers`` worker processes on 127.0.0.1; yield the address."""
+def loopback_cluster(workers: int = 2, threads: int = 1, start_timeout: float = 90.0,
+                     nanny: bool = True) -> Iterator[str]:
+    """Start a scheduler and ``workers`` worker processes of ``threads`` threads each on
+    127.0.0.1; yield the scheduler's address. Without ``nanny`` (one worker only) the worker
+    runs tasks in its own process: fewer processes to share the cores with the runs."""
+    if not nanny and workers != 1:
+        raise CampaignError("a cluster without nannies has exactly one worker process")
     dask = _dask_program()
     processes: list[subprocess.Popen[bytes]] = []
     with tempfile.TemporaryDirectory(prefix="rei-dask-") as tmp:
@@ -63,7 +67,8 @@ def loopback_cluster(workers: int = 2, threads: int = 1, start_timeout: float = 
             address = _wait_for_address(info, processes[0], start_timeout, Path(tmp))
             processes.append(subprocess.Popen(
                 [*dask, "worker", address, "--host", "127.0.0.1", "--nworkers", str(workers),
-                 "--nthreads", str(threads), "--no-dashboard", "--memory-limit", "0"],
+                 "--nthreads", str(threads), "--no-dashboard", "--memory-limit", "0",
+                 "--nanny" if nanny else "--no-nanny"],
                 stdout=logs[1], stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
                 process_group=0, cwd=tmp))
             _wait_for_workers(address, workers, start_timeout, processes[1], Path(tmp))
