@@ -285,3 +285,23 @@ def test_kill_9_of_one_run_leaves_it_missing_and_resume_runs_it(tmp_path: Path) 
     assert "5 of 6 runs already recorded" in resumed.stderr
     records = CampaignStore.read(out)[2]
     assert len(records) == 6 and all(r.status == "ran" for r in records)
+
+
+@pytest.mark.slow
+def test_a_users_vepl_reaches_every_run_and_its_requirements_reach_junit(tmp_path: Path) -> None:
+    require_rei_run()
+    vepl = EXAMPLES / "navigation" / "human_safety.vepl"
+    out = tmp_path / "campaign"
+    done = subprocess.run([sys.executable, "-m", "rei.runtime.cli", "campaign",
+                           str(EXAMPLES / "navigation"), "-o", str(out), "--vepl", str(vepl),
+                           "--duration", "5", "--no-report"],
+                          capture_output=True, text=True, timeout=SAFETY_LIMIT)
+    assert done.returncode in (0, 1), done.stderr
+    (record,) = CampaignStore.read(out)[2]
+    assert record.summary is not None
+    requirements = {v.requirement for v in record.summary.verdicts}
+    assert requirements == {"HUMAN_PERSONAL_SPACE", "HUMAN_NO_COLLISION"}
+    cases = etree.parse(str(out / "junit.xml")).getroot().iter("testcase")
+    assert {c.get("name", "").split(" [")[0] for c in cases} == requirements
+    columns = (out / "results.csv").read_text().splitlines()[0].split(",")
+    assert {"req:HUMAN_PERSONAL_SPACE", "req:HUMAN_NO_COLLISION"} <= set(columns)
