@@ -7,6 +7,7 @@ It must never influence a run (runs depend on the plan only).
 from __future__ import annotations
 
 import datetime
+import importlib.util
 import platform
 import subprocess
 import sys
@@ -36,13 +37,34 @@ def git_revision(path: Path) -> str | None:
     return head.stdout.strip() + ("+dirty" if dirty.stdout.strip() else "")
 
 
+def controller_revision(controller: str) -> str | None:
+    """The version of a user's controller: its distribution's version, or the git revision of
+    its source (``module:Class`` or a path). Built-in controllers have REI's version."""
+    if Path(controller).exists():
+        return git_revision(Path(controller))
+    if ":" not in controller:
+        return None
+    module = controller.split(":", 1)[0]
+    top = module.split(".", 1)[0]
+    try:
+        spec = importlib.util.find_spec(module)
+    except (ImportError, ValueError):
+        spec = None
+    origin = spec.origin if spec is not None else None
+    revision = git_revision(Path(origin)) if origin and Path(origin).exists() else None
+    package = _version(top)
+    if revision and package:
+        return f"{package} ({revision})"
+    return revision or package
+
+
 def collect(argv: Sequence[str], engine: dict[str, object], controller: str | None,
             controller_version: str | None) -> dict[str, Any]:
     from rei.lang import __version__  # noqa: PLC0415
 
     revision = controller_version
-    if revision is None and controller and Path(controller).exists():
-        revision = git_revision(Path(controller))
+    if revision is None and controller:
+        revision = controller_revision(controller)
     return {
         "started": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
         "rei": __version__,

@@ -57,8 +57,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     parser.add_argument("--controller", default=None, metavar="NAME",
                         help="controller passed to `rei run` (default: its default)")
     parser.add_argument("--controller-version", default=None, metavar="TEXT",
-                        help="version of the controller, for the provenance (default: its git "
-                             "revision when --controller is a path in a git work tree)")
+                        help="version of the controller, for the provenance (default: the "
+                             "version of its installed package and/or the git revision of "
+                             "its module's source)")
     parser.add_argument("--vepl", type=Path, default=None, metavar="FILE",
                         help="monitor specification passed to `rei run`")
     parser.add_argument("--duration", type=_seconds, default=None, metavar="S",
