@@ -23,7 +23,8 @@ from rei.runtime.report.tables import (
     success_table,
 )
 
-MAX_MAPS = 12
+MAX_MAPS = 40
+"""Failed runs drawn from above (each ~40 kB of PNG); the rest are listed without a map."""
 MAX_FAILURES = 200
 """Failures listed in full; the rest are in junit.xml and results.csv."""
 
