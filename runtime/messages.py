@@ -17,8 +17,9 @@ import numpy as np
 
 from rei.catalogue import Footprint
 
-SCHEMA_VERSION = 1
-"""Bumped whenever a field changes meaning; readers refuse other versions."""
+SCHEMA_VERSION = 2
+"""Bumped whenever a field changes meaning; readers refuse other versions (2: the header
+carries the laser's mount point)."""
 
 
 class NavState(StrEnum):
@@ -74,6 +75,10 @@ class StreamHeader:
     tile_size: float
     floors: tuple[tuple[str, float, float], ...] = ()
     """(name, x, y) of every floor centre: the abstract model's inverse mapping."""
+    laser_mount: tuple[float, float] = (0.0, 0.0)
+    """(x, y) of the laser in the robot's frame, metres; its beams point along the robot's
+    heading plus the scan's angles. The monitor measures laser clearance from here to the
+    robot footprint's boundary (issue 6: the TurtleBot3 Waffle's laser sits 6.4 cm back)."""
 
 
 @dataclass(frozen=True)

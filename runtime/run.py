@@ -104,7 +104,8 @@ def stream_header(manifest: WorldManifest, monitor: MonitorConfig, mission: str,
         raise RunError("the monitor configuration's objects expected to be the world's walls "
                        "and objects in order; regenerate both targets from the same input")
     return StreamHeader(SCHEMA_VERSION, manifest.world, mission, seed, monitor.rate,
-                        monitor.robot, monitor.objects, manifest.tile_size, manifest.floors)
+                        monitor.robot, monitor.objects, manifest.tile_size, manifest.floors,
+                        (manifest.laser.mount_x, manifest.laser.mount_y))
 
 
 class _Contacts:

@@ -12,6 +12,7 @@ complete; a killed run leaves only the partial file. This module must never impo
 from __future__ import annotations
 
 import json
+import math
 import os
 from collections.abc import Iterator
 from pathlib import Path
@@ -78,7 +79,8 @@ def header_json(h: StreamHeader) -> dict[str, Any]:
     return {"format": FORMAT, "trace_version": TRACE_VERSION, "version": h.version,
             "world": h.world, "mission": h.mission, "seed": h.seed, "rate": h.rate,
             "robot": _object_json(h.robot), "objects": [_object_json(o) for o in h.objects],
-            "tile_size": h.tile_size, "floors": [list(f) for f in h.floors]}
+            "tile_size": h.tile_size, "floors": [list(f) for f in h.floors],
+            "laser_mount": list(h.laser_mount)}
 
 
 def _event_json(e: MissionEvent) -> dict[str, Any]:
@@ -163,7 +165,18 @@ def _header(data: dict[str, Any], path: Path) -> StreamHeader:
     return StreamHeader(data["version"], data["world"], data["mission"], data["seed"],
                         data["rate"], _object(data["robot"]),
                         tuple(_object(o) for o in data["objects"]), data["tile_size"],
-                        tuple((f[0], f[1], f[2]) for f in data["floors"]))
+                        tuple((f[0], f[1], f[2]) for f in data["floors"]),
+                        _pair(data["laser_mount"], path, "laser_mount"))
+
+
+def _pair(value: Any, path: Path, what: str) -> tuple[float, float]:
+    """Two finite numbers of the header (the edge rejects what the monitor cannot use)."""
+    if not (isinstance(value, list) and len(value) == 2
+            and all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                    and math.isfinite(v) for v in value)):
+        raise TraceError(f"{path}:1: {what}: expected two finite numbers [x, y], found "
+                         f"{value!r}")
+    return float(value[0]), float(value[1])
 
 
 def _samples(lines: Iterator[tuple[int, str]], n: int, path: Path) -> Iterator[Sample]:

@@ -29,7 +29,7 @@ def _header() -> StreamHeader:
                                        Box(0.281, 0.306), 0.141),
                         (ObservedObject("wall_1", "wall", "wall", Box(1.0, 1.0), 1.2),
                          ObservedObject("walker", "human", "human", Cylinder(0.25), 1.75)),
-                        1.0, (("a", 0.0, 0.0), ("b", 1.0, 0.0)))
+                        1.0, (("a", 0.0, 0.0), ("b", 1.0, 0.0)), (-0.064, 0.0))
 
 
 def _samples() -> list[Sample]:
@@ -86,3 +86,23 @@ def test_other_versions_and_files_are_refused(tmp_path: Path) -> None:
         read_trace(other)
     with pytest.raises(TraceError, match="cannot read"):
         read_trace(tmp_path / "missing.jsonl")
+
+
+def test_the_laser_mount_travels_in_the_header_and_a_bad_one_is_refused(tmp_path: Path) -> None:
+    path = tmp_path / "trace.jsonl"
+    write(path, _header(), _samples(), 0.4)
+    lines = path.read_text().splitlines()
+    head = json.loads(lines[0])
+    assert head["laser_mount"] == [-0.064, 0.0]
+    header, samples = read_trace(path)
+    assert header.laser_mount == (-0.064, 0.0) and len(list(samples)) == 5
+    for bad, found in (([0.1], r"\[0.1\]"), (None, "None"), (["x", 0.0], r"\['x', 0.0\]")):
+        head["laser_mount"] = bad
+        path.write_text("\n".join([json.dumps(head), *lines[1:]]) + "\n")
+        with pytest.raises(TraceError, match=f"laser_mount: expected two finite numbers .*"
+                                             f"found {found}"):
+            read_trace(path)
+    del head["laser_mount"]
+    path.write_text("\n".join([json.dumps(head), *lines[1:]]) + "\n")
+    with pytest.raises(TraceError, match="damaged trace header"):
+        read_trace(path)
