@@ -5,9 +5,17 @@ robot's footprint radius of any wall or static object and made dearer near them,
 to the middle of passages. Local planning: a dynamic-window search over (linear, angular)
 velocity pairs within the drive limits, each rolled out for a short horizon against the
 points the laser sees (humans and moving objects included), scored by progress towards a
-lookahead point on the path, clearance and speed. The navigator aborts a goal that makes no
-progress for ``BLOCKED_AFTER`` seconds (blocked or oscillating, thesis 7.4.4), and a goal with
-no path. It reads only its observation (odometry and laser), never the ground truth.
+lookahead point on the path, clearance and speed.
+
+Recovery (runtime/robot/recovery.py, as ROS move_base / Nav2 do it): when the local planner
+finds no admissible motion for ``STUCK_AFTER`` seconds, or the robot makes no progress for
+``OSCILLATE_AFTER`` seconds, the navigator backs up, re-plans around what the laser sees (then
+with a reduced inflation), turns towards the new path, waits for a person to walk on, and
+drives on with a tighter laser margin for a while. It aborts a goal only when it made no
+progress for ``BLOCKED_AFTER`` seconds and every recovery has been tried since (or, at the
+latest, after ``BLOCKED_AFTER + ABORT_GRACE`` seconds; blocked or oscillating, thesis 7.4.4),
+and a goal with no path. It reads only its observation (odometry and laser), never the ground
+truth, and never commands a motion that brings its footprint into a point the laser sees.
 This module must never import pybullet.
 """
 
@@ -27,6 +35,7 @@ from rei.runtime.robot.protocol import (
     Observation,
     VelocityCommand,
 )
+from rei.runtime.robot.recovery import Recovery
 
 RESOLUTION = 0.2
 """Metres per planning cell: a tile of 1 m holds 5, so a 1 m passage keeps free centres."""
@@ -42,11 +51,18 @@ SENSE_RADIUS = 1.6
 LOCAL_RES = 0.04
 """Metres per cell of the robot-centred grid the roll-outs are checked on."""
 BLOCKED_AFTER = 30.0
-"""Seconds without 0.1 m of progress before a goal is aborted."""
+"""Seconds without 0.1 m of progress before a goal is aborted (once the recoveries failed)."""
+ABORT_GRACE = 15.0
+"""Seconds a recovery still running at ``BLOCKED_AFTER`` may go on before the goal aborts."""
 FINAL_APPROACH = 0.35
 """Metres from the goal where the rollouts give way to a direct approach."""
-REPLAN_AFTER = 3.0
-"""Seconds without an admissible motion before replanning around what the laser sees."""
+STUCK_AFTER = 1.0
+"""Seconds without an admissible motion before a recovery starts."""
+OSCILLATE_AFTER = 10.0
+"""Seconds without progress (while moving, or since the last recovery) before a recovery."""
+TIGHT_MARGIN = 0.01
+"""Metres kept from laser points by the local planner for ``TIGHT_FOR`` s after a recovery."""
+TIGHT_FOR = 10.0
 
 
 def clearance_field(xs: np.ndarray, ys: np.ndarray, ctx: ControllerContext,
@@ -101,6 +117,7 @@ class ReferenceNavigator:
         self._best_remaining = math.inf
         self._last_progress_time = 0.0
         self._stuck_since: float | None = None
+        self._tight_until = -math.inf
         hx, hy = context.robot_size[0] / 2, context.robot_size[1] / 2
         self._half = (hx, hy)
         self._radius = math.hypot(hx, hy)
@@ -111,6 +128,10 @@ class ReferenceNavigator:
         self._wmax = context.drive.max_angular
         self._build_grid(context)
         self._build_rollouts()
+        laser = context.laser
+        # Backing up is only done where the laser sees behind the robot.
+        self._recovery = Recovery(self._half, self._vmax, self._wmax,
+                                  rear_visible=laser.fov >= 1.9 * math.pi)
 
     def _build_grid(self, ctx: ControllerContext) -> None:
         x0, y0, x1, y1 = ctx.bounds
@@ -121,7 +142,13 @@ class ReferenceNavigator:
         self._origin = (x0, y0)
         self._shape = (nx_, ny_)
         self._clear = clear
-        inflate = self._radius + 0.01
+        self._graph, self._free_cells = self._grid_graph(self._radius + 0.01)
+        self._reduced: tuple[nx.Graph, np.ndarray] | None = None
+
+    def _grid_graph(self, inflate: float) -> tuple[nx.Graph, np.ndarray]:
+        """The planning graph of the cells farther than ``inflate`` from the static map."""
+        clear = self._clear
+        nx_, ny_ = self._shape
         free = clear > inflate
         cost = 1.0 + 4.0 * np.clip((COMFORT - clear) / COMFORT, 0.0, 1.0)
         graph: nx.Graph = nx.Graph()
@@ -140,8 +167,14 @@ class ReferenceNavigator:
                 ((p0, p1), (q0, q1), c) for p0, p1, q0, q1, c in
                 zip(a[:, 0].tolist(), a[:, 1].tolist(), b[:, 0].tolist(), b[:, 1].tolist(),
                     w.tolist(), strict=False))
-        self._graph = graph
-        self._free_cells = idx
+        return graph, idx
+
+    def _reduced_graph(self) -> tuple[nx.Graph, np.ndarray]:
+        """The graph with the inflation cut to the half width (built on first use): passages
+        the robot fits through only when aligned with them, which the local planner checks."""
+        if self._reduced is None:
+            self._reduced = self._grid_graph(max(self._half) + 0.01)
+        return self._reduced
 
     def _build_rollouts(self) -> None:
         """Velocity pairs, their rolled-out poses, and each one's swept-distance map.
@@ -204,25 +237,29 @@ class ReferenceNavigator:
         j = int((y - self._origin[1]) / RESOLUTION)
         return min(max(i, 0), self._shape[0] - 1), min(max(j, 0), self._shape[1] - 1)
 
-    def _nearest_free(self, cell: tuple[int, int]) -> tuple[int, int] | None:
-        if cell in self._graph:
+    @staticmethod
+    def _nearest_free(cell: tuple[int, int], graph: nx.Graph,
+                      free_cells: np.ndarray) -> tuple[int, int] | None:
+        if cell in graph:
             return cell
-        if len(self._free_cells) == 0:
+        if len(free_cells) == 0:
             return None
-        d = np.abs(self._free_cells - np.array(cell)).sum(axis=1)
-        best = self._free_cells[int(np.argmin(d))]
+        d = np.abs(free_cells - np.array(cell)).sum(axis=1)
+        best = free_cells[int(np.argmin(d))]
         return int(best[0]), int(best[1])
 
     def _plan(self, start: tuple[float, float], goal: NavGoal,
-              blocked: set[tuple[int, int]] | None = None) -> np.ndarray | None:
-        a = self._nearest_free(self._cell(*start))
-        b = self._nearest_free(self._cell(goal.x, goal.y))
+              blocked: set[tuple[int, int]] | None = None,
+              reduced: bool = False) -> np.ndarray | None:
+        base, free_cells = self._reduced_graph() if reduced else (self._graph, self._free_cells)
+        a = self._nearest_free(self._cell(*start), base, free_cells)
+        b = self._nearest_free(self._cell(goal.x, goal.y), base, free_cells)
         if a is None or b is None:
             return None
-        graph = self._graph
+        graph = base
         if blocked:
             # A view hides what the laser saw for this plan without copying the graph.
-            graph = nx.restricted_view(self._graph, [c for c in blocked if c not in (a, b)], [])
+            graph = nx.restricted_view(base, [c for c in blocked if c not in (a, b)], [])
 
         def h(u: tuple[int, int], v: tuple[int, int]) -> float:
             return math.hypot(u[0] - v[0], u[1] - v[1])
@@ -283,26 +320,77 @@ class ReferenceNavigator:
                 return STOP
             turn = float(np.clip(2.0 * err, -0.6 * self._wmax, 0.6 * self._wmax))
             return VelocityCommand(0.0, turn)
+        now = observation.time
+        recovery = self._recovery
         remaining = self._advance((x, y))
         if remaining < self._best_remaining - 0.1:
             self._best_remaining = remaining
-            self._last_progress_time = observation.time
-        elif observation.time - self._last_progress_time > BLOCKED_AFTER:
-            tracker.abort(f"no progress for {BLOCKED_AFTER:g} s (blocked or oscillating)")
-            return STOP
+            self._last_progress_time = now
+            recovery.progress()
+        else:
+            idle = now - self._last_progress_time
+            if idle > BLOCKED_AFTER and (recovery.exhausted or idle > BLOCKED_AFTER + ABORT_GRACE):
+                tracker.abort(f"no progress for {idle:.0f} s after {recovery.rounds} recovery "
+                              f"round(s) (blocked or oscillating)")
+                return STOP
         points = self._laser_points(observation)
+        pose = observation.odom_pose
+        if recovery.active:
+            action = recovery.step(now, pose, points,
+                                   lambda reduced: self._replan_around(points, goal, (x, y),
+                                                                       reduced),
+                                   lambda: self._path_heading((x, y)))
+            if action.command is not None:
+                return action.command
+            # The level is over: drive on, keeping closer to obstacles for a while.
+            self._tight_until = now + TIGHT_FOR
+            self._stuck_since = None
         if dist < FINAL_APPROACH:
-            return self._approach(observation.odom_pose, goal, dist, points)
-        cmd = self._choose(observation.odom_pose, points, dist)
-        if cmd is None:
+            cmd = self._approach(pose, goal, dist, points)
+            if cmd.linear == 0.0 and now - max(self._last_progress_time,
+                                              recovery.ended_at or -math.inf) > OSCILLATE_AFTER:
+                return self._start_recovery(now, pose, points, goal)
+            return cmd
+        margin = TIGHT_MARGIN if now < self._tight_until else MARGIN
+        cmd = self._choose(pose, points, dist, margin)
+        heading = self._path_heading((x, y))
+        aligned = heading is not None and abs(math.remainder(heading - yaw, math.tau)) < 0.5
+        # Turning on the spot although already facing the path is the local planner's way
+        # of saying that nothing ahead is admissible: as stuck as finding nothing at all.
+        if cmd is None or (cmd.linear <= 0.0 and aligned):
             if self._stuck_since is None:
-                self._stuck_since = observation.time
-            elif observation.time - self._stuck_since > REPLAN_AFTER:
-                self._replan_around(points, goal, (x, y))
-                self._stuck_since = observation.time
-            return STOP
+                self._stuck_since = now
+            if now - self._stuck_since >= STUCK_AFTER:
+                return self._start_recovery(now, pose, points, goal)
+            return STOP if cmd is None else cmd
         self._stuck_since = None
+        if now - max(self._last_progress_time, recovery.ended_at or -math.inf) > OSCILLATE_AFTER:
+            return self._start_recovery(now, pose, points, goal)
         return cmd
+
+    def _start_recovery(self, now: float, pose: tuple[float, float, float], points: np.ndarray,
+                        goal: NavGoal) -> VelocityCommand:
+        """Begin the next level of the recovery ladder and return its first command."""
+        recovery = self._recovery
+        recovery.begin(now, pose)
+        self._stuck_since = None
+        action = recovery.step(now, pose, points,
+                               lambda reduced: self._replan_around(points, goal, pose[:2],
+                                                                   reduced),
+                               lambda: self._path_heading(pose[:2]))
+        if action.command is not None:
+            return action.command
+        self._tight_until = now + TIGHT_FOR
+        return STOP
+
+    def _path_heading(self, xy: tuple[float, float]) -> float | None:
+        """World direction from the robot to the lookahead point of its path."""
+        if self._path is None:
+            return None
+        target = self._lookahead(xy)
+        if math.hypot(target[0] - xy[0], target[1] - xy[1]) < 1e-6:
+            return None
+        return math.atan2(target[1] - xy[1], target[0] - xy[0])
 
     def _approach(self, pose: tuple[float, float, float], goal: NavGoal, dist: float,
                   points: np.ndarray) -> VelocityCommand:
@@ -333,7 +421,8 @@ class ReferenceNavigator:
         rest = path[self._index:]
         d = np.hypot(rest[:, 0] - xy[0], rest[:, 1] - xy[1])
         beyond = np.nonzero(d >= LOOKAHEAD)[0]
-        return rest[int(beyond[0])] if len(beyond) else rest[-1]
+        point: np.ndarray = rest[int(beyond[0])] if len(beyond) else rest[-1]
+        return point
 
     def _laser_points(self, observation: Observation) -> np.ndarray:
         """Laser endpoints near the robot, in the robot's frame."""
@@ -352,7 +441,7 @@ class ReferenceNavigator:
         return np.stack((mx + r[keep] * cos[keep], my + r[keep] * sin[keep]), axis=1)
 
     def _choose(self, pose: tuple[float, float, float], points: np.ndarray,
-                dist: float) -> VelocityCommand | None:
+                dist: float, margin: float = MARGIN) -> VelocityCommand | None:
         x, y, yaw = pose
         target = self._lookahead((x, y))
         c, s = math.cos(yaw), math.sin(yaw)
@@ -367,7 +456,7 @@ class ReferenceNavigator:
             clearance = gaps.min(axis=1) if gaps.shape[1] else np.full(len(self._cmds), 0.5)
         else:
             clearance = np.full(len(self._cmds), 0.5)
-        hit = clearance < MARGIN
+        hit = clearance < margin
         clearance = np.clip(clearance, 0.0, 0.5)
         v, w = self._cmds[:, 0], self._cmds[:, 1]
         end = self._roll_end
@@ -387,22 +476,42 @@ class ReferenceNavigator:
             return None
         return VelocityCommand(float(v[best]), float(w[best]))
 
-    def _replan_around(self, points: np.ndarray, goal: NavGoal, xy: tuple[float, float]) -> None:
-        """Replan with the cells around what the laser sees now marked as blocked."""
-        if self._pose is None or not len(points):
-            return
+    def _replan_around(self, points: np.ndarray, goal: NavGoal, xy: tuple[float, float],
+                       reduced: bool = False) -> bool:
+        """Replan with the cells around what the laser sees now marked as blocked (with the
+        inflation cut to the half width when ``reduced``); True when a path was adopted."""
+        if self._pose is None:
+            return False
         x, y, yaw = self._pose
         c, s = math.cos(yaw), math.sin(yaw)
         wx = x + c * points[:, 0] - s * points[:, 1]
         wy = y + s * points[:, 0] + c * points[:, 1]
-        grow = int(math.ceil((self._radius + 0.05) / RESOLUTION))
-        blocked: set[tuple[int, int]] = set()
-        for px, py in zip(wx, wy, strict=False):
-            ci, cj = self._cell(float(px), float(py))
-            for di in range(-grow, grow + 1):
-                for dj in range(-grow, grow + 1):
-                    blocked.add((ci + di, cj + dj))
-        blocked.discard(self._cell(*xy))
-        path = self._plan(xy, goal, blocked)
-        if path is not None:
-            self._path, self._index, self._tail = path, 0, None
+        # A cell is blocked when its centre lies within the inflation of a point the laser
+        # sees; cells where the robot stands are free whatever the laser says around them.
+        inflate = (max(self._half) if reduced else self._radius) + 0.05
+        grow = int(math.ceil(inflate / RESOLUTION)) + 1
+        ci = np.floor((wx - self._origin[0]) / RESOLUTION).astype(np.int64)
+        cj = np.floor((wy - self._origin[1]) / RESOLUTION).astype(np.int64)
+        off = np.arange(-grow, grow + 1)
+        ii = (ci[:, None, None] + off[None, :, None]).repeat(len(off), axis=2)
+        jj = (cj[:, None, None] + off[None, None, :]).repeat(len(off), axis=1)
+        cx = self._origin[0] + (ii + 0.5) * RESOLUTION
+        cy = self._origin[1] + (jj + 0.5) * RESOLUTION
+        near = np.hypot(cx - wx[:, None, None], cy - wy[:, None, None]) < inflate
+        near &= np.hypot(cx - xy[0], cy - xy[1]) > RESOLUTION
+        inside = (ii >= 0) & (ii < self._shape[0]) & (jj >= 0) & (jj < self._shape[1])
+        keep = near & inside
+        blocked: set[tuple[int, int]] = set(zip(ii[keep].tolist(), jj[keep].tolist(),
+                                                strict=True))
+        path = self._plan(xy, goal, blocked, reduced)
+        if path is None and blocked:
+            # What the laser sees shuts every way: the map alone may still have one (a
+            # person about to move on); keep to it rather than to the stale path.
+            path = self._plan(xy, goal, None, reduced)
+        if path is None:
+            return False
+        self._path, self._index, self._tail = path, 0, None
+        # A new path is measured afresh: a longer detour is not a loss of progress, but
+        # adopting it is no progress either (the abort clock keeps running).
+        self._best_remaining = self._remaining
+        return True
