@@ -23,8 +23,9 @@ from rei.lang.vepl.document import load_vepl
 from rei.lang.vepl.linker import NAMED_STATES
 
 OUTPUT = "automata.py"
-FORMAT_VERSION = 1
-INTERPOLATED = {"laser_min", "speed", "time", "odom_error"}
+FORMAT_VERSION = 2
+"""Must equal rei.runtime.monitor.automata.FORMAT_VERSION (2: reads laser_clearance)."""
+INTERPOLATED = {"laser_min", "laser_clearance", "speed", "time", "odom_error"}
 """Measures that change continuously between samples (crossings are replayed in order)."""
 
 

@@ -18,8 +18,8 @@ CompareOp = Literal["<", "<=", ">", ">=", "==", "!="]
 
 TASK_STATES = ("pending", "active", "succeeded", "failed")
 MISSION_STATES = ("pending", "running", "ended")
-SCALAR_MEASURES = ("laser_min", "speed", "time", "odom_error", "robot_inradius",
-                   "robot_circumradius")
+SCALAR_MEASURES = ("laser_min", "laser_clearance", "speed", "time", "odom_error",
+                   "robot_inradius", "robot_circumradius")
 """Names an expression may read from the robot description without arguments."""
 
 

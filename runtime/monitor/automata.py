@@ -21,8 +21,9 @@ from rei.lang.vepl import model as vm
 from rei.runtime.monitor.cep import Occurrence
 from rei.runtime.monitor.errors import MonitorError
 
-FORMAT_VERSION = 1
-"""Bumped when the generated module's contract changes; the host refuses other versions."""
+FORMAT_VERSION = 2
+"""Bumped when the generated module's contract changes; the host refuses other versions
+(2: QueryInputs gained ``laser_clearance``)."""
 
 
 @dataclass(frozen=True)
@@ -61,7 +62,9 @@ class QueryInputs:
 
     Concrete environment: ``distance`` (footprint distance robot -> every observed object);
     abstract environment: ``robot_floor`` (which floor the robot stands on); robot
-    description: laser minimum, speed, odometry error, navigation state, task states.
+    description: laser minimum, laser clearance (smallest range minus the distance from the
+    mount point to the footprint boundary along that beam), speed, odometry error,
+    navigation state, task states.
     """
 
     distance: np.ndarray
@@ -69,6 +72,7 @@ class QueryInputs:
     robot_floor: np.ndarray
     task_state: np.ndarray
     laser_min: float
+    laser_clearance: float
     speed: float
     time: float
     odom_error: float

@@ -3,8 +3,9 @@
 Concrete environment: pose, twist and footprint of every observed object, and the footprint
 distance from the robot to each (vectorised, rei.runtime.monitor.geometry). Abstract
 environment: the floor the robot stands on, through the generators' inverse mapping (the
-floor centres in the stream header). Robot description: odometry, laser minimum, navigation
-state, mission and task states. Also the sample hygiene: non-finite, out-of-order,
+floor centres in the stream header). Robot description: odometry, laser minimum, laser
+clearance (from the latest scan, rei.runtime.monitor.laser), navigation state, mission and
+task states. Also the sample hygiene: non-finite, out-of-order,
 duplicated and missing samples are counted, never modelled. This module must never import
 the simulator.
 """
@@ -21,6 +22,7 @@ from rei.lang.vepl.model import MISSION_STATES, TASK_STATES
 from rei.runtime.messages import MissionEvent, Sample, StreamHeader
 from rei.runtime.monitor.automata import QueryInputs
 from rei.runtime.monitor.geometry import FootprintSet
+from rei.runtime.monitor.laser import BeamEdges, clearance
 
 FAR_AWAY = 1e3
 """Distances and laser readings of the baseline before the first sample: nothing is near,
@@ -81,6 +83,9 @@ class RuntimeModel:
         self._floor_xy = np.array([(f[1], f[2]) for f in header.floors], dtype=float).reshape(
             -1, 2)
         self.inradius = self.footprints.robot_inradius()
+        self.beam_edges = BeamEdges(header.robot.footprint, header.laser_mount)
+        self.laser_clearance = FAR_AWAY
+        """Of the latest scan a sample carried; scans come only when new, so it is kept."""
         self.circumradius = self.footprints.robot_bound
         self.tasks: list[TaskRecord] = []
         self.task_codes = np.zeros(0, dtype=np.int64)
@@ -97,7 +102,8 @@ class RuntimeModel:
         n = len(self.object_names)
         return QueryInputs(np.full(n, FAR_AWAY), self.kind_masks,
                            np.zeros(len(self.floor_names), dtype=bool), self.task_codes.copy(),
-                           FAR_AWAY, 0.0, 0.0, 0.0, self.inradius, self.circumradius,
+                           FAR_AWAY, FAR_AWAY, 0.0, 0.0, 0.0, self.inradius,
+                           self.circumradius,
                            MISSION_CODE["pending"], NAV_CODE["idle"])
 
     def observe(self, s: Sample) -> QueryInputs:
@@ -116,10 +122,14 @@ class RuntimeModel:
         if self._last_xy is not None:
             self.path_length += math.hypot(x - self._last_xy[0], y - self._last_xy[1])
         self._last_xy = (x, y)
+        scan = s.belief.scan
+        if scan is not None:
+            self.laser_clearance = clearance(scan, self.beam_edges.of(scan))
         ox, oy, _ = s.belief.odom
         return QueryInputs(
             distance, self.kind_masks, self._robot_floor(x, y), self.task_codes.copy(),
-            float(s.belief.laser_min), math.hypot(s.robot_twist[0], s.robot_twist[1]),
+            float(s.belief.laser_min), self.laser_clearance,
+            math.hypot(s.robot_twist[0], s.robot_twist[1]),
             s.time, math.hypot(ox - x, oy - y), self.inradius, self.circumradius,
             self.mission_state, NAV_CODE.get(s.belief.nav_state.value, 0))
 
@@ -172,6 +182,8 @@ def interpolate(a: QueryInputs, b: QueryInputs, f: float) -> QueryInputs:
     continuous measures only; states come from ``b``)."""
     return replace(b, distance=a.distance + f * (b.distance - a.distance),
                    laser_min=a.laser_min + f * (b.laser_min - a.laser_min),
+                   laser_clearance=a.laser_clearance + f * (b.laser_clearance
+                                                            - a.laser_clearance),
                    speed=a.speed + f * (b.speed - a.speed),
                    time=a.time + f * (b.time - a.time),
                    odom_error=a.odom_error + f * (b.odom_error - a.odom_error))
@@ -208,6 +220,15 @@ def check_sample(s: Sample, header: StreamHeader) -> str | None:
                s.belief.laser_min)
     if not all(map(math.isfinite, scalars)):
         return "non_finite"
+    scan = s.belief.scan
+    if scan is not None:
+        ranges = np.asarray(scan.ranges)
+        if ranges.ndim != 1:
+            return "malformed"
+        # NaN and +inf ranges are beams without a return (not counted); -inf is nonsense
+        if not all(map(math.isfinite, (scan.angle_min, scan.angle_increment, scan.range_max))) \
+                or bool(np.isneginf(ranges).any()):
+            return "non_finite"
     # x * 0 is 0 for every finite x and NaN for inf and NaN: one reduction per array
     with np.errstate(invalid="ignore"):
         if (poses * 0.0).sum() != 0.0 or (twists * 0.0).sum() != 0.0:

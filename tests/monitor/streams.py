@@ -9,6 +9,7 @@ import numpy as np
 from rei.catalogue import Box, Cylinder
 from rei.runtime.messages import (
     SCHEMA_VERSION,
+    LaserScan,
     MissionEvent,
     NavState,
     ObservedObject,
@@ -34,9 +35,16 @@ def header(objects: Sequence[ObservedObject], floors: tuple[tuple[str, float, fl
                         tuple(objects), 1.0, floors)
 
 
+def forward_scan(forward: float) -> LaserScan:
+    """A 4-beam scan (back, right, forward, left) whose forward beam reads ``forward``; the
+    others see nothing."""
+    return LaserScan(-np.pi, np.pi / 2, 0.12, 3.5, np.array([3.5, 3.5, forward, 3.5]))
+
+
 def sample(seq: int, time: float, pose: tuple[float, float, float], poses: np.ndarray,
-           laser_min: float = 3.5, events: tuple[MissionEvent, ...] = ()) -> Sample:
-    belief = RobotBelief(pose, (0.0, 0.0), laser_min, None, NavState.ACTIVE, None)
+           laser_min: float = 3.5, events: tuple[MissionEvent, ...] = (),
+           scan: LaserScan | None = None) -> Sample:
+    belief = RobotBelief(pose, (0.0, 0.0), laser_min, scan, NavState.ACTIVE, None)
     n = len(poses)
     return Sample(seq, time, pose, (0.0, 0.0, 0.0), np.asarray(poses, dtype=float).reshape(n, 3),
                   np.zeros((n, 3)), belief, events)
@@ -47,13 +55,16 @@ def drive(placed: Sequence[tuple[ObservedObject, tuple[float, float, float]]],
           laser: Sequence[float] | None = None,
           events: dict[int, tuple[MissionEvent, ...]] | None = None
           ) -> tuple[StreamHeader, list[Sample]]:
-    """A header and one sample per robot pose, 1/rate seconds apart, objects standing still."""
+    """A header and one sample per robot pose, 1/rate seconds apart, objects standing still.
+    With ``laser``, every sample carries a new scan whose forward beam reads that range from
+    the laser at the footprint's centre (the header's mount)."""
     h = header([o for o, _ in placed])
     poses = np.array([p for _, p in placed], dtype=float).reshape(len(placed), 3)
     samples = []
     for i, pose in enumerate(robot_poses):
         lm = laser[i] if laser is not None else 3.5
-        samples.append(sample(i, i / rate, pose, poses, lm, (events or {}).get(i, ())))
+        scan = forward_scan(lm) if laser is not None else None
+        samples.append(sample(i, i / rate, pose, poses, lm, (events or {}).get(i, ()), scan))
     return h, samples
 
 

@@ -83,7 +83,7 @@ def test_human_collisions_are_counted_against_n_collision(tmp_path: Path,
 
 def test_laser_requirement_passes_when_the_laser_agrees(tmp_path: Path, automata: Path) -> None:
     poses = straight(0.0, 1.2, 13)
-    # a laser at the footprint centre sees the wall face at 1.5 - x
+    # a laser at the footprint centre sees the wall face at 1.5 - x along its forward beam
     laser = [1.5 - x for x, _, _ in poses]
     h, samples = drive([wall("w", 2.0, 0.0)], poses, laser=laser)
     _, result = monitor(h, samples, tmp_path, automata=automata)
