@@ -7,8 +7,12 @@ humans (transitions happen, most samples change nothing). Measured in the same r
 * replay: the same stream read back from a trace file and fed the same way
   (``rei replay`` without the CLI);
 * hand-written: a plain-Python monitor of the same patterns (FAR/CLOSE/COLLISION on the
-  minimum footprint distance, laser close/collision, mission signals, utilities) using the
-  same vectorised geometry; the baseline the generated automata are compared with.
+  minimum footprint distance, laser close/collision on the laser clearance, mission signals,
+  utilities) using the same vectorised geometry; the baseline the generated automata are
+  compared with.
+
+Every other sample carries a new 360-beam scan from a laser mounted off-centre, as a real
+run's 5 Hz laser does at 10 Hz sampling, so the laser clearance is computed as in a run.
 
 Rates are samples per CPU second of this process (time.process_time), so other load on
 the machine does not distort them.
@@ -31,6 +35,7 @@ from rei.lang.vepl import load_vepl
 from rei.runtime.collector.trace import read_trace, write
 from rei.runtime.messages import (
     SCHEMA_VERSION,
+    LaserScan,
     MissionEvent,
     NavState,
     ObservedObject,
@@ -40,8 +45,11 @@ from rei.runtime.messages import (
 )
 from rei.runtime.monitor import MonitorSink, generate_automata
 from rei.runtime.monitor.geometry import FootprintSet
+from rei.runtime.monitor.laser import BeamEdges, clearance
 
 ROBOT = ObservedObject("robot", "static", "turtlebot3_waffle", Box(0.281, 0.306), 0.2)
+MOUNT = (-0.064, 0.0)
+BEAMS, MAX_RANGE = 360, 3.5
 UTILITY = {"SIG_MISSION_BEGIN": 20, "SIG_MISSION_END": 20, "SIG_MISSION_TASK_START": 5,
            "SIG_MISSION_TASK_FAIL": -100, "SIG_MISSION_TASK_SUCCESS": 10,
            "SIG_GEOM_FAR_TRANSIT_CLOSE": -2, "SIG_GEOM_CLOSE_TRANSIT_FAR": 1,
@@ -61,8 +69,9 @@ def scenario(n_objects: int, n_samples: int, seed: int = 0) -> tuple[StreamHeade
         objects.append(ObservedObject(f"o{i}", kind, kind, fp, 1.0))  # type: ignore[arg-type]
         poses[i] = (rng.uniform(0, side), rng.uniform(0, side), rng.uniform(-math.pi, math.pi))
     header = StreamHeader(SCHEMA_VERSION, "bench", "bench", seed, 10.0, ROBOT, tuple(objects),
-                          1.0)
+                          1.0, (), MOUNT)
     samples = []
+    laser_min = MAX_RANGE
     for k in range(n_samples):
         t = k / 10.0
         x = (0.05 * k) % side
@@ -72,9 +81,19 @@ def scenario(n_objects: int, n_samples: int, seed: int = 0) -> tuple[StreamHeade
             events = (MissionEvent("begin", t), MissionEvent("task_start", t, "g", 0))
         elif k == n_samples - 1:
             events = (MissionEvent("task_success", t, "g", 0), MissionEvent("end", t))
-        d = poses[:, :2] - (x, y)
-        laser = float(max(0.12, np.min(np.hypot(d[:, 0], d[:, 1])) - 0.4))
-        belief = RobotBelief((x, y, 0.0), (0.5, 0.0), laser, None, NavState.ACTIVE, "g")
+        scan = None
+        if k % 2 == 0:
+            # a few beams towards the nearest object see it; the others see nothing
+            d = poses[:, :2] - (x + MOUNT[0], y + MOUNT[1])
+            near = int(np.argmin(np.hypot(d[:, 0], d[:, 1])))
+            reach = float(max(0.12, math.hypot(*d[near]) - 0.4))
+            ranges = np.full(BEAMS, MAX_RANGE)
+            beam = int(round((math.atan2(d[near, 1], d[near, 0]) + math.pi) * BEAMS
+                             / (2 * math.pi))) % BEAMS
+            ranges[np.arange(beam - 2, beam + 3) % BEAMS] = min(reach, MAX_RANGE)
+            scan = LaserScan(-math.pi, 2 * math.pi / BEAMS, 0.12, MAX_RANGE, ranges)
+            laser_min = float(ranges.min())
+        belief = RobotBelief((x, y, 0.0), (0.5, 0.0), laser_min, scan, NavState.ACTIVE, "g")
         samples.append(Sample(k, t, (x, y, 0.0), (0.5, 0.0, 0.0), poses, np.zeros_like(poses),
                               belief, events))
     return header, samples
@@ -86,7 +105,8 @@ class HandWrittenMonitor:
     def __init__(self, header: StreamHeader, eps_close: float, eps_collision: float) -> None:
         self.fs = FootprintSet.build(header.robot.footprint,
                                      [o.footprint for o in header.objects], header.tile_size)
-        self.inradius = self.fs.robot_inradius()
+        self.edges = BeamEdges(header.robot.footprint, header.laser_mount)
+        self.clearance = 1e3
         self.close, self.collision = eps_close, eps_collision
         self.geom = "FAR"
         self.laser = "FAR"
@@ -109,7 +129,9 @@ class HandWrittenMonitor:
                                                    else -1)]
             self._raise(s.time, f"SIG_GEOM_{self.geom}_TRANSIT_{step}")
             self.geom = step
-        laser = self._state(s.belief.laser_min - self.inradius)
+        if s.belief.scan is not None:
+            self.clearance = clearance(s.belief.scan, self.edges.of(s.belief.scan))
+        laser = self._state(self.clearance)
         if laser != self.laser:
             if laser == "COLLISION":
                 self._raise(s.time, "SIG_LASER_CLOSE_TRANSIT_COLLISION")
@@ -159,10 +181,13 @@ def bench(n_objects: int, n_samples: int, work: Path) -> dict[str, float]:
     assert sink.result is not None
     geom_auto = sum(v for k, v in sink.result.signal_counts.items() if k.startswith("SIG_GEOM"))
     geom_hand = sum(1 for _, k, _ in hand.signals if k.startswith("SIG_GEOM"))
+    laser_auto = sum(v for k, v in sink.result.signal_counts.items() if k.startswith("SIG_LASER"))
+    laser_hand = sum(1 for _, k, _ in hand.signals if k.startswith("SIG_LASER"))
     return {"objects": n_objects, "samples": n_samples, "live": rate(n_samples, live),
             "replay": rate(n_samples, replay), "hand": rate(n_samples, handwritten),
             "ratio": live / handwritten if handwritten > 0 else math.inf,
-            "geom_signals": geom_auto, "geom_signals_hand": geom_hand}
+            "geom_signals": geom_auto, "geom_signals_hand": geom_hand,
+            "laser_signals": laser_auto, "laser_signals_hand": laser_hand}
 
 
 def main() -> None:
@@ -173,13 +198,15 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         work = args.out or Path(tmp)
         print("| objects | samples | live samples/s | replay samples/s | hand-written samples/s "
-              "| live / hand time | geometric signals (automata / hand) |")
-        print("|---:|---:|---:|---:|---:|---:|---:|")
+              "| live / hand time | geometric signals (automata / hand) "
+              "| laser signals (automata / hand) |")
+        print("|---:|---:|---:|---:|---:|---:|---:|---:|")
         for n in (10, 200, 2000):
             r = bench(n, args.samples, work)
             print(f"| {n:,} | {r['samples']:,} | {r['live']:,.0f} | {r['replay']:,.0f} | "
                   f"{r['hand']:,.0f} | {r['ratio']:.2f} | {r['geom_signals']} / "
-                  f"{r['geom_signals_hand']} |")
+                  f"{r['geom_signals_hand']} | {r['laser_signals']} / "
+                  f"{r['laser_signals_hand']} |")
 
 
 if __name__ == "__main__":
