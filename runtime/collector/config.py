@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from rei.catalogue import Box, Cylinder, Footprint
+from rei.catalogue import Footprint
+from rei.runtime.artifacts import footprint, read_artifact
 from rei.runtime.errors import RunError
 from rei.runtime.messages import ObservedObject
 
@@ -25,10 +25,8 @@ class MonitorConfig:
     """'when_new': a sample carries a scan only when a new one was taken since the last."""
 
 
-def _footprint(data: dict[str, Any]) -> Footprint:
-    if data["shape"] == "cylinder":
-        return Cylinder(float(data["radius"]))
-    return Box(float(data["size"][0]), float(data["size"][1]))
+def _footprint(data: Any) -> Footprint:
+    return footprint(data, "monitor.json: footprint")
 
 
 def _observed(data: dict[str, Any]) -> ObservedObject:
@@ -38,16 +36,7 @@ def _observed(data: dict[str, Any]) -> ObservedObject:
 
 def load_monitor_config(folder: str | Path) -> MonitorConfig:
     path = Path(folder) / "monitor.json"
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise RunError(f"cannot read the monitor configuration '{path}': {exc.strerror} "
-                       f"(generate it with `rei-gen generate --target monitor`)") from None
-    except json.JSONDecodeError as exc:
-        raise RunError(f"{path}:{exc.lineno}:{exc.colno}: not valid JSON: {exc.msg}") from None
-    if data.get("version") != CONFIG_VERSION:
-        raise RunError(f"{path}: expected monitor configuration version {CONFIG_VERSION}, found "
-                       f"{data.get('version')!r}")
+    data = read_artifact(path, "monitor configuration", "monitor", CONFIG_VERSION)
     try:
         rate = float(data["rate"])
         if not (math.isfinite(rate) and rate > 0):
