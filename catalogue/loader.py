@@ -180,7 +180,8 @@ class _Reader:
                           low_open=True)
         mx, my, mz = self.vector(tname, "laser.mount", raw.get("mount", [0.0, 0.0, 0.1]), 3,
                                  -100.0, 100.0)
-        return LaserSpec(beams, lo, hi, rate, math.radians(fov), mx, my, mz)
+        noise = self.number(tname, "laser.noise", raw.get("noise", 0.0), low=0.0, high=1.0)
+        return LaserSpec(beams, lo, hi, rate, math.radians(fov), mx, my, mz, noise)
 
 
 def parse_catalogue(path: str, text: str) -> Catalogue:

@@ -110,6 +110,8 @@ class LaserSpec:
     mount_x: float = 0.0
     mount_y: float = 0.0
     mount_z: float = 0.1
+    noise: float = 0.0
+    """Standard deviation (m) of the Gaussian error of every range that hit something."""
 
 
 @dataclass(frozen=True)

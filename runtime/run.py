@@ -57,6 +57,8 @@ class RunConfig:
     """Wall-clock seconds a controller call may take; None runs it in the main thread."""
     odom_drift: float = 0.0
     """Relative standard deviation of odometry's per-tick error (0: odometry is exact)."""
+    laser_noise: float | None = None
+    """Standard deviation (m) of the laser's range error; None: the catalogue's value."""
 
 
 @dataclass(frozen=True)
@@ -155,6 +157,7 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
                              manifest.tile_size)
     statics = shapes_of(static_seen, np.array([(b.x, b.y, b.yaw) for b in static_seen]))
     laser = Laser2D(laser_spec, ShapeSet(np.concatenate((walls, statics.boxes)), statics.circles))
+    laser_noise = laser_spec.noise if config.laser_noise is None else config.laser_noise
 
     n_walls = len(manifest.walls)
     all_poses = np.array([(b.x, b.y, b.yaw) for b in manifest.observed], dtype=float).reshape(-1, 3)
@@ -232,7 +235,7 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
                         poses, _ = world.object_states()
                         moving = shapes_of([manifest.objects[i] for i in seen_index],
                                            poses[seen_index])
-                    ranges = laser.scan(truth, moving)
+                    ranges = laser.scan(truth, moving, rng, laser_noise)
                     min_laser = min(min_laser, float(ranges.min()))
                     scan = LaserScan(laser.angle_min, laser.angle_increment, laser_spec.min_range,
                                      laser_spec.max_range, ranges)

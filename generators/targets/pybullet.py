@@ -35,7 +35,7 @@ from rei.generators.templating import (
 )
 
 MANIFEST = "world.json"
-MANIFEST_VERSION = 1
+MANIFEST_VERSION = 2
 
 
 def footprint_json(otype: ObjectType, tile: float) -> dict[str, Any]:
@@ -113,7 +113,8 @@ def build_manifest(world: ConcreteWorld, source_name: str, room_file: str) -> tu
                       "wheel_radius": drive.wheel_radius}
     robot["laser"] = {"beams": laser.beams, "min_range": laser.min_range,
                       "max_range": laser.max_range, "rate": laser.rate, "fov": laser.fov,
-                      "mount": [laser.mount_x, laser.mount_y, laser.mount_z]}
+                      "mount": [laser.mount_x, laser.mount_y, laser.mount_z],
+                      "noise": laser.noise}
     manifest = {
         "version": MANIFEST_VERSION, "generator": "rei-gen pybullet", "world": world.name,
         "source": {"input": source_name, "room": room_file},

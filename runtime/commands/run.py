@@ -54,6 +54,9 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                         help="physics steps per simulated second (default 100)")
     parser.add_argument("--odom-drift", type=float, default=0.0, metavar="SIGMA",
                         help="relative odometry error per control tick (default 0: exact)")
+    parser.add_argument("--laser-noise", type=float, default=None, metavar="SIGMA",
+                        help="standard deviation (m) of the laser's range error (default: the "
+                             "robot's catalogue type, 0.01 for the TurtleBot3 Waffle; 0: exact)")
     parser.add_argument("--vepl", type=Path, default=None, metavar="FILE",
                         help="monitoring specification: queries, event patterns, signals with "
                              "utilities and requirements (default: REI's default.vepl)")
@@ -72,19 +75,22 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
              duration: float | None = None, watchdog: float | None = 5.0,
              physics_rate: float = 100.0, odom_drift: float = 0.0,
              sinks: Sequence[SampleSink] = (), progress: IO[str] | None = None,
-             vepl: Path | None = None, monitor: bool = True,
+             vepl: Path | None = None, monitor: bool = True, laser_noise: float | None = None,
              ) -> tuple[RunSummary, RunRecord]:
     """Everything `rei run` does: generate, run, monitor with the .vepl's automata (the
     default specification unless ``vepl``; none when ``monitor`` is False), write outputs.
     Extra ``sinks`` see the same stream as the trace and the monitor."""
     for name, value in (("--duration", duration), ("--watchdog", watchdog),
-                        ("--physics-rate", physics_rate), ("--odom-drift", odom_drift)):
+                        ("--physics-rate", physics_rate), ("--odom-drift", odom_drift),
+                        ("--laser-noise", laser_noise)):
         _finite(name, value)
     if duration is not None and duration <= 0:
         raise RunError(f"--duration: expected a positive number of seconds, found {duration:g}")
     if physics_rate <= 0 or odom_drift < 0 or (watchdog is not None and watchdog <= 0):
         raise RunError("--physics-rate and --watchdog expected positive numbers, --odom-drift "
                        "a non-negative one")
+    if laser_noise is not None and not 0 <= laser_noise <= 1:
+        raise RunError(f"--laser-noise: expected metres from 0 to 1, found {laser_noise:g}")
     if mission_path.suffix != ".mission":
         raise RunError(f"expected a .mission file to run, found '{mission_path}'")
     try:
@@ -101,7 +107,7 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
     monitor = load_monitor_config(world_dir)
     robot = make_controller(controller)
     config = RunConfig(seed=seed, physics_rate=physics_rate, duration=duration,
-                       watchdog=watchdog, odom_drift=odom_drift)
+                       watchdog=watchdog, odom_drift=odom_drift, laser_noise=laser_noise)
     for stale in (out_dir / SUMMARY, out_dir / TRACE, out_dir / EVENTS):
         stale.unlink(missing_ok=True)
 
@@ -139,7 +145,8 @@ def run(args: argparse.Namespace) -> int:
     progress = None if args.quiet or not sys.stderr.isatty() else sys.stderr
     summary, record = run_into(args.mission, args.output, args.controller, args.seed,
                                args.duration, args.watchdog, args.physics_rate, args.odom_drift,
-                               progress=progress, vepl=args.vepl, monitor=not args.no_monitor)
+                               progress=progress, vepl=args.vepl, monitor=not args.no_monitor,
+                               laser_noise=args.laser_noise)
     rtf = record.duration / record.wall_seconds if record.wall_seconds > 0 else math.inf
     cpu_rtf = record.duration / record.cpu_seconds if record.cpu_seconds > 0 else math.inf
     m = summary.measurements

@@ -118,8 +118,13 @@ class Laser2D:
         return np.array([x + c * self.spec.mount_x - s * self.spec.mount_y,
                          y + s * self.spec.mount_x + c * self.spec.mount_y])
 
-    def scan(self, pose: tuple[float, float, float], moving: ShapeSet | None = None) -> np.ndarray:
-        """Ranges of every beam from the robot at ``pose`` (max_range where nothing is hit)."""
+    def scan(self, pose: tuple[float, float, float], moving: ShapeSet | None = None,
+             rng: np.random.Generator | None = None, noise: float = 0.0) -> np.ndarray:
+        """Ranges of every beam from the robot at ``pose`` (max_range where nothing is hit).
+
+        With ``noise`` > 0, every range that hit something gets a Gaussian error of that
+        standard deviation drawn from ``rng`` (the run's seeded generator), then is clipped
+        to the sensor's limits, as a real scanner's readings are."""
         spec = self.spec
         o = self.origin(pose)
         world_angles = self.angles + pose[2]
@@ -135,5 +140,9 @@ class Laser2D:
             circle_sets.append(moving.circles)
         t = np.minimum(ray_boxes(o, dirs, np.concatenate(box_sets)),
                        ray_circles(o, dirs, np.concatenate(circle_sets)))
+        if noise > 0 and rng is not None:
+            hit = t <= reach
+            t = np.where(hit, t + rng.normal(0.0, noise, size=t.shape), t)
+            t = np.where(hit, np.minimum(t, reach), t)
         ranges = np.where(t > reach, reach, np.maximum(t, spec.min_range))
         return np.round(ranges, 3)

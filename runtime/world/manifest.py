@@ -14,7 +14,7 @@ from rei.catalogue import DriveSpec, Footprint, LaserSpec
 from rei.runtime.artifacts import finite, footprint, read_artifact
 from rei.runtime.errors import RunError
 
-MANIFEST_VERSION = 1
+MANIFEST_VERSION = 2
 
 
 @dataclass(frozen=True)
@@ -99,7 +99,8 @@ def load_manifest(folder: str | Path) -> WorldManifest:
         laser = LaserSpec(int(las["beams"]), _num(las["min_range"], "laser"),
                           _num(las["max_range"], "laser"), _num(las["rate"], "laser"),
                           _num(las["fov"], "laser"), _num(las["mount"][0], "laser"),
-                          _num(las["mount"][1], "laser"), _num(las["mount"][2], "laser"))
+                          _num(las["mount"][1], "laser"), _num(las["mount"][2], "laser"),
+                          _num(las["noise"], "laser.noise"))
         walls = tuple(_body(w, f"walls[{i}]") for i, w in enumerate(data["walls"]))
         objects = tuple(_body(o, f"objects[{i}]") for i, o in enumerate(data["objects"]))
         floors = tuple((str(f[0]), _num(f[1], "floors"), _num(f[2], "floors"))

@@ -37,7 +37,9 @@ def test_teleop_wall_live_gives_the_four_transitions_and_replay_agrees(tmp_path:
     assert [signal for _, signal in laser] == ["SIG_LASER_CLOSE_TRANSIT_COLLISION",
                                                "SIG_LASER_COLLISION_TRANSIT_CLOSE"]
     touch, release = (t for t, _ in geom(rows)[1:3])
-    assert touch <= laser[0][0] <= touch + 1.0 and release <= laser[1][0] <= release + 1.0
+    # within the requirements' 1 s window; the laser's 1 cm range noise (the catalogue's) may
+    # make it sense the touch a sample early or late
+    assert abs(laser[0][0] - touch) <= 1.0 and abs(laser[1][0] - release) <= 1.0
     # the times the recorded geometry predicts (Table 2 on the trace's footprint distances)
     header, samples = read_trace(tmp_path / "trace.jsonl")
     fs = FootprintSet.build(header.robot.footprint, [o.footprint for o in header.objects],
