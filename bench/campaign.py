@@ -39,6 +39,31 @@ def timed(plan: CampaignPlan, engine: CampaignEngine, out: Path) -> float:
     return elapsed
 
 
+def _spin(n: int) -> int:
+    total = 0
+    for i in range(n):
+        total += i * i % 7
+    return total
+
+
+def machine_scaling(n: int = 6_000_000) -> float:
+    """How much faster two CPU-bound processes finish than one after the other on this machine
+    (1.0 = two independent cores; two hyperthreads of one core or a busy host give less): the
+    ceiling any engine's scaling efficiency can reach here."""
+    import multiprocessing  # noqa: PLC0415
+
+    ctx = multiprocessing.get_context("spawn")
+    start = time.perf_counter()
+    with ctx.Pool(1) as pool:
+        pool.map(_spin, [n, n])
+    one = time.perf_counter() - start
+    start = time.perf_counter()
+    with ctx.Pool(2) as pool:
+        pool.map(_spin, [n, n])
+    two = time.perf_counter() - start
+    return one / (2 * two)
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--count", type=int, default=8, help="medium rooms (default 8)")
@@ -67,8 +92,10 @@ def main() -> int:
         # machine hits them alike; ratios are taken per round, then the median is reported.
         times: dict[str, list[float]] = {"local-1": [], "local-2": [], "dask-2": []}
         startups: list[float] = []
+        ceilings: list[float] = []
         for i in range(args.rounds):
             load = os.getloadavg()[0]
+            ceilings.append(machine_scaling())
             times["local-1"].append(timed(plan, LocalEngine(1), root / f"local-1-{i}"))
             times["local-2"].append(timed(plan, LocalEngine(2), root / f"local-2-{i}"))
             start = time.perf_counter()
@@ -78,7 +105,8 @@ def main() -> int:
                 startups.append(time.perf_counter() - start)
                 times["dask-2"].append(timed(plan, DaskEngine(address), root / f"dask-2-{i}"))
             print(f"  round {i + 1}: " + ", ".join(f"{k} {v[-1]:.2f} s" for k, v in times.items())
-                  + f"  (load average before: {load:.2f})", flush=True)
+                  + f"  (load average before: {load:.2f}; machine ceiling "
+                  f"{100 * ceilings[-1]:.0f} %)", flush=True)
         efficiency = statistics.median(a / (2 * b) for a, b in zip(times["local-1"],
                                                                    times["local-2"], strict=True))
         overhead = statistics.median(d / b - 1 for d, b in zip(times["dask-2"], times["local-2"],
@@ -93,6 +121,9 @@ def main() -> int:
         print()
         print(f"scaling efficiency 1 -> 2 workers (median of rounds): {100 * efficiency:.1f} % "
               f"(target >= 90 %)")
+        print(f"machine ceiling (two CPU-bound processes vs one, median of rounds): "
+              f"{100 * statistics.median(ceilings):.1f} %; campaign efficiency relative to it: "
+              f"{100 * efficiency / statistics.median(ceilings):.1f} %")
         print(f"Dask engine overhead vs local, 2 workers (median of rounds): "
               f"{100 * overhead:+.1f} % (target < 10 %)")
         print(f"Dask cluster start-up (scheduler + 1 worker, not in the above): "
