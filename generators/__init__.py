@@ -1,1 +1,1 @@
-"""Model-to-text: the concrete model (coordinates, catalogue mapping) and one generator per target."""
+"""Model-to-text: the concrete model (coordinates, catalogue mapping), one generator per target."""

@@ -9,7 +9,7 @@ print, exit, or write anything before every target has succeeded.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -87,9 +87,12 @@ def check_options(targets: list[Target], options: Mapping[str, str]) -> None:
     A target may list the keys it reads in an ``options`` attribute; when one of the chosen
     targets does not, any key might be its, so nothing is refused.
     """
-    declared = [getattr(t, "options", None) for t in targets]
-    if any(keys is None for keys in declared):
-        return
+    declared: list[Iterable[str]] = []
+    for t in targets:
+        keys = getattr(t, "options", None)
+        if keys is None:
+            return
+        declared.append(keys)
     known = sorted({key for keys in declared for key in keys})
     for key in options:
         if key not in known:

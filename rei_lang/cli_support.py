@@ -34,8 +34,8 @@ def build_parser(prog: str, description: str, package: str) -> argparse.Argument
     pkg = importlib.import_module(package)
     for info in sorted(pkgutil.iter_modules(pkg.__path__), key=lambda m: m.name):
         module = importlib.import_module(f"{package}.{info.name}")
-        register: Callable[[argparse._SubParsersAction], None] | None = getattr(
-            module, "register", None)
+        register: Callable[[argparse._SubParsersAction[argparse.ArgumentParser]], None] | None
+        register = getattr(module, "register", None)
         if register is not None:
             register(sub)
     return parser

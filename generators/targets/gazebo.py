@@ -11,7 +11,7 @@ write files itself or read the textX model.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import jinja2
 
@@ -62,16 +62,17 @@ class SdfModel:
 def _object_model(obj: ConcreteObject, comment: str) -> SdfModel:
     otype: ObjectType = obj.type
     fp = otype.footprint
-    common = dict(name=obj.name, static=obj.role == "static",
-                  pose=(obj.pose.x, obj.pose.y, 0.0, 0.0, 0.0, normalise_angle(obj.pose.yaw)),
-                  height=otype.height, colour=otype.colour, mass=otype.mass,
-                  inertia=otype.inertia, comment=comment)
+    # Everything but the geometry; each branch below fills in its shape.
+    common = SdfModel(name=obj.name, static=obj.role == "static",
+                      pose=(obj.pose.x, obj.pose.y, 0.0, 0.0, 0.0, normalise_angle(obj.pose.yaw)),
+                      shape="", height=otype.height, colour=otype.colour, mass=otype.mass,
+                      inertia=otype.inertia, comment=comment)
     if isinstance(fp, Box):
-        return SdfModel(shape="box", size=(fp.size_x, fp.size_y, otype.height), **common)
+        return replace(common, shape="box", size=(fp.size_x, fp.size_y, otype.height))
     if isinstance(fp, Cylinder):
-        return SdfModel(shape="cylinder", radius=fp.radius, **common)
+        return replace(common, shape="cylinder", radius=fp.radius)
     if isinstance(fp, Polygon):
-        return SdfModel(shape="polyline", points=fp.points, **common)
+        return replace(common, shape="polyline", points=fp.points)
     raise GenerationError(f"object '{obj.name}' (on floor '{obj.floor}'): catalogue type "
                           f"'{otype.name}' has no geometry a simulator can use: expected a box, "
                           f"cylinder or polygon footprint, found {type(fp).__name__.lower()}")

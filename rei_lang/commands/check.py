@@ -12,7 +12,7 @@ from rei.lang.errors import Diagnostic
 from rei.lang.workspace import Workspace, known_suffixes
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser = sub.add_parser(
         "check",
         help="check .room / .mission / .vepl files and report every problem",

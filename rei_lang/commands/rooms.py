@@ -26,7 +26,7 @@ OVERRIDES = (
 )
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser = sub.add_parser(
         "rooms",
         help="generate test rooms and missions, valid by construction, with difficulty "

@@ -8,7 +8,7 @@ from rei.lang.cli_support import EXIT_OK
 from rei.lang.rules import RULES
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser = sub.add_parser("rules", help="list the rules `rei-gen check` enforces",
                             description="List every rule id with what it checks.")
     parser.set_defaults(func=run)

@@ -11,7 +11,7 @@ NUM-FINITE and NUM-RANGE. This module must never import the runtime.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Literal
 
 import networkx as nx
 
@@ -254,7 +254,7 @@ class _Linker:
             return self._name(e)
         raise AssertionError(kind)
 
-    def _nary(self, op: str, parts: list[m.Expr | None], e: Any) -> m.Expr | None:
+    def _nary(self, op: Literal["and", "or"], parts: list[m.Expr | None], e: Any) -> m.Expr | None:
         if any(p is None for p in parts):
             return None
         valid = [p for p in parts if p is not None]
@@ -391,7 +391,9 @@ class _Linker:
                        f"that ends in NOT (absence needs a deadline), found none")
             return None
         raw = (tx.event_context or "immediate").split()
-        context: m.ContextKind = "strict" if raw[0] == "strict" else raw[0]
+        # The grammar's ContextName allows only these three words first.
+        context: m.ContextKind = ("strict" if raw[0] == "strict"
+                                  else "chronicle" if raw[0] == "chronicle" else "immediate")
         start, end = tx.pattern._tx_position, tx.pattern._tx_position_end
         text = " ".join(self.source.text[start:end].split())
         return m.ComplexEvent(tx.name, pattern, context, text, self.span(tx))
@@ -406,7 +408,11 @@ class _Linker:
             valid = tuple(p for p in parts if p is not None)
             if len(valid) == 1:
                 return valid[0]
-            return {"EventOr": m.EvOr, "EventAnd": m.EvAnd, "EventSeq": m.EvSeq}[kind](valid)
+            if kind == "EventOr":
+                return m.EvOr(valid)
+            if kind == "EventAnd":
+                return m.EvAnd(valid)
+            return m.EvSeq(valid)
         if kind == "EventNot":
             inner = self._pattern(e.operand, defined, later)
             return m.EvNot(inner) if inner is not None and e.negated else inner

@@ -13,6 +13,7 @@ starts and ends at rest. This module must never import the simulator.
 from __future__ import annotations
 
 from bisect import bisect_right
+from typing import cast
 
 import numpy as np
 
@@ -72,7 +73,7 @@ class CatmullRom:
         tt = t0 + rel
         i = np.clip(np.searchsorted(self.t, tt, side="right") - 1, 0, len(self.t) - 2)
         s = (tt - self.t[i])[:, None]
-        return ((self.a[i] * s + self.b[i]) * s + self.c[i]) * s + self.d[i]
+        return cast(np.ndarray, ((self.a[i] * s + self.b[i]) * s + self.c[i]) * s + self.d[i])
 
     def velocity(self, time: float) -> tuple[float, float]:
         i, s, ended = self._local(time)

@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import cast
 
 from rei.lang.cli_support import EXIT_RUN_ERROR
 from rei.runtime.collector.trace import read_trace, read_trace_end
@@ -19,10 +20,10 @@ from rei.runtime.evaluator.summary import merge_summary, write_summary
 from rei.runtime.monitor import MonitorSink, generate_automata
 from rei.runtime.monitor.automata import load_generated
 from rei.runtime.monitor.errors import MonitorError
-from rei.runtime.results import RESULTS_VERSION, RunSummary
+from rei.runtime.results import RESULTS_VERSION, Outcome, RunSummary
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser = sub.add_parser(
         "replay", help="monitor a recorded trace with the event automata of a .vepl file",
         description="Feed a trace recorded by `rei run` through the event automata generated "
@@ -64,8 +65,9 @@ def replay(trace: Path, vepl: Path | None, out_dir: Path) -> RunSummary:
                                                              "the trace has no end line")
     sink.finish(end_time, outcome, reason)
     assert sink.result is not None
+    # The end line was written by `rei run` from its summary's outcome; read back as is.
     base = RunSummary(RESULTS_VERSION, header.mission, header.world, header.seed, "replay",
-                      outcome, reason, sink.result.duration, 0.0, {}, ())
+                      cast(Outcome, outcome), reason, sink.result.duration, 0.0, {}, ())
     summary = merge_summary(base, sink.result)
     write_summary(summary, out_dir)
     return summary

@@ -33,7 +33,7 @@ LOG = "run.log"
 EVENTS = "events.csv"
 
 
-def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser = sub.add_parser(
         "run", help="run a mission in the simulator and record its trace and summary",
         description="Check and generate what the mission needs, run it headless in pybullet "
@@ -104,7 +104,7 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
     world_dir = out_dir / "world"
     mission = generate_world(mission_path, world_dir)
     manifest = load_manifest(world_dir)
-    monitor = load_monitor_config(world_dir)
+    monitor_config = load_monitor_config(world_dir)
     robot = make_controller(controller)
     config = RunConfig(seed=seed, physics_rate=physics_rate, duration=duration,
                        watchdog=watchdog, odom_drift=odom_drift, laser_noise=laser_noise)
@@ -127,7 +127,7 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
 
         log(f"mission {mission.name} in room {mission.world.name}, controller {controller}, "
             f"seed {seed}")
-        record = run_mission(mission, manifest, monitor, robot,
+        record = run_mission(mission, manifest, monitor_config, robot,
                              [TraceWriter(out_dir / TRACE),
                               *([monitor_sink] if monitor_sink is not None else []), *sinks],
                              config,

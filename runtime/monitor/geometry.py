@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import cast
 
 import numpy as np
 
@@ -55,12 +56,12 @@ def _point_segment(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     denom = abx * abx + aby * aby
     t = (apx * abx + apy * aby) / np.where(denom > 0, denom, 1.0)
     np.clip(t, 0.0, 1.0, out=t)
-    return np.hypot(apx - t * abx, apy - t * aby)
+    return cast(np.ndarray, np.hypot(apx - t * abx, apy - t * aby))
 
 
 def _cross(o: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return (a[..., 0] - o[..., 0]) * (b[..., 1] - o[..., 1]) - (a[..., 1] - o[..., 1]) * (
-        b[..., 0] - o[..., 0])
+    return cast(np.ndarray, (a[..., 0] - o[..., 0]) * (b[..., 1] - o[..., 1])
+                - (a[..., 1] - o[..., 1]) * (b[..., 0] - o[..., 0]))
 
 
 def _inside(points: np.ndarray, poly: np.ndarray, poly_next: np.ndarray) -> np.ndarray:
@@ -74,7 +75,7 @@ def _inside(points: np.ndarray, poly: np.ndarray, poly_next: np.ndarray) -> np.n
     dy = np.where(y2 != y1, y2 - y1, 1.0)
     x_at = x1 + (py - y1) * (x2 - x1) / dy
     crossings = np.count_nonzero(straddles & (px < x_at), axis=-1)
-    return (crossings % 2) == 1
+    return cast(np.ndarray, (crossings % 2) == 1)
 
 
 def _inner_radius(poly: np.ndarray) -> float:
@@ -247,12 +248,12 @@ class FootprintSet:
                                       *self.robot_half)
             inside = (np.abs(c * relx + s * rely) < self.robot_half[0]) & (
                 np.abs(c * rely - s * relx) < self.robot_half[1])
-            return np.where(inside, -signed, signed) - radii
+            return cast(np.ndarray, np.where(inside, -signed, signed) - radii)
         a = robot_world[None, :, :]
         b = np.roll(robot_world, -1, axis=0)[None, :, :]
         boundary = _point_segment(centres[:, None, :], a, b).min(axis=1)
         inside = _inside(centres, robot_world[None], np.roll(robot_world, -1, axis=0)[None])
-        return np.where(inside, -boundary - radii, boundary - radii)
+        return cast(np.ndarray, np.where(inside, -boundary - radii, boundary - radii))
 
     def _to_polygons(self, robot_world: np.ndarray | None, centre: tuple[float, float],
                      world: np.ndarray) -> np.ndarray:
@@ -261,8 +262,8 @@ class FootprintSet:
             c = np.array(centre)
             boundary = _point_segment(c[None, None, :], world, nxt).min(axis=1)
             inside = _inside(np.broadcast_to(c, (len(world), 2)), world, nxt)
-            return np.where(inside, -boundary - self.robot_radius,
-                            boundary - self.robot_radius)
+            return cast(np.ndarray, np.where(inside, -boundary - self.robot_radius,
+                                             boundary - self.robot_radius))
         r = robot_world
         rn = np.roll(r, -1, axis=0)
         # object vertices against robot edges, robot vertices against object edges
@@ -283,7 +284,7 @@ class FootprintSet:
         overlap = crossing.any(axis=(1, 2)) | inside1.any(axis=1) | inside2.any(axis=1)
         depth = np.maximum(np.where(inside1, v1, 0.0).max(axis=1),
                            np.where(inside2, v2, 0.0).max(axis=1))
-        return np.where(overlap, -depth, boundary)
+        return cast(np.ndarray, np.where(overlap, -depth, boundary))
 
     def _boxes(self, robot_pose: tuple[float, float, float], near: np.ndarray,
                sel: np.ndarray, poses: np.ndarray, world: np.ndarray) -> np.ndarray:
@@ -316,7 +317,7 @@ class FootprintSet:
             oy.min(axis=1) >= half[:, 1]) | (oy.max(axis=1) <= -half[:, 1])
         depth = np.maximum(np.where(in1, v1, 0.0).max(axis=1),
                            np.where(in2, v2, 0.0).max(axis=1))
-        return np.where(separated, boundary, -depth)
+        return cast(np.ndarray, np.where(separated, boundary, -depth))
 
 
 def _box_distance(x: np.ndarray, y: np.ndarray, hx: float | np.ndarray, hy: float | np.ndarray

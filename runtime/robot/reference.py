@@ -352,21 +352,21 @@ class ReferenceNavigator:
                 return self._start_recovery(now, pose, points, goal)
             return cmd
         margin = TIGHT_MARGIN if now < self._tight_until else MARGIN
-        cmd = self._choose(pose, points, dist, margin)
+        chosen = self._choose(pose, points, dist, margin)
         heading = self._path_heading((x, y))
         aligned = heading is not None and abs(math.remainder(heading - yaw, math.tau)) < 0.5
         # Turning on the spot although already facing the path is the local planner's way
         # of saying that nothing ahead is admissible: as stuck as finding nothing at all.
-        if cmd is None or (cmd.linear <= 0.0 and aligned):
+        if chosen is None or (chosen.linear <= 0.0 and aligned):
             if self._stuck_since is None:
                 self._stuck_since = now
             if now - self._stuck_since >= STUCK_AFTER:
                 return self._start_recovery(now, pose, points, goal)
-            return STOP if cmd is None else cmd
+            return STOP if chosen is None else chosen
         self._stuck_since = None
         if now - max(self._last_progress_time, recovery.ended_at or -math.inf) > OSCILLATE_AFTER:
             return self._start_recovery(now, pose, points, goal)
-        return cmd
+        return chosen
 
     def _start_recovery(self, now: float, pose: tuple[float, float, float], points: np.ndarray,
                         goal: NavGoal) -> VelocityCommand:

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 
@@ -84,7 +85,7 @@ def ray_boxes(origin: np.ndarray, dirs: np.ndarray, boxes: np.ndarray) -> np.nda
     far = np.minimum(np.maximum(tx1, tx2), np.maximum(ty1, ty2))
     # An origin inside a box (the robot pressed into it) reads 0: the scanner is blinded.
     t = np.where(far >= np.maximum(near, 0.0), np.maximum(near, 0.0), np.inf)
-    return t.min(axis=0)
+    return cast(np.ndarray, t.min(axis=0))
 
 
 def ray_circles(origin: np.ndarray, dirs: np.ndarray, circles: np.ndarray) -> np.ndarray:
@@ -98,7 +99,7 @@ def ray_circles(origin: np.ndarray, dirs: np.ndarray, circles: np.ndarray) -> np
     t = np.where(disc >= 0, -b - root, np.inf)
     t = np.where((disc >= 0) & (t < 0) & (-b + root >= 0), 0.0, t)
     t = np.where(t < 0, np.inf, t)
-    return t.min(axis=0)
+    return cast(np.ndarray, t.min(axis=0))
 
 
 class Laser2D:

@@ -13,6 +13,8 @@ import math
 import os
 import sys
 from pathlib import Path
+from types import ModuleType
+from typing import cast
 
 import numpy as np
 
@@ -20,7 +22,7 @@ from rei.runtime.errors import RunError
 from rei.runtime.world.manifest import BodySpec, WorldManifest
 
 
-def _import_pybullet():  # type: ignore[no-untyped-def]
+def _import_pybullet() -> ModuleType:
     """pybullet prints its build time from C at import; keep REI's terminal output clean."""
     sys.stderr.flush()
     saved = os.dup(2)
@@ -29,7 +31,8 @@ def _import_pybullet():  # type: ignore[no-untyped-def]
             os.dup2(devnull.fileno(), 2)
             import pybullet  # noqa: PLC0415
 
-        return pybullet
+        # pybullet ships no type information; it is a module all the same.
+        return cast(ModuleType, pybullet)
     finally:
         os.dup2(saved, 2)
         os.close(saved)
@@ -85,7 +88,7 @@ class BulletWorld:
         try:
             # Every body is a single link: maximal coordinates make it a plain rigid body,
             # which steps about four times faster than a one-link multibody.
-            bid = p.loadURDF(str(path), [body.x, body.y, body.z], _quat(body.yaw),
+            bid: int = p.loadURDF(str(path), [body.x, body.y, body.z], _quat(body.yaw),
                              useFixedBase=body.fixed, useMaximalCoordinates=True,
                              physicsClientId=self.client)
         except p.error as exc:
