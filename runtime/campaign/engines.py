@@ -14,6 +14,7 @@ import uuid
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import ModuleType
 from typing import Protocol, runtime_checkable
 
 from rei.runtime.campaign.errors import CampaignError
@@ -35,7 +36,8 @@ DASK_INSTALL_HINT = ("the Dask engine needs Dask distributed: "
 class CampaignEngine(Protocol):
     """Runs planned runs; yields (spec, work folder, result) as each run ends."""
 
-    name: str
+    @property
+    def name(self) -> str: ...
 
     def execute(self, specs: Sequence[RunSpec], work_dir: WorkDirFactory
                 ) -> Iterator[tuple[RunSpec, Path, RunResult]]: ...
@@ -148,7 +150,7 @@ class DaskEngine:
             client.close()
 
 
-def _import_distributed():  # type: ignore[no-untyped-def]
+def _import_distributed() -> ModuleType:
     try:
         import distributed  # noqa: PLC0415
     except ImportError as exc:

@@ -20,7 +20,7 @@ from rei.lang.cli_support import EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_OK
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser = sub.add_parser(
         "demo", help="generate a small suite, run a campaign on it and write its report",
         description="Generate a small suite of rooms and missions with `rei-gen rooms`, run "

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser = sub.add_parser(
         "report", help="rebuild report.html and junit.xml of a campaign folder",
         description="Rebuild the results tables, report.html and junit.xml of a campaign folder "

@@ -63,4 +63,5 @@ def junit_xml(records: Sequence[RunRecord], rerun: dict[str, str], name: str = "
             totals[key] += value
     for key, value in totals.items():
         root.set(key, str(value))
-    return etree.tostring(root, xml_declaration=True, encoding="UTF-8", pretty_print=True)
+    data: bytes = etree.tostring(root, xml_declaration=True, encoding="UTF-8", pretty_print=True)
+    return data
