@@ -53,16 +53,13 @@ class MissionExecutor:
     def tick(self, time: float, client: GoalClient,
              truth: tuple[float, float, float]) -> list[MissionEvent]:
         """Advance the mission at simulation time ``time``; the events it emitted."""
-        events: list[MissionEvent] = []
         if self.finished:
-            return events
-        if not self.begun:
-            self.begun = True
-            events.append(MissionEvent("begin", time))
+            return []
+        events = self._begin(time)
         if self._current is not None:
             goal = self.tasks[self._current]
             fb = client.feedback()
-            distance = math.hypot(truth[0] - goal.x, truth[1] - goal.y)
+            distance = self._distance(truth)
             reason: str | None = None
             ok = False
             if fb.state == NavState.SUCCEEDED:
@@ -91,6 +88,19 @@ class MissionExecutor:
                 events.append(MissionEvent("end", time))
         return events
 
+    def _begin(self, time: float) -> list[MissionEvent]:
+        """The 'begin' event the first time the mission is advanced or abandoned."""
+        if self.begun:
+            return []
+        self.begun = True
+        return [MissionEvent("begin", time)]
+
+    def _distance(self, truth: tuple[float, float, float]) -> float:
+        """Ground-truth distance from the robot to the running task's goal."""
+        assert self._current is not None
+        goal = self.tasks[self._current]
+        return math.hypot(truth[0] - goal.x, truth[1] - goal.y)
+
     def _end_task(self, time: float, ok: bool, reason: str, distance: float) -> MissionEvent:
         assert self._current is not None
         index, goal = self._current, self.tasks[self._current]
@@ -101,16 +111,11 @@ class MissionExecutor:
     def abandon(self, time: float, reason: str,
                 truth: tuple[float, float, float]) -> list[MissionEvent]:
         """End the mission early (time limit, error, interruption): fail the running task."""
-        events: list[MissionEvent] = []
         if self.finished:
-            return events
-        if not self.begun:
-            self.begun = True
-            events.append(MissionEvent("begin", time))
+            return []
+        events = self._begin(time)
         if self._current is not None:
-            goal = self.tasks[self._current]
-            events.append(self._end_task(time, False, reason,
-                                         math.hypot(truth[0] - goal.x, truth[1] - goal.y)))
+            events.append(self._end_task(time, False, reason, self._distance(truth)))
         self.finished = True
         events.append(MissionEvent("end", time, reason=reason))
         return events
