@@ -1,11 +1,13 @@
-"""`rei run MISSION -o DIR`: generate the world, run the mission headless, write trace and summary.
+"""`rei run MISSION -o DIR`: generate the world, run the mission headless, monitor and evaluate it.
 
 Writes into DIR: ``world/`` (the generated `pybullet` and `monitor` targets the run loads),
-``trace.jsonl`` (the sample stream), ``summary.json`` (a RunSummary) and ``run.log`` (the
-mission events and the outcome). Every output is a function of the inputs, the seed and the
-REI version only: wall-clock time goes to the terminal, never into DIR. Exit status: 0 the
-mission completed, 1 a task failed or the time ran out, 2 invalid input, 3 a run error,
-130 interrupted (the outputs are then marked incomplete).
+``automata/`` (the RxPY automata generated from the .vepl), ``trace.jsonl`` (the sample
+stream), ``events.csv`` (one row per signal), ``summary.json`` (a RunSummary with verdicts)
+and ``run.log`` (the mission events and the outcome). Every output is a function of the
+inputs, the seed and the REI version only: wall-clock time goes to the terminal, never into
+DIR. Exit status: 0 every requirement passed, 1 one failed or was inconclusive (without the
+monitor: a task failed or the time ran out), 2 invalid input, 3 a run error, 130 interrupted
+(the outputs are then marked incomplete).
 """
 
 from __future__ import annotations
@@ -35,10 +37,14 @@ EVENTS = "events.csv"
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser = sub.add_parser(
-        "run", help="run a mission in the simulator and record its trace and summary",
+        "run", help="run a mission in the simulator, monitor it and record what happened",
         description="Check and generate what the mission needs, run it headless in pybullet "
-                    "with the robot under test, and write trace.jsonl, summary.json and run.log "
-                    "into the output folder. Same inputs and seed give byte-identical outputs.")
+                    "with the robot under test, monitor it with the event automata of a .vepl "
+                    "specification, and write trace.jsonl, events.csv, summary.json (with the "
+                    "requirement verdicts) and run.log into the output folder. Same inputs and "
+                    "seed give byte-identical outputs. Exit status: 0 every requirement passed, "
+                    "1 one failed or was inconclusive, 2 invalid input, 3 a run error, "
+                    "130 interrupted.")
     parser.add_argument("mission", type=Path, metavar="MISSION", help="the .mission file")
     parser.add_argument("-o", "--output", type=Path, required=True, metavar="DIR",
                         help="output folder (created if missing)")
