@@ -42,6 +42,7 @@ from rei.runtime.sensors.laser import Laser2D, ShapeSet, merge_wall_tiles, shape
 from rei.runtime.sensors.odometry import Odometry
 from rei.runtime.world.bullet import BulletWorld
 from rei.runtime.world.manifest import WorldManifest
+from rei.runtime.world.start_jitter import START_JITTER, StartJitter, jitter_start, with_robot_pose
 
 
 @dataclass(frozen=True)
@@ -59,6 +60,8 @@ class RunConfig:
     """Relative standard deviation of odometry's per-tick error (0: odometry is exact)."""
     laser_noise: float | None = None
     """Standard deviation (m) of the laser's range error; None: the catalogue's value."""
+    jitter: StartJitter | None = START_JITTER
+    """Seeded start-pose jitter of the robot; None starts it exactly at the declared pose."""
 
 
 @dataclass(frozen=True)
@@ -140,6 +143,10 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
     every_laser = _every(config.physics_rate, manifest.laser.rate, "the laser rate")
     every_sample = _every(config.physics_rate, monitor.rate, "the monitor's sample rate")
     header = stream_header(manifest, monitor, mission.name, config.seed)
+    # The jittered pose replaces the declared one in the manifest itself, so the pybullet body,
+    # odometry's origin and the controller's start_pose below cannot disagree.
+    started = jitter_start(manifest, config.seed, config.jitter)
+    manifest = with_robot_pose(manifest, started.pose)
     rng = np.random.default_rng(config.seed)
     end_time = mission.time_limit
     end_reason = f"mission time limit of {mission.time_limit:g} s reached"
@@ -311,6 +318,9 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
         "physics_steps": steps,
         "incomplete": outcome == "interrupted",
     }
+    # Other variations (the humans') record themselves under the same key: merge, never replace.
+    variations = measurements.setdefault("variations", {})
+    variations["start_jitter"] = started.to_json()
     return RunRecord(outcome, reason, now, tasks, measurements,
                      wallclock.perf_counter() - wall_start,
                      wallclock.process_time() - cpu_start, steps)
