@@ -13,7 +13,7 @@ import csv
 import hashlib
 import math
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -41,12 +41,21 @@ class RunSpec:
     duration: float | None = None
     parameters: dict[str, Any] = field(default_factory=dict)
     """Parameter and difficulty-descriptor columns of the suite's index (empty otherwise)."""
+    static_pair: bool = False
+    """This run is the static twin of run ``pair``: its mission file is the original's twin
+    in the same room without humans and dynamic objects (``--pair-static``), same seed."""
+    pair: str = ""
+    """With ``--pair-static``: the run id of the run with people that this run (the run
+    itself, or its static twin) belongs to; empty in an unpaired campaign."""
 
     def to_json(self) -> dict[str, Any]:
-        return {"run_id": self.run_id, "mission_file": self.mission_file,
+        data = {"run_id": self.run_id, "mission_file": self.mission_file,
                 "mission_key": self.mission_key, "group": self.group, "repeat": self.repeat,
                 "seed": self.seed, "controller": self.controller, "vepl": self.vepl,
                 "duration": self.duration, "parameters": dict(self.parameters)}
+        if self.pair:  # unpaired plans keep the shape earlier versions wrote and read
+            data.update(static_pair=self.static_pair, pair=self.pair)
+        return data
 
     @staticmethod
     def from_json(data: dict[str, Any]) -> RunSpec:
@@ -179,10 +188,20 @@ def _ids(entries: list[_MissionEntry]) -> list[str]:
     return out
 
 
+STATIC = "static"
+"""Run ids of static twins are NAME.static.rKK; their files are STATIC_DIR/NAME/."""
+
+
 def plan_campaign(inputs: list[Path], *, repeat: int = 1, seed: int = 0,
                   controller: str | None = None, vepl: Path | None = None,
-                  duration: float | None = None) -> CampaignPlan:
-    """Every mission of the inputs, ``repeat`` times, each with its derived seed."""
+                  duration: float | None = None, static_dir: Path | None = None
+                  ) -> CampaignPlan:
+    """Every mission of the inputs, ``repeat`` times, each with its derived seed.
+
+    With ``static_dir`` every run is paired with its static twin (same seed, the mission's
+    room without humans and dynamic objects, written into ``static_dir`` by
+    ``static_pair.write_static_twins`` before the runs start): ``--pair-static``.
+    """
     if repeat < 1:
         raise CampaignError(f"--repeat: expected a count of at least 1, found {repeat}")
     if duration is not None and not (math.isfinite(duration) and duration > 0):
@@ -202,9 +221,25 @@ def plan_campaign(inputs: list[Path], *, repeat: int = 1, seed: int = 0,
     runs = []
     for entry, stem in zip(unique, _ids(unique), strict=True):
         for k in range(repeat):
-            runs.append(RunSpec(
-                run_id=f"{stem}.r{k:02d}" if repeat <= 100 else f"{stem}.r{k:04d}",
-                mission_file=str(entry.path), mission_key=entry.key, group=entry.group,
-                repeat=k, seed=derive_seed(seed, entry.key, k), controller=controller,
-                vepl=vepl_path, duration=duration, parameters=entry.parameters))
+            number = f"r{k:02d}" if repeat <= 100 else f"r{k:04d}"
+            run = RunSpec(
+                run_id=f"{stem}.{number}", mission_file=str(entry.path), mission_key=entry.key,
+                group=entry.group, repeat=k, seed=derive_seed(seed, entry.key, k),
+                controller=controller, vepl=vepl_path, duration=duration,
+                parameters=entry.parameters)
+            if static_dir is None:
+                runs.append(run)
+                continue
+            # Twins right after their run: a pair finishes together, also when interrupted.
+            twin_file = static_dir.resolve() / stem / entry.path.name
+            runs.append(replace(run, pair=run.run_id))
+            runs.append(replace(run, run_id=f"{stem}.{STATIC}.{number}",
+                                mission_file=str(twin_file), static_pair=True,
+                                pair=run.run_id))
+    ids = [r.run_id for r in runs]
+    if len(set(ids)) != len(ids):
+        twice = sorted({i for i in ids if ids.count(i) > 1})[:3]
+        raise CampaignError(f"--pair-static: the run ids {twice} are taken by both a mission "
+                            f"and a static twin; rename the mission file ending in "
+                            f"'.{STATIC}'")
     return CampaignPlan(PLAN_VERSION, seed, repeat, tuple(runs))

@@ -15,6 +15,7 @@ from typing import Any, TextIO
 from rei.runtime.campaign.engines import CampaignEngine
 from rei.runtime.campaign.plan import CampaignPlan
 from rei.runtime.campaign.progress import Progress
+from rei.runtime.campaign.static_pair import write_static_twins
 from rei.runtime.campaign.store import CampaignStore, RunRecord
 
 
@@ -40,6 +41,9 @@ def run_campaign(plan: CampaignPlan, root: Path, engine: CampaignEngine,
     """Run what is missing of ``plan`` in ``root``; write results.csv / results.parquet."""
     out = stream if stream is not None else sys.stderr
     with CampaignStore.open(root, plan, provenance) as store:
+        # Static twins are (re)written on every session before any run: they follow the
+        # original files, and a run never reads a twin that is not complete.
+        write_static_twins(plan)
         missing = store.missing()
         already = len(plan.runs) - len(missing)
         if already:

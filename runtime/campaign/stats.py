@@ -3,7 +3,11 @@
 A rate from 3 repeats is not a rate from 300: every rate carries its Wilson score interval
 (95 % by default), which stays inside [0, 1] and is sensible at 0 and at n successes, unlike
 the normal approximation. A mission whose repeats disagree (some pass, some fail) is labelled
-flaky. This module must never read files.
+flaky. Against a required pass rate each mission gets one verdict (``mission_verdicts``), and
+with ``--pair-static`` each failing mission is told apart by whether its runs in the same room
+without people fail too (``classify_pairs``). The campaign's exit status, junit.xml and the
+report all take the verdicts from here, so they cannot disagree. This module must never read
+files.
 """
 
 from __future__ import annotations
@@ -12,6 +16,7 @@ import math
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from statistics import NormalDist
+from typing import Literal
 
 from rei.runtime.campaign.store import RunRecord
 
@@ -70,3 +75,128 @@ def by_mission(record: RunRecord) -> str:
 
 def by_group(record: RunRecord) -> str:
     return record.spec.group
+
+
+# -- mission verdicts against a required pass rate ---------------------------------------
+
+DEFAULT_PASS_RATE = 1.0
+"""Every run must pass: without --pass-rate a campaign is as strict as its runs (exit status 0
+only when every run passed), which is what a CI job that never asked for a rate expects."""
+
+MissionVerdictKind = Literal["pass", "fail", "flaky"]
+
+
+@dataclass(frozen=True)
+class MissionVerdict:
+    """One mission judged against the required pass rate, on the Wilson interval of its rate."""
+
+    rate: SuccessRate
+    required: float
+    verdict: MissionVerdictKind
+    reason: str
+
+    @property
+    def mission(self) -> str:
+        return self.rate.key
+
+
+def check_pass_rate(required: float) -> float:
+    """The required pass rate, checked (a number from 0 to 1)."""
+    if not (math.isfinite(required) and 0.0 <= required <= 1.0):
+        raise ValueError(f"expected a required pass rate from 0 to 1, found {required}")
+    return required
+
+
+def judge(rate: SuccessRate, required: float) -> MissionVerdict:
+    """The verdict of one mission; the rule of docs/campaign.md ("Mission verdicts").
+
+    pass:  the interval lies at or above the required rate (low >= P), or it straddles P and
+           every run passed (no run contradicts P; a handful of repeats cannot prove more);
+    fail:  the interval lies below it (high < P), or it straddles P and no run passed;
+    flaky: the interval straddles P (low < P <= high) and the repeats disagree: the runs so far
+           neither confirm nor refute P — repeat more, or find why some runs fail.
+    """
+    check_pass_rate(required)
+    where = (f"{rate.passed}/{rate.runs} passed, rate {rate.rate:.2f}, "
+             f"Wilson [{rate.low:.2f}, {rate.high:.2f}], required {required:g}")
+    if rate.runs == 0:
+        return MissionVerdict(rate, required, "fail", "no run recorded")
+    if rate.low >= required:
+        return MissionVerdict(rate, required, "pass", f"{where}: interval at or above")
+    if rate.high < required:
+        return MissionVerdict(rate, required, "fail", f"{where}: interval below")
+    if rate.passed == rate.runs:
+        return MissionVerdict(rate, required, "pass",
+                              f"{where}: every run passed, interval straddles")
+    if rate.passed == 0:
+        return MissionVerdict(rate, required, "fail", f"{where}: no run passed")
+    return MissionVerdict(rate, required, "flaky",
+                          f"{where}: interval straddles and runs disagree; repeat more")
+
+
+def mission_verdicts(records: Iterable[RunRecord], required: float = DEFAULT_PASS_RATE,
+                     confidence: float = 0.95) -> list[MissionVerdict]:
+    """One verdict per mission in first-seen order. Paired static runs (``--pair-static``) are
+    a diagnosis, not the mission under test: they never count towards its verdict."""
+    check_pass_rate(required)
+    tested = [r for r in records if not r.spec.static_pair]
+    return [judge(rate, required) for rate in success_rates(tested, by_mission, confidence)]
+
+
+def campaign_passed(verdicts: Iterable[MissionVerdict]) -> bool:
+    """Every mission passed; a flaky one does not (CI must not go green on an open question)."""
+    return all(v.verdict == "pass" for v in verdicts)
+
+
+# -- paired static runs: the people or the room? ----------------------------------------
+
+PairCause = Literal["passes", "fails with people only", "fails in the static room too"]
+
+
+@dataclass(frozen=True)
+class PairedMission:
+    """A mission's runs next to their twins in the same room without humans and dynamic
+    objects (same seed, so the same start pose and laser noise)."""
+
+    mission: str
+    with_people: SuccessRate
+    static: SuccessRate
+    failed_pairs: int
+    """Pairs whose run with people failed."""
+    failed_static_too: int
+    """Of those, pairs whose static twin failed as well."""
+    cause: PairCause
+
+
+def classify_pairs(records: Iterable[RunRecord], confidence: float = 0.95
+                   ) -> list[PairedMission]:
+    """Per paired mission: "passes" when every run with people passed; "fails in the static
+    room too" when some failing run's static twin failed as well (the room, the navigator or
+    the mission is the problem, people or not); else "fails with people only"."""
+    all_records = list(records)
+    static = {r.spec.pair: r for r in all_records if r.spec.static_pair}
+    people = [r for r in all_records if not r.spec.static_pair and r.spec.pair in static]
+    rates = {rate.key: rate for rate in success_rates(people, by_mission, confidence)}
+    static_rates = {rate.key: rate for rate in success_rates(
+        [static[r.spec.pair] for r in people], lambda r: by_mission_of_pair(r), confidence)}
+    failed: dict[str, int] = {}
+    both: dict[str, int] = {}
+    for record in people:
+        key = by_mission(record)
+        if not record.passed:
+            failed[key] = failed.get(key, 0) + 1
+            if not static[record.spec.pair].passed:
+                both[key] = both.get(key, 0) + 1
+    out = []
+    for key, rate in rates.items():
+        cause: PairCause = ("passes" if not failed.get(key) else
+                            "fails in the static room too" if both.get(key) else
+                            "fails with people only")
+        out.append(PairedMission(key, rate, static_rates[key], failed.get(key, 0),
+                                 both.get(key, 0), cause))
+    return out
+
+
+def by_mission_of_pair(record: RunRecord) -> str:
+    """The mission a run belongs to, its static twin included (grouped with the original)."""
+    return record.spec.pair.rsplit(".r", 1)[0] if record.spec.pair else by_mission(record)

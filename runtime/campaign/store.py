@@ -6,6 +6,7 @@ Layout of a campaign folder::
     runs/RUN_ID/         the run's own folder (summary.json, events.csv, trace, run.log, ...)
                          plus record.json, written last: a run folder is complete or absent
     runs/.partial/       runs in progress (discarded on resume: they run again)
+    static/NAME/         --pair-static: each mission's static twin (.mission and .room)
     results.parquet      one row per recorded run (rebuilt from the records)
     results.csv          the same rows as CSV
 
@@ -273,9 +274,22 @@ def _plan_difference(manifest: Path, stored: CampaignPlan, new: CampaignPlan) ->
         return head + f"Runs only in the new command: {extra}; only in the folder: {gone}"
     for a, b in zip(stored.runs, new.runs, strict=True):
         if a != b:
-            fields = [k for k, v in a.to_json().items() if b.to_json()[k] != v]
+            old, now = a.to_json(), b.to_json()
+            fields = [k for k in {**old, **now} if old.get(k) != now.get(k)]
             return head + f"Run {a.run_id} differs in {', '.join(fields)}"
     return head
+
+
+def required_pass_rate(manifest: dict[str, Any], default: float = 1.0) -> float:
+    """The pass rate the latest session of a campaign required (``--pass-rate``), so that
+    `rei report DIR` judges the missions as the campaign did; ``default`` for older folders."""
+    sessions = manifest.get("sessions") or []
+    for session in reversed(sessions):
+        value = session.get("pass_rate") if isinstance(session, dict) else None
+        if isinstance(value, (int, float)) and not isinstance(value, bool) \
+                and 0.0 <= value <= 1.0:
+            return float(value)
+    return default
 
 
 def _read_records(root: Path, plan: CampaignPlan) -> list[RunRecord]:
@@ -322,6 +336,7 @@ def record_row(record: RunRecord) -> dict[str, Any]:
             spec.mission_file).stem,
         "room": summary.room if summary else "", "group": spec.group,
         "mission_file": spec.mission_file, "seed": spec.seed, "repeat": spec.repeat,
+        "pair": spec.pair, "static_pair": spec.static_pair,
         "controller": (summary.controller if summary else spec.controller) or "",
         "status": record.status, "outcome": record.outcome, "passed": record.passed,
         "reason": record.reason,

@@ -1,8 +1,10 @@
 """`rei campaign MISSIONS... -o DIR`: run many missions, repeated, in parallel; resumable.
 
 Writes the results store (results.parquet / results.csv, a folder per run), report.html and
-junit.xml into DIR. Exit status 0 when every run passed every requirement, 1 when any failed,
-crashed or hung, 2 for bad input, 130 when interrupted (run the same command to resume).
+junit.xml into DIR. Each mission gets a verdict against the required pass rate (--pass-rate,
+judged on the Wilson interval of its rate; see docs/campaign.md). Exit status 0 when every
+mission passes, 1 when any mission fails or is flaky, 2 for bad input, 130 when interrupted
+(run the same command to resume).
 """
 
 from __future__ import annotations
@@ -35,6 +37,18 @@ def _seconds(text: str) -> float:
     return value
 
 
+def _rate(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a rate from 0 to 1, found {text!r}") \
+            from None
+    if not (math.isfinite(value) and 0.0 <= value <= 1.0):
+        raise argparse.ArgumentTypeError(f"expected a rate from 0 to 1 (0.9 for 90 %), "
+                                         f"found {text!r}")
+    return value
+
+
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser = sub.add_parser(
         "campaign",
@@ -43,7 +57,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                     "from `rei-gen rooms`) --repeat times with seeds derived from --seed, each "
                     "run in its own `rei run` process under a watchdog. Results go to DIR: "
                     "results.parquet/.csv, runs/RUN_ID/, report.html, junit.xml. Interrupted? "
-                    "Run the same command again: only the missing runs run.")
+                    "Run the same command again: only the missing runs run. Exit status: 0 "
+                    "every mission passes (--pass-rate), 1 a mission fails or is flaky, 2 bad "
+                    "input, 130 interrupted.")
     parser.add_argument("missions", nargs="+", type=Path, metavar="MISSIONS",
                         help=".mission files, folders with .mission files, or a suite index .csv")
     parser.add_argument("-o", "--output", type=Path, required=True, metavar="DIR",
@@ -71,6 +87,18 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                         help="local worker processes (default) or a Dask distributed cluster")
     parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
                         help="Dask scheduler address, e.g. tcp://10.0.0.5:8786 (--engine dask)")
+    parser.add_argument("--pass-rate", type=_rate, default=1.0, metavar="P",
+                        help="required pass rate of each mission, 0..1 (default 1: every run "
+                             "must pass). A mission passes when the 95%% Wilson interval of its "
+                             "rate lies at or above P, or straddles P with every run passed; "
+                             "fails when it lies below P, or no run passed; is flaky when it "
+                             "straddles P and runs disagree (repeat more). It can change "
+                             "between sessions: it judges runs, it does not plan them")
+    parser.add_argument("--pair-static", action="store_true",
+                        help="pair every run with a run of the same seed in the same room "
+                             "without humans and dynamic objects (written to DIR/static/), so "
+                             "the report tells failures caused by people from failures the "
+                             "room causes anyway; doubles the runs")
     parser.add_argument("--no-report", action="store_true",
                         help="skip report.html (tables and junit.xml are still written)")
     parser.set_defaults(func=run)
@@ -87,10 +115,12 @@ def run(args: argparse.Namespace) -> int:
         run_campaign,
     )
     from rei.runtime.campaign.engines import CampaignEngine  # noqa: PLC0415
+    from rei.runtime.campaign.plan import STATIC  # noqa: PLC0415
     from rei.runtime.campaign.provenance import collect  # noqa: PLC0415
 
     plan = plan_campaign(list(args.missions), repeat=args.repeat, seed=args.seed,
-                         controller=args.controller, vepl=args.vepl, duration=args.duration)
+                         controller=args.controller, vepl=args.vepl, duration=args.duration,
+                         static_dir=args.output / STATIC if args.pair_static else None)
     engine: CampaignEngine
     if args.engine == "dask":
         if not args.scheduler:
@@ -101,25 +131,46 @@ def run(args: argparse.Namespace) -> int:
         if args.scheduler:
             raise CampaignError("--scheduler is only used with --engine dask")
         engine = LocalEngine(args.workers or os.cpu_count() or 1, timeout=args.timeout)
-    provenance = collect(["rei", *sys.argv[1:]] if sys.argv else [], engine.describe(),
-                         args.controller, args.controller_version)
-    print(f"campaign: {len(plan.runs)} runs ({len(plan.runs) // plan.repeat} missions x "
-          f"{plan.repeat}) on {args.engine} engine -> {args.output}", file=sys.stderr)
+    provenance = {**collect(["rei", *sys.argv[1:]] if sys.argv else [], engine.describe(),
+                            args.controller, args.controller_version),
+                  "pass_rate": args.pass_rate}
+    twins = " + static twins" if args.pair_static else ""
+    missions = len({s.mission_file for s in plan.runs if not s.static_pair})
+    print(f"campaign: {len(plan.runs)} runs ({missions} missions x {plan.repeat}{twins}) on "
+          f"{args.engine} engine -> {args.output}", file=sys.stderr)
     try:
         result = run_campaign(plan, args.output, engine, provenance)
     except KeyboardInterrupt:
         print(f"rei campaign: interrupted; the finished runs are kept in {args.output}. Run "
               f"the same command again to finish the missing ones.", file=sys.stderr)
         return EXIT_INTERRUPTED
-    return finish(args.output, no_report=args.no_report, complete=result.complete)
+    return finish(args.output, no_report=args.no_report, complete=result.complete,
+                  pass_rate=args.pass_rate)
 
 
-def finish(root: Path, *, no_report: bool = False, complete: bool = True) -> int:
-    """Write junit.xml and the report of a campaign folder; the exit status of its verdicts."""
+def finish(root: Path, *, no_report: bool = False, complete: bool = True,
+           pass_rate: float | None = None) -> int:
+    """Write junit.xml and the report of a campaign folder; the exit status of its mission
+    verdicts against ``pass_rate`` (None: the rate the campaign's last session required)."""
+    from rei.runtime.campaign import CampaignStore  # noqa: PLC0415
+    from rei.runtime.campaign.stats import (  # noqa: PLC0415
+        campaign_passed,
+        classify_pairs,
+        mission_verdicts,
+    )
+    from rei.runtime.campaign.store import required_pass_rate  # noqa: PLC0415
     from rei.runtime.report import build_report  # noqa: PLC0415
 
     outcome = build_report(root, html=not no_report)
     print(outcome.describe(), file=sys.stderr)
+    _, manifest, records = CampaignStore.read(root)
+    required = required_pass_rate(manifest) if pass_rate is None else pass_rate
+    verdicts = mission_verdicts(records, required)
+    causes = {p.mission: p.cause for p in classify_pairs(records)}
+    for verdict in verdicts:
+        cause = causes.get(verdict.mission)
+        print(f"  {verdict.verdict.upper():5}  {verdict.mission}: {verdict.reason}"
+              + (f"; {cause}" if cause and cause != "passes" else ""), file=sys.stderr)
     if not complete:
         return EXIT_INTERRUPTED
-    return EXIT_OK if outcome.all_passed else EXIT_FAILED
+    return EXIT_OK if campaign_passed(verdicts) else EXIT_FAILED
