@@ -17,7 +17,7 @@ from pathlib import Path
 from rei.lang.cli_support import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK
 
 
-def _positive_int(text: str) -> int:
+def positive_int(text: str) -> int:
     try:
         value = int(text)
     except ValueError:
@@ -64,9 +64,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                         help=".mission files, folders with .mission files, or a suite index .csv")
     parser.add_argument("-o", "--output", type=Path, required=True, metavar="DIR",
                         help="campaign folder (created; an existing one is resumed)")
-    parser.add_argument("--workers", type=_positive_int, default=None, metavar="N",
+    parser.add_argument("--workers", type=positive_int, default=None, metavar="N",
                         help="runs at once with the local engine (default: number of CPUs)")
-    parser.add_argument("--repeat", type=_positive_int, default=1, metavar="K",
+    parser.add_argument("--repeat", type=positive_int, default=1, metavar="K",
                         help="runs per mission, each with its own derived seed (default 1)")
     parser.add_argument("--seed", type=int, default=0, metavar="S",
                         help="campaign seed the run seeds derive from (default 0)")

@@ -1,9 +1,11 @@
 """`rei demo -o DIR`: generate a small room suite, run a campaign on it, write the report.
 
 The README's first command: everything on the embedded defaults (catalogue, default .vepl,
-reference controller), a couple of minutes on two cores. It uses `rei-gen rooms` when that
-generator is installed and the bundled examples otherwise. Exit status 0 when the campaign
-finished (failed runs are results to look at, not a failure of the demo), 2 for bad input.
+reference controller), a couple of minutes on two cores; ``--controller`` and ``--vepl`` put a
+user's own navigator and monitoring specification on the same suite, as `rei campaign` would.
+It uses `rei-gen rooms` when that generator is installed and the bundled examples otherwise.
+Exit status 0 when the campaign finished (failed runs are results to look at, not a failure of
+the demo), 2 for bad input.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ import sys
 from pathlib import Path
 
 from rei.lang.cli_support import EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_OK
+from rei.runtime.commands.campaign import positive_int
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
@@ -25,18 +28,27 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "demo", help="generate a small suite, run a campaign on it and write its report",
         description="Generate a small suite of rooms and missions with `rei-gen rooms`, run "
                     "every mission --repeat times in parallel with `rei campaign`, and write "
-                    "DIR/campaign/report.html. Run it again to resume an interrupted demo.")
+                    "DIR/campaign/report.html. Test your own navigator on the defaults with "
+                    "--controller module:Class (and your requirements with --vepl FILE). Run "
+                    "the same command again to resume an interrupted demo.")
     parser.add_argument("-o", "--output", type=Path, required=True, metavar="DIR",
                         help="folder for the suite (DIR/suite) and the campaign (DIR/campaign)")
-    parser.add_argument("--count", type=int, default=6, metavar="N",
+    parser.add_argument("--count", type=positive_int, default=6, metavar="N",
                         help="rooms to generate (default 6)")
-    parser.add_argument("--repeat", type=int, default=2, metavar="K",
-                        help="runs per mission (default 2)")
+    parser.add_argument("--repeat", type=positive_int, default=2, metavar="K",
+                        help="runs per mission, each with its own seed (default 2)")
     parser.add_argument("--preset", choices=("small", "medium", "large"), default="small",
                         help="room class of the suite (default small)")
-    parser.add_argument("--seed", type=int, default=0, metavar="S", help="seed (default 0)")
-    parser.add_argument("--workers", type=int, default=None, metavar="N",
+    parser.add_argument("--seed", type=int, default=0, metavar="S",
+                        help="seed of the generated suite and of the campaign's runs (default 0)")
+    parser.add_argument("--workers", type=positive_int, default=None, metavar="N",
                         help="runs at once (default: number of CPUs)")
+    parser.add_argument("--controller", default=None, metavar="NAME",
+                        help="robot under test, passed to every `rei run`: a built-in name or "
+                             "module:Class of your own navigator (default: the reference one)")
+    parser.add_argument("--vepl", type=Path, default=None, metavar="FILE",
+                        help="monitoring specification passed to every `rei run` (default: "
+                             "REI's default.vepl)")
     parser.set_defaults(func=run)
 
 
@@ -62,19 +74,28 @@ def generate_suite(out: Path, count: int, preset: str, seed: int) -> list[Path]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rei.runtime.campaign import LocalEngine, plan_campaign, run_campaign  # noqa: PLC0415
+    from rei.runtime.campaign import (  # noqa: PLC0415
+        CampaignError,
+        LocalEngine,
+        plan_campaign,
+        run_campaign,
+    )
     from rei.runtime.campaign.provenance import collect  # noqa: PLC0415
     from rei.runtime.commands.campaign import finish  # noqa: PLC0415
 
     out: Path = args.output
+    if args.vepl is not None and not args.vepl.is_file():  # before minutes of generation
+        raise CampaignError(f"--vepl: file '{args.vepl}' does not exist")
     print(f"1/3 generating {args.count} {args.preset} rooms into {out / 'suite'}",
           file=sys.stderr)
     inputs = generate_suite(out / "suite", args.count, args.preset, args.seed)
-    plan = plan_campaign(inputs, repeat=args.repeat, seed=args.seed)
+    plan = plan_campaign(inputs, repeat=args.repeat, seed=args.seed, controller=args.controller,
+                         vepl=args.vepl)
     engine = LocalEngine(args.workers or os.cpu_count() or 1)
-    print(f"2/3 running {len(plan.runs)} runs on {engine.workers} worker(s) into "
+    who = f" of {args.controller}" if args.controller else ""
+    print(f"2/3 running {len(plan.runs)} runs{who} on {engine.workers} worker(s) into "
           f"{out / 'campaign'}", file=sys.stderr)
-    provenance = collect(["rei", *sys.argv[1:]], engine.describe(), None, None)
+    provenance = collect(["rei", *sys.argv[1:]], engine.describe(), args.controller, None)
     try:
         run_campaign(plan, out / "campaign", engine, provenance)
     except KeyboardInterrupt:
