@@ -1,4 +1,5 @@
-"""Success rates with Wilson intervals, and the flaky label."""
+"""Success rates with Wilson intervals, the flaky label, and mission verdicts against a
+required pass rate."""
 
 from __future__ import annotations
 
@@ -8,8 +9,10 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from rei.runtime.campaign import CampaignStore, success_rates, wilson_interval
-from rei.runtime.campaign.stats import by_group, by_mission
+from rei.runtime.campaign import CampaignStore, campaign_passed, mission_verdicts
+from rei.runtime.campaign import SuccessRate, success_rates, wilson_interval
+from rei.runtime.campaign.stats import by_group, by_mission, judge
+from rei.runtime.campaign.store import required_pass_rate
 
 from .records import write_campaign
 
@@ -47,3 +50,67 @@ def test_rates_and_flaky_label_per_mission_and_group(tmp_path: Path) -> None:
     assert rates["navigation"].rate == pytest.approx(2 / 3)
     (group,) = success_rates(records, by_group)
     assert (group.key, group.runs, group.passed) == ("examples", 12, 7)
+
+
+# -- mission verdicts against a required pass rate ---------------------------------------
+
+
+def _rate(passed: int, runs: int) -> SuccessRate:
+    low, high = wilson_interval(passed, runs)
+    return SuccessRate("m", runs, passed, passed / runs, low, high)
+
+
+@pytest.mark.parametrize(("passed", "runs", "required", "verdict"), [
+    (3, 3, 1.0, "pass"),     # the default: every run must pass
+    (2, 3, 1.0, "fail"),     # one failure refutes a required rate of 1
+    (3, 3, 0.9, "pass"),     # Wilson [0.44, 1] straddles 0.9, but no run contradicts it
+    (29, 30, 0.9, "flaky"),  # [0.83, 0.99]: a failure, and 0.9 not yet confirmed nor refuted
+    (2, 3, 0.5, "flaky"),
+    (0, 3, 0.5, "fail"),     # straddles 0.5, but nothing ever passed
+    (9, 10, 0.5, "pass"),    # [0.60, 0.98] lies above 0.5: confidently at or above
+    (5, 10, 0.9, "fail"),    # [0.24, 0.76] lies below 0.9
+    (0, 3, 0.0, "pass"),     # nothing required
+])
+def test_mission_verdict_rule(passed: int, runs: int, required: float, verdict: str) -> None:
+    judged = judge(_rate(passed, runs), required)
+    assert judged.verdict == verdict, judged.reason
+    assert f"{passed}/{runs} passed" in judged.reason
+
+
+@given(st.integers(1, 60).flatmap(lambda n: st.tuples(st.integers(0, n), st.just(n))),
+       st.floats(0.0, 1.0))
+def test_verdicts_follow_the_wilson_interval(kn: tuple[int, int], required: float) -> None:
+    k, n = kn
+    rate = _rate(k, n)
+    verdict = judge(rate, required).verdict
+    if rate.low >= required:
+        assert verdict == "pass"
+    elif rate.high < required:
+        assert verdict == "fail"
+    else:  # the interval straddles the required rate: flaky exactly when the runs disagree
+        assert (verdict == "flaky") == rate.flaky
+    # Requiring less never turns a passing mission into a failing or flaky one.
+    if verdict == "pass":
+        assert judge(rate, required / 2).verdict == "pass"
+
+
+def test_a_required_rate_outside_0_to_1_is_refused() -> None:
+    with pytest.raises(ValueError, match="from 0 to 1, found 1.5"):
+        judge(_rate(1, 1), 1.5)
+
+
+def test_mission_verdicts_of_a_campaign_and_the_rate_it_required(tmp_path: Path) -> None:
+    write_campaign(tmp_path)
+    _, manifest, records = CampaignStore.read(tmp_path)
+    verdicts = {v.mission: v.verdict for v in mission_verdicts(records)}
+    assert verdicts == {"medium_sparse": "fail", "navigation": "fail", "simple_wall": "pass",
+                        "small_dense": "fail"}
+    lenient = {v.mission: v.verdict for v in mission_verdicts(records, 0.5)}
+    assert lenient == {"medium_sparse": "fail", "navigation": "flaky", "simple_wall": "pass",
+                       "small_dense": "flaky"}
+    assert not campaign_passed(mission_verdicts(records, 0.5))
+    assert campaign_passed(mission_verdicts(records, 0.0))
+    # `rei report DIR` judges as the last session did; folders from before --pass-rate: 1.0.
+    assert required_pass_rate(manifest) == 1.0
+    sessions = [{"pass_rate": 0.5}, {"pass_rate": 0.8}, {"command": ["rei"]}]
+    assert required_pass_rate({"sessions": sessions}) == 0.8
