@@ -80,7 +80,8 @@ def test_the_twin_is_the_room_without_humans_and_dynamic_objects(tmp_path: Path)
     assert twin.mission_text.replace('"corridor.room"', '"rooms/corridor.room"') == \
         (tmp_path / "blocked.mission").read_text()
     # Everything else is the original text: grids, comments, the robot and static objects.
-    kept = [line for line in CORRIDOR.splitlines() if "blocker" not in line and "trolley" not in line]
+    kept = [line for line in CORRIDOR.splitlines()
+            if "blocker" not in line and "trolley" not in line]
     assert [line for line in twin.room_text.splitlines()[2:] if line.strip()] == \
         [line for line in kept if line.strip()]
     (tmp_path / "twin").mkdir()
@@ -98,7 +99,8 @@ def test_a_catalogue_path_still_names_the_same_file_from_the_twin(tmp_path: Path
     catalogue = Path(__file__).resolve().parents[2] / "catalogue" / "default.toml"
     room = tmp_path / "rooms" / "corridor.room"
     (tmp_path / "rooms" / "default.toml").write_bytes(catalogue.read_bytes())
-    room.write_text(CORRIDOR.replace("    grid hall", '    catalogue "default.toml"\n    grid hall'))
+    room.write_text(CORRIDOR.replace("    grid hall",
+                                     '    catalogue "default.toml"\n    grid hall'))
     twin = static_twin(tmp_path / "blocked.mission")
     expected = (tmp_path / "rooms" / "default.toml").resolve().as_posix()
     assert f'catalogue "{expected}"' in twin.room_text

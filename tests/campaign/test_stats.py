@@ -9,8 +9,14 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from rei.runtime.campaign import CampaignStore, campaign_passed, mission_verdicts
-from rei.runtime.campaign import SuccessRate, success_rates, wilson_interval
+from rei.runtime.campaign import (
+    CampaignStore,
+    SuccessRate,
+    campaign_passed,
+    mission_verdicts,
+    success_rates,
+    wilson_interval,
+)
 from rei.runtime.campaign.stats import by_group, by_mission, judge
 from rei.runtime.campaign.store import required_pass_rate
 
