@@ -305,3 +305,35 @@ def test_a_users_vepl_reaches_every_run_and_its_requirements_reach_junit(tmp_pat
     assert {c.get("name", "").split(" [")[0] for c in cases} == requirements
     columns = (out / "results.csv").read_text().splitlines()[0].split(",")
     assert {"req:HUMAN_PERSONAL_SPACE", "req:HUMAN_NO_COLLISION"} <= set(columns)
+
+
+@pytest.mark.slow
+def test_demo_passes_a_users_controller_vepl_and_seed_to_every_run(tmp_path: Path) -> None:
+    require_rei_run()
+    (tmp_path / "plugins").mkdir()
+    (tmp_path / "plugins" / "my_nav.py").write_text(
+        "from rei.runtime.robot.reference import ReferenceNavigator\n\n\n"
+        "class MyNavigator(ReferenceNavigator):\n    name = 'my-navigator'\n")
+    vepl = EXAMPLES / "navigation" / "human_safety.vepl"
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(tmp_path / "plugins"), os.environ.get("PYTHONPATH", "")])}
+    done = subprocess.run([sys.executable, "-m", "rei.runtime.cli", "demo", "-o",
+                           str(tmp_path / "demo"), "--count", "1", "--repeat", "1",
+                           "--workers", "1", "--seed", "4", "--controller", "my_nav:MyNavigator",
+                           "--vepl", str(vepl)],
+                          capture_output=True, text=True, timeout=SAFETY_LIMIT, env=env)
+    assert done.returncode == 0, done.stderr
+    plan, manifest, records = CampaignStore.read(tmp_path / "demo" / "campaign")
+    assert plan.seed == 4
+    (record,) = records
+    assert record.spec.controller == "my_nav:MyNavigator"
+    assert record.spec.vepl == str(vepl.resolve())
+    assert record.summary is not None
+    assert {v.requirement for v in record.summary.verdicts} == {"HUMAN_PERSONAL_SPACE",
+                                                               "HUMAN_NO_COLLISION"}
+    assert manifest["sessions"][0]["controller"] == "my_nav:MyNavigator"
+    bad = subprocess.run([sys.executable, "-m", "rei.runtime.cli", "demo", "-o",
+                          str(tmp_path / "bad"), "--vepl", str(tmp_path / "missing.vepl")],
+                         capture_output=True, text=True, timeout=SAFETY_LIMIT)
+    assert bad.returncode == 2 and "missing.vepl' does not exist" in bad.stderr
+    assert not (tmp_path / "bad" / "suite").exists()  # refused before generating anything
