@@ -47,6 +47,8 @@ class RunSpec:
     pair: str = ""
     """With ``--pair-static``: the run id of the run with people that this run (the run
     itself, or its static twin) belongs to; empty in an unpaired campaign."""
+    variation: bool = True
+    """False: `rei run --no-variation` (no seeded start-pose jitter: the exact declared scene)."""
 
     def to_json(self) -> dict[str, Any]:
         data = {"run_id": self.run_id, "mission_file": self.mission_file,
@@ -55,6 +57,8 @@ class RunSpec:
                 "duration": self.duration, "parameters": dict(self.parameters)}
         if self.pair:  # unpaired plans keep the shape earlier versions wrote and read
             data.update(static_pair=self.static_pair, pair=self.pair)
+        if not self.variation:
+            data["variation"] = False
         return data
 
     @staticmethod
@@ -70,6 +74,8 @@ class RunSpec:
             argv += ["--vepl", self.vepl]
         if self.duration is not None:
             argv += ["--duration", _number(self.duration)]
+        if not self.variation:
+            argv.append("--no-variation")
         return argv
 
 
@@ -194,8 +200,8 @@ STATIC = "static"
 
 def plan_campaign(inputs: list[Path], *, repeat: int = 1, seed: int = 0,
                   controller: str | None = None, vepl: Path | None = None,
-                  duration: float | None = None, static_dir: Path | None = None
-                  ) -> CampaignPlan:
+                  duration: float | None = None, static_dir: Path | None = None,
+                  variation: bool = True) -> CampaignPlan:
     """Every mission of the inputs, ``repeat`` times, each with its derived seed.
 
     With ``static_dir`` every run is paired with its static twin (same seed, the mission's
@@ -226,7 +232,7 @@ def plan_campaign(inputs: list[Path], *, repeat: int = 1, seed: int = 0,
                 run_id=f"{stem}.{number}", mission_file=str(entry.path), mission_key=entry.key,
                 group=entry.group, repeat=k, seed=derive_seed(seed, entry.key, k),
                 controller=controller, vepl=vepl_path, duration=duration,
-                parameters=entry.parameters)
+                parameters=entry.parameters, variation=variation)
             if static_dir is None:
                 runs.append(run)
                 continue

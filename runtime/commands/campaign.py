@@ -99,6 +99,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                              "without humans and dynamic objects (written to DIR/static/), so "
                              "the report tells failures caused by people from failures the "
                              "room causes anyway; doubles the runs")
+    parser.add_argument("--no-variation", action="store_true",
+                        help="passed to `rei run`: no seeded start-pose jitter, every repeat "
+                             "starts at the exact declared scene (only the laser noise differs)")
     parser.add_argument("--no-report", action="store_true",
                         help="skip report.html (tables and junit.xml are still written)")
     parser.set_defaults(func=run)
@@ -120,7 +123,8 @@ def run(args: argparse.Namespace) -> int:
 
     plan = plan_campaign(list(args.missions), repeat=args.repeat, seed=args.seed,
                          controller=args.controller, vepl=args.vepl, duration=args.duration,
-                         static_dir=args.output / STATIC if args.pair_static else None)
+                         static_dir=args.output / STATIC if args.pair_static else None,
+                         variation=not args.no_variation)
     engine: CampaignEngine
     if args.engine == "dask":
         if not args.scheduler:

@@ -94,3 +94,12 @@ def test_bad_inputs_are_named(tmp_path: Path) -> None:
         plan_campaign([EXAMPLES], duration=float("nan"))
     with pytest.raises(CampaignError, match="--vepl"):
         plan_campaign([EXAMPLES], vepl=tmp_path / "x.vepl")
+
+
+def test_no_variation_reaches_the_run_and_is_part_of_the_plan() -> None:
+    plain = plan_campaign([EXAMPLES / "simple_wall"])
+    exact = plan_campaign([EXAMPLES / "simple_wall"], variation=False)
+    assert "--no-variation" in exact.runs[0].run_argv("out")
+    assert "--no-variation" not in plain.runs[0].run_argv("out")
+    assert "variation" not in plain.runs[0].to_json()  # plans as earlier versions wrote them
+    assert CampaignPlan.from_json(exact.to_json()) == exact != plain
