@@ -115,6 +115,11 @@ def _overlap(fp: Footprint, pose: tuple[float, float, float], body: BodySpec) ->
     """Do the footprints strictly overlap (touching is not overlapping: a robot declared
     against a wall may stay there)?"""
     other = body.footprint
+    if not (isinstance(fp, Box | Cylinder) and isinstance(other, Box | Cylinder)):
+        return True  # manifests hold boxes and cylinders only; anything else: keep clear
+    reach = fp.circumradius() + other.circumradius()
+    if abs(pose[0] - body.x) >= reach or abs(pose[1] - body.y) >= reach:
+        return False  # far apart: most of a room's wall tiles, without any geometry
     if isinstance(fp, Cylinder) and isinstance(other, Cylinder):
         return math.hypot(pose[0] - body.x, pose[1] - body.y) < fp.radius + other.radius - 1e-9
     if isinstance(fp, Box) and isinstance(other, Box):
@@ -130,9 +135,8 @@ def _overlap(fp: Footprint, pose: tuple[float, float, float], body: BodySpec) ->
         return True
     if isinstance(fp, Box) and isinstance(other, Cylinder):
         return _box_circle(fp, pose, (body.x, body.y), other.radius)
-    if isinstance(fp, Cylinder) and isinstance(other, Box):
-        return _box_circle(other, (body.x, body.y, body.yaw), pose[:2], fp.radius)
-    return False
+    assert isinstance(fp, Cylinder) and isinstance(other, Box)
+    return _box_circle(other, (body.x, body.y, body.yaw), (pose[0], pose[1]), fp.radius)
 
 
 def _box_circle(box: Box, pose: tuple[float, float, float], centre: tuple[float, float],

@@ -11,7 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rei.catalogue import Box
+from rei.catalogue import Box, Cylinder
 from rei.runtime.commands.run import run_into
 from rei.runtime.errors import RunError
 from rei.runtime.run import generate_world
@@ -65,6 +65,56 @@ def test_a_pose_that_would_touch_an_obstacle_falls_back_to_the_declared_one(
     fallbacks = [s for s in outcomes if not s.applied]
     assert fallbacks and all(s.pose == s.declared and "'tight'" in s.reason for s in fallbacks)
     assert any(s.applied for s in outcomes)
+
+
+def _reach_x(shape: Box | Cylinder, yaw: float) -> float:
+    """How far a footprint turned by ``yaw`` reaches along +x from its centre."""
+    if isinstance(shape, Cylinder):
+        return shape.radius
+    hx, hy = shape.half_extents()
+    return hx * abs(math.cos(yaw)) + hy * abs(math.sin(yaw))
+
+
+def _outline(box: Box, x: float, y: float, yaw: float, n: int = 400
+             ) -> list[tuple[float, float]]:
+    hx, hy = box.half_extents()
+    local = [(hx * (2 * i / n - 1), side * hy) for i in range(n + 1) for side in (-1, 1)]
+    local += [(side * hx, hy * (2 * i / n - 1)) for i in range(n + 1) for side in (-1, 1)]
+    c, s = math.cos(yaw), math.sin(yaw)
+    return [(x + c * u - s * v, y + s * u + c * v) for u, v in local]
+
+
+@pytest.mark.parametrize("robot_shape", [Box(0.281, 0.306), Cylinder(0.15)])
+@pytest.mark.parametrize("obstacle", [Box(0.4, 0.6), Cylinder(0.25)])
+def test_touching_is_allowed_and_overlapping_is_not(
+        manifest: WorldManifest, robot_shape: Box | Cylinder, obstacle: Box | Cylinder) -> None:
+    robot = replace(manifest.robot, x=0.0, y=0.0, yaw=0.0, footprint=robot_shape)
+    gap = robot_shape.half_extents()[0] + obstacle.half_extents()[0]
+    # The post exactly touches the robot's +x side at the declared pose.
+    post = replace(manifest.objects[0], name="post", x=gap, y=0.0, yaw=0.0, footprint=obstacle)
+    scene = replace(manifest, robot=robot, objects=(post,), walls=(),
+                    floors=(("start", 0.0, 0.0),))
+    assert jitter_start(scene, 0, StartJitter(0.0, 0.0)).applied  # touching is allowed
+    starts = [jitter_start(scene, seed) for seed in range(80)]
+    for start in starts:
+        # What an exact oracle says about the drawn pose (the declared one on fallback is
+        # only reached from a drawn pose that overlaps).
+        x, y, yaw = start.pose
+        if isinstance(robot_shape, Cylinder) and isinstance(obstacle, Cylinder):
+            overlaps = math.hypot(gap - x, y) < gap - 1e-9
+        elif isinstance(obstacle, Cylinder):  # a turned box's outline, densely sampled
+            clearance = min(math.hypot(gap - px, py) for px, py in _outline(robot_shape, x, y,
+                                                                            yaw))
+            if abs(clearance - obstacle.radius) < 1e-3:
+                continue  # too close to call for a sampled oracle
+            overlaps = clearance < obstacle.radius
+        else:  # flat faces meet; the y jitter stays within them
+            overlaps = x + _reach_x(robot_shape, yaw) > robot_shape.half_extents()[0] + 1e-9
+        if start.applied:
+            assert not overlaps, start
+        else:
+            assert start.pose == start.declared and "'post'" in start.reason
+    assert any(s.applied for s in starts) and any(not s.applied for s in starts)
 
 
 def test_a_bad_range_is_a_located_error() -> None:
