@@ -2,7 +2,9 @@
 
 One fixed physics step drives everything; the controller, the laser and the collector run
 every n-th step at their own rates (each rate must divide the physics rate). All randomness
-comes from one ``numpy.random.Generator`` seeded from the run's seed, iteration is in
+comes from ``numpy.random.Generator``s seeded from the run's seed (the main stream from
+``default_rng(seed)``, each variation such as the start-pose jitter from its own
+``default_rng([seed, k])``, so adding one never shifts another), iteration is in
 declaration order and no wall-clock time enters the outputs, so the same inputs and seed give
 the same bytes. A controller that raises, hangs past the watchdog or sends a non-finite
 command ends the run with outcome ``error``; Ctrl-C ends it ``interrupted``; in both cases the
