@@ -48,6 +48,9 @@ class MissionEvent:
     """Position of the task in the sent sequence (cycles expanded), from 0."""
     reason: str = ""
     """Why a task failed: 'aborted', 'timeout', 'outside tolerance', ..."""
+    cause: str = ""
+    """Machine-readable failure category of a task_fail: aborted, preempted, timeout,
+    position, heading or abandoned."""
 
 
 @dataclass(frozen=True)
@@ -60,6 +63,36 @@ class ObservedObject:
     footprint: Footprint
     """In the object's own frame; walls carry a Box of the tile size."""
     height: float
+
+
+@dataclass(frozen=True)
+class GoalFacts:
+    name: str
+    x: float
+    y: float
+    heading: float | None
+    """rad, world frame; None when the goal has no heading."""
+    tolerance: float
+    """m"""
+    heading_tolerance: float
+    """rad"""
+    timeout: float
+    """s"""
+
+
+@dataclass(frozen=True)
+class MissionFacts:
+    """What the mission asks for, so requirements can judge it (goals, limits)."""
+
+    goals: tuple[GoalFacts, ...]
+    """As declared, one cycle."""
+    cycles: int
+    time_limit: float
+    speed_limit: float
+    """m/s: the tighter of the drive's max_linear and the mission's max_speed."""
+    turn_limit: float
+    """rad/s: the drive's max_angular."""
+    mission_max_speed: float | None
 
 
 @dataclass(frozen=True)
@@ -79,6 +112,7 @@ class StreamHeader:
     """(x, y) of the laser in the robot's frame, metres; its beams point along the robot's
     heading plus the scan's angles. The monitor measures laser clearance from here to the
     robot footprint's boundary (issue 6: the TurtleBot3 Waffle's laser sits 6.4 cm back)."""
+    mission_facts: MissionFacts | None = None
 
 
 @dataclass(frozen=True)
@@ -105,6 +139,9 @@ class RobotBelief:
     nav_state: NavState
     task: str | None
     """Name of the goal being executed, if any."""
+    cmd: tuple[float, float] = (0.0, 0.0)
+    """The raw (linear m/s, angular rad/s) command the controller last returned, before the
+    motor model clips it to the drive limits."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -126,3 +163,6 @@ class Sample:
     belief: RobotBelief
     events: tuple[MissionEvent, ...] = ()
     """Mission events since the previous sample."""
+    contacts: tuple[int, ...] = ()
+    """Indices into StreamHeader.objects of the bodies the robot physically touched at any
+    physics step since the previous sample."""

@@ -13,6 +13,7 @@ from importlib import resources
 import jinja2
 
 from rei.runtime.campaign.stats import by_mission
+from rei.runtime.campaign.store import verdict_reason
 from rei.runtime.report import plots
 from rei.runtime.report.data import CampaignData
 from rei.runtime.report.tables import (
@@ -75,7 +76,7 @@ def render_html(data: CampaignData, rerun: dict[str, str]) -> str:
         failed=len(failures), flaky=[m for m in missions if m.flaky],
         repeat=data.plan.repeat, seed=data.plan.seed,
         failures=failures[:MAX_FAILURES], more_failures=max(0, len(failures) - MAX_FAILURES),
-        rerun=rerun, mission_of=by_mission,
+        rerun=rerun, mission_of=by_mission, reason_of=verdict_reason,
         success_tables=[success_table(missions, "Mission"), group_success_table(records)],
         summary_tables=tables, signal_table=signal_counts(records),
         utility_plot=plots.utility_over_time(data),

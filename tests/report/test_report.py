@@ -76,7 +76,7 @@ def test_junit_has_a_suite_per_mission_and_a_case_per_requirement(campaign: Path
     nav = suites[1]
     assert (nav.get("tests"), nav.get("failures"), nav.get("errors")) == ("6", "1", "0")
     (failure,) = nav.iter("failure")
-    assert failure.get("message") == "task 2 timed out"
+    assert failure.get("message") == "all_tasks_succeed fail at t=11 s: task 2 timed out"
     assert "re-run: rei run " in (failure.text or "") and "--seed" in (failure.text or "")
     small = suites[3]
     (error,) = small.iter("error")
