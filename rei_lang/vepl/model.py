@@ -18,11 +18,13 @@ CompareOp = Literal["<", "<=", ">", ">=", "==", "!="]
 
 TASK_STATES = ("pending", "active", "succeeded", "failed")
 MISSION_STATES = ("pending", "running", "ended")
-TASK_FAILURES = ("none", "aborted", "preempted", "timeout", "position", "heading", "abandoned")
+TASK_FAILURES = ("none", "aborted", "preempted", "timeout", "position", "heading", "abandoned",
+                 "cut")
 """Why a task failed (``failure(t)``): none (it did not fail), aborted or preempted by the
 robot, timeout (outlived its timeout), position (claimed success outside the goal's
-tolerance), heading (claimed success with the wrong heading), abandoned (the mission ended
-first: time limit, run error, interruption)."""
+tolerance), heading (claimed success with the wrong heading), abandoned (the mission's time
+limit ran out first, or the run broke), cut (the run was stopped early by the user's
+``--duration``: the task's end was never observed)."""
 SCALAR_MEASURES = ("laser_min", "laser_clearance", "speed", "time", "odom_error",
                    "robot_inradius", "robot_circumradius", "cmd_speed", "cmd_turn",
                    "turn_rate", "yaw", "speed_limit", "turn_limit", "humans",
