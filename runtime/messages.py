@@ -35,6 +35,13 @@ class NavState(StrEnum):
 
 MissionEventKind = Literal["begin", "task_start", "task_success", "task_fail", "end"]
 
+FAILURE_CAUSES = ("aborted", "preempted", "timeout", "position", "heading", "abandoned")
+"""The machine-readable causes of a ``task_fail`` event: the controller aborted or preempted
+the goal, the goal outlived its timeout, the controller claimed success outside the position
+tolerance or with the wrong heading, or the mission ended early (time limit, run error,
+interruption) while the task ran. Requirements select on these, never on the reason text."""
+
+
 
 @dataclass(frozen=True)
 class MissionEvent:
@@ -47,7 +54,9 @@ class MissionEvent:
     index: int | None = None
     """Position of the task in the sent sequence (cycles expanded), from 0."""
     reason: str = ""
-    """Why a task failed: 'aborted', 'timeout', 'outside tolerance', ..."""
+    """Why a task failed, for people: 'aborted: blocked', 'timeout after 30 s', ..."""
+    cause: str = ""
+    """Why a task failed, for requirements: one of FAILURE_CAUSES on ``task_fail``, else ''."""
 
 
 @dataclass(frozen=True)
