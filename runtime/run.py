@@ -332,7 +332,7 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
         "path_length": path_length,
         "tasks": [{"index": r.index, "task": r.task, "succeeded": r.succeeded, "reason": r.reason,
                    "start": r.start, "end": r.end, "time": r.end - r.start,
-                   "final_distance": r.final_distance} for r in tasks],
+                   "final_distance": r.final_distance, "cause": r.cause} for r in tasks],
         "time_per_task": {f"{r.index}:{r.task}": r.end - r.start for r in tasks},
         "tasks_succeeded": sum(r.succeeded for r in tasks),
         "tasks_failed": sum(not r.succeeded for r in tasks),

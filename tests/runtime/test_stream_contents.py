@@ -142,6 +142,7 @@ def test_a_wrong_heading_fails_the_task_with_cause_heading(tmp_path: Path) -> No
     assert ends[0].reason == "heading off by 90.0° (tolerance 15°)"
     tasks = summary.measurements["tasks"]
     assert tasks[0]["reason"] == ends[0].reason and not tasks[0]["succeeded"]
+    assert [t["cause"] for t in tasks[:4]] == ["heading", "", "", "position"]
     facts = header.mission_facts
     assert facts is not None
     assert [(g.name, g.heading, g.tolerance, g.timeout) for g in facts.goals] == [
