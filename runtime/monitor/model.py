@@ -159,8 +159,9 @@ class RuntimeModel:
         distance = self.footprints.distances(s.robot_pose, s.poses, self.cutoff)
         approach = self._approach(s, distance)  # from the geometry, before contacts count
         if s.contacts:
-            # the physics touched these between samples: a contact is always a collision
-            touched = np.asarray(s.contacts, dtype=np.int64)
+            # A physical contact is always a collision: pybullet saw the bodies touch, maybe
+            # between two samples, while the sampled footprints may stand a little apart.
+            touched = np.asarray(s.contacts, dtype=np.intp)
             distance[touched] = np.minimum(distance[touched], 0.0)
         if self._any_human:
             humans = distance[self.human_mask]
@@ -303,8 +304,10 @@ def check_sample(s: Sample, header: StreamHeader) -> str | None:
     twists = np.asarray(s.twists)
     if poses.shape != (n, 3) or twists.shape != (n, 3):
         return "malformed"
+    if not all(isinstance(i, (int, np.integer)) and 0 <= i < n for i in s.contacts):
+        return "malformed"
     scalars = (s.time, *s.robot_pose, *s.robot_twist, *s.belief.odom, *s.belief.odom_twist,
-               s.belief.laser_min)
+               s.belief.laser_min, *s.belief.cmd)
     if not all(map(math.isfinite, scalars)):
         return "non_finite"
     scan = s.belief.scan
