@@ -8,7 +8,7 @@ mission is printed as written. Numbers are printed with repr, so they read back 
 
 from __future__ import annotations
 
-from rei.lang.mission.model import DEFAULT_TOLERANCE, Mission
+from rei.lang.mission.model import DEFAULT_HEADING_TOLERANCE, DEFAULT_TOLERANCE, Mission
 from rei.lang.room.model import DEFAULT_TILE_SIZE, PlacedObject, Room
 
 _KEYWORD = {"static": "object", "dynamic": "dynamic", "human": "human", "robot": "robot"}
@@ -77,6 +77,8 @@ def print_mission(mission: Mission, room_path: str) -> str:
             line += f" tolerance {_num(goal.tolerance)}"
         if goal.heading_deg is not None:
             line += f" heading {_num(goal.heading_deg)}"
+        if goal.heading_tolerance_deg != DEFAULT_HEADING_TOLERANCE:
+            line += f" heading_tolerance {_num(goal.heading_tolerance_deg)}"
         line += f" timeout {_num(goal.timeout)}"
         lines.append(line)
     lines.append("}")

@@ -17,9 +17,11 @@ import numpy as np
 
 from rei.catalogue import Footprint
 
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
 """Bumped whenever a field changes meaning; readers refuse other versions (2: the header
-carries the laser's mount point)."""
+carries the laser's mount point; 3: the header carries the mission's facts, a sample the
+bodies touched since the previous one and the robot's raw velocity command, a failed task
+its cause)."""
 
 
 class NavState(StrEnum):
@@ -35,6 +37,14 @@ class NavState(StrEnum):
 
 MissionEventKind = Literal["begin", "task_start", "task_success", "task_fail", "end"]
 
+FAILURE_CAUSES = ("aborted", "preempted", "timeout", "position", "heading", "abandoned", "cut")
+"""The machine-readable causes of a ``task_fail`` event: the controller aborted or preempted
+the goal, the goal outlived its timeout, the controller claimed success outside the position
+tolerance or with the wrong heading, the mission ended early (its time limit, a run error,
+an interruption) while the task ran, or the run was cut short by the user's ``--duration``
+(the task's end was never observed). Requirements select on these, never on the reason
+text."""
+
 
 @dataclass(frozen=True)
 class MissionEvent:
@@ -47,7 +57,9 @@ class MissionEvent:
     index: int | None = None
     """Position of the task in the sent sequence (cycles expanded), from 0."""
     reason: str = ""
-    """Why a task failed: 'aborted', 'timeout', 'outside tolerance', ..."""
+    """Why a task failed, for people: 'aborted: blocked', 'timeout after 30 s', ..."""
+    cause: str = ""
+    """Why a task failed, for requirements: one of FAILURE_CAUSES on ``task_fail``, else ''."""
 
 
 @dataclass(frozen=True)
@@ -60,6 +72,41 @@ class ObservedObject:
     footprint: Footprint
     """In the object's own frame; walls carry a Box of the tile size."""
     height: float
+
+
+@dataclass(frozen=True)
+class GoalFacts:
+    """One goal of the mission as the executor judges it (world frame, metres, radians)."""
+
+    name: str
+    x: float
+    y: float
+    heading: float | None
+    """Radians, world frame; None when any heading will do."""
+    tolerance: float
+    """Metres from (x, y) within which a claimed success counts."""
+    heading_tolerance: float
+    """Radians the final heading may differ from ``heading`` (unused without a heading)."""
+    timeout: float
+    """Seconds the task may run before it is cancelled."""
+
+
+@dataclass(frozen=True)
+class MissionFacts:
+    """What the mission asks for, so requirements can name goals, limits and tolerances
+    without re-reading the .mission file (a replayed trace carries them with it)."""
+
+    goals: tuple[GoalFacts, ...]
+    """As declared: one cycle; the tasks are this sequence repeated ``cycles`` times."""
+    cycles: int
+    time_limit: float
+    """Seconds of simulated time the whole mission may take."""
+    speed_limit: float
+    """m/s the robot can actually reach: min(drive max_linear, mission max_speed)."""
+    turn_limit: float
+    """rad/s: the drive's max_angular."""
+    mission_max_speed: float | None
+    """The mission's own max_speed (m/s), None when it sets none."""
 
 
 @dataclass(frozen=True)
@@ -79,6 +126,8 @@ class StreamHeader:
     """(x, y) of the laser in the robot's frame, metres; its beams point along the robot's
     heading plus the scan's angles. The monitor measures laser clearance from here to the
     robot footprint's boundary (issue 6: the TurtleBot3 Waffle's laser sits 6.4 cm back)."""
+    mission_facts: MissionFacts | None = None
+    """The goals and limits of the mission run; None for streams not made by a mission run."""
 
 
 @dataclass(frozen=True)
@@ -105,6 +154,10 @@ class RobotBelief:
     nav_state: NavState
     task: str | None
     """Name of the goal being executed, if any."""
+    cmd: tuple[float, float] = (0.0, 0.0)
+    """(linear m/s, angular rad/s) the controller last returned, before the motor model
+    clipped it to the drive limits: requirements on what the software *asked* for (a
+    controller commanding 2 m/s to a 0.26 m/s drive) cannot be read from the motion."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -126,3 +179,8 @@ class Sample:
     belief: RobotBelief
     events: tuple[MissionEvent, ...] = ()
     """Mission events since the previous sample."""
+    contacts: tuple[int, ...] = ()
+    """Sorted indices into StreamHeader.objects of the bodies the robot physically touched
+    at any physics step since the previous sample (this one included). Physics runs faster
+    than the samples, so a brief touch between two samples would otherwise be lost while the
+    sampled footprint distance never drops below the collision threshold."""

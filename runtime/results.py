@@ -16,7 +16,14 @@ Outcome = Literal["completed", "failed", "timeout", "error", "interrupted"]
 timeout: the mission's time limit ran out; error: the run itself broke (controller raised,
 hung or sent non-finite commands); interrupted: stopped by the user (output incomplete)."""
 
-VerdictStatus = Literal["pass", "fail", "inconclusive"]
+VerdictStatus = Literal["pass", "fail", "inconclusive", "not_applicable"]
+"""not_applicable: the requirement's premise (``when QUERY`` in the .vepl: people in the room,
+a back-and-forth mission, goals with headings) never held in the run, so it judged nothing."""
+
+RunVerdict = Literal["pass", "fail", "inconclusive", "error", "interrupted", "unjudged"]
+"""The run's one judgement (``judge``): pass, fail (a requirement failed), inconclusive (none
+failed but one could not be decided), error (the run itself broke), interrupted (stopped by
+the user), unjudged (no requirement was checked: ``rei run --no-monitor``)."""
 
 
 @dataclass(frozen=True)
@@ -26,6 +33,8 @@ class Verdict:
     decided_at: float | None
     """Simulation time of the event that decided it (None when decided at the end)."""
     reason: str
+    objects: tuple[str, ...] = ()
+    """What the deciding event involved: objects, humans or tasks (names)."""
 
 
 @dataclass(frozen=True)
@@ -47,15 +56,52 @@ class RunSummary:
 
     def to_json(self) -> dict[str, Any]:
         data = asdict(self)
-        data["verdicts"] = [asdict(v) for v in self.verdicts]
+        data["verdicts"] = [{**asdict(v), "objects": list(v.objects)} for v in self.verdicts]
+        data["verdict"] = judge(self)
         return data
 
     @staticmethod
     def from_json(data: dict[str, Any]) -> RunSummary:
-        verdicts = tuple(Verdict(**v) for v in data.get("verdicts", ()))
-        fields = {k: v for k, v in data.items() if k != "verdicts"}
+        verdicts = tuple(Verdict(**{**v, "objects": tuple(v.get("objects", ()))})
+                         for v in data.get("verdicts", ()))
+        fields = {k: v for k, v in data.items() if k not in ("verdicts", "verdict")}
         return RunSummary(verdicts=verdicts, **fields)
 
     @property
+    def verdict(self) -> RunVerdict:
+        return judge(self)
+
+    @property
     def passed(self) -> bool:
-        return all(v.status == "pass" for v in self.verdicts) and self.outcome != "error"
+        return judge(self) == "pass"
+
+
+def judge(summary: RunSummary) -> RunVerdict:
+    """The one pass rule behind every exit status, JUnit file, results table and report.
+
+    A run passes exactly when it ran to its end and every applicable requirement passed.
+    Task outcomes (aborted, timed out, false success claims), speed, headings and collisions
+    reach the verdict only through requirements of the .vepl, never through a side rule here.
+    """
+    if summary.outcome == "error":
+        return "error"
+    if summary.outcome == "interrupted":
+        return "interrupted"
+    statuses = {v.status for v in summary.verdicts}
+    if not statuses:
+        return "unjudged"
+    if "fail" in statuses:
+        return "fail"
+    if "inconclusive" in statuses:
+        return "inconclusive"
+    if statuses == {"not_applicable"}:
+        # nothing was judged: a specification whose every premise is absent proves nothing
+        return "inconclusive"
+    return "pass"
+
+
+def failed_verdicts(summary: RunSummary) -> tuple[Verdict, ...]:
+    """The verdicts that keep the run from passing (fail first, then inconclusive)."""
+    order = {"fail": 0, "inconclusive": 1}
+    return tuple(sorted((v for v in summary.verdicts if v.status in order),
+                        key=lambda v: order[v.status]))

@@ -28,7 +28,15 @@ from rei.generators.concrete import ConcreteMission
 from rei.runtime.animator import Animated, Animator, spline_of
 from rei.runtime.collector import DataCollector, MonitorConfig, SampleSink
 from rei.runtime.errors import RunError
-from rei.runtime.messages import SCHEMA_VERSION, LaserScan, MissionEvent, NavState, StreamHeader
+from rei.runtime.messages import (
+    SCHEMA_VERSION,
+    GoalFacts,
+    LaserScan,
+    MissionEvent,
+    MissionFacts,
+    NavState,
+    StreamHeader,
+)
 from rei.runtime.mission import MissionExecutor, TaskResult
 from rei.runtime.results import RESULTS_VERSION, Outcome, RunSummary
 from rei.runtime.robot.protocol import (
@@ -104,15 +112,37 @@ def static_map(manifest: WorldManifest) -> tuple[MapObstacle, ...]:
     return tuple(obstacles)
 
 
-def stream_header(manifest: WorldManifest, monitor: MonitorConfig, mission: str,
-                  seed: int) -> StreamHeader:
+def speed_limit(manifest: WorldManifest, mission: ConcreteMission) -> float:
+    """m/s the robot can reach: the drive's limit, lowered by the mission's max_speed."""
+    if mission.max_speed is None:
+        return manifest.drive.max_linear
+    return min(manifest.drive.max_linear, mission.max_speed)
+
+
+def mission_facts(manifest: WorldManifest, mission: ConcreteMission) -> MissionFacts:
+    """The goals and limits the stream header carries for requirements (one cycle)."""
+    # Headings in (-pi, pi]: the .mission admits -360..360 degrees for the same directions.
+    goals = tuple(GoalFacts(g.name, g.x, g.y,
+                            None if g.yaw is None else math.remainder(g.yaw, math.tau),
+                            g.tolerance, g.heading_tolerance, g.timeout) for g in mission.goals)
+    return MissionFacts(goals, mission.cycles, mission.time_limit,
+                        speed_limit(manifest, mission), manifest.drive.max_angular,
+                        mission.max_speed)
+
+
+def stream_header(manifest: WorldManifest, monitor: MonitorConfig,
+                  mission: ConcreteMission | str, seed: int) -> StreamHeader:
+    """The header of a run's stream; a mission given by name only (a stream not made by a
+    mission run) has no mission facts."""
     names = [b.name for b in manifest.observed]
     if [o.name for o in monitor.objects] != names:
         raise RunError("the monitor configuration's objects expected to be the world's walls "
                        "and objects in order; regenerate both targets from the same input")
-    return StreamHeader(SCHEMA_VERSION, manifest.world, mission, seed, monitor.rate,
+    facts = None if isinstance(mission, str) else mission_facts(manifest, mission)
+    name = mission if isinstance(mission, str) else mission.name
+    return StreamHeader(SCHEMA_VERSION, manifest.world, name, seed, monitor.rate,
                         monitor.robot, monitor.objects, manifest.tile_size, manifest.floors,
-                        (manifest.laser.mount_x, manifest.laser.mount_y))
+                        (manifest.laser.mount_x, manifest.laser.mount_y), facts)
 
 
 class _Contacts:
@@ -144,7 +174,7 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
     every_control = _every(config.physics_rate, config.control_rate, "the control rate")
     every_laser = _every(config.physics_rate, manifest.laser.rate, "the laser rate")
     every_sample = _every(config.physics_rate, monitor.rate, "the monitor's sample rate")
-    header = stream_header(manifest, monitor, mission.name, config.seed)
+    header = stream_header(manifest, monitor, mission, config.seed)
     # The jittered pose replaces the declared one in the manifest itself, so the pybullet body,
     # odometry's origin and the controller's start_pose below cannot disagree.
     started = jitter_start(manifest, config.seed, config.jitter)
@@ -152,9 +182,11 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
     rng = np.random.default_rng(config.seed)
     end_time = mission.time_limit
     end_reason = f"mission time limit of {mission.time_limit:g} s reached"
+    end_cause = "abandoned"
     if config.duration is not None and config.duration < end_time:
         end_time = config.duration
         end_reason = f"duration limit of {config.duration:g} s reached"
+        end_cause = "cut"  # the user stopped watching: the running task's end is unknown
     last_step = int(math.floor(end_time * config.physics_rate + 1e-9))
 
     laser_spec = manifest.laser
@@ -183,8 +215,7 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
         drive=manifest.drive, laser=laser_spec, start_pose=start, obstacles=static_map(manifest),
         bounds=manifest.bounds, tile_size=manifest.tile_size, control_rate=config.control_rate,
         seed=config.seed, max_speed=mission.max_speed)
-    vmax = manifest.drive.max_linear if mission.max_speed is None else min(
-        manifest.drive.max_linear, mission.max_speed)
+    vmax = speed_limit(manifest, mission)
     wmax = manifest.drive.max_angular
 
     executor = MissionExecutor(mission.tasks())
@@ -209,6 +240,7 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
         scan: LaserScan | None = None
         scan_time: float | None = None
         cmd: VelocityCommand = STOP
+        raw: VelocityCommand = STOP
         last_truth = start
         next_progress = 0.0
 
@@ -228,7 +260,8 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
             # Each sample owns its arrays: sinks may keep samples (the monitor's windows).
             collector.sample(t, truth, world.twist(world.robot_id), all_poses.copy(),
                              all_twists.copy(),
-                             odom.pose, odom.twist, scan, scan_time, fb_state, task)
+                             odom.pose, odom.twist, scan, scan_time, fb_state, task,
+                             (raw.linear, raw.angular))
 
         nav_view: tuple[NavState, str | None] = (NavState.IDLE, None)
         try:
@@ -237,7 +270,9 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
                 steps = k
                 now = k / config.physics_rate
                 truth = world.pose(world.robot_id)
-                contacts.update(world.robot_contacts(), now)
+                touching = world.robot_contact_indices()
+                contacts.update([header.objects[i].name for i in touching], now)
+                collector.touch(touching)
                 if k % every_laser == 0:
                     moving = None
                     if seen_index:
@@ -266,7 +301,7 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
                                           min(max(raw.angular, -wmax), wmax))
                 final = k == last_step
                 if final:
-                    emit(executor.abandon(now, end_reason, truth))
+                    emit(executor.abandon(now, end_reason, truth, end_cause))
                     outcome, reason = "timeout", end_reason
                 if k % every_sample == 0 or final:
                     record_sample(now, truth)
@@ -308,7 +343,7 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
         "path_length": path_length,
         "tasks": [{"index": r.index, "task": r.task, "succeeded": r.succeeded, "reason": r.reason,
                    "start": r.start, "end": r.end, "time": r.end - r.start,
-                   "final_distance": r.final_distance} for r in tasks],
+                   "final_distance": r.final_distance, "cause": r.cause} for r in tasks],
         "time_per_task": {f"{r.index}:{r.task}": r.end - r.start for r in tasks},
         "tasks_succeeded": sum(r.succeeded for r in tasks),
         "tasks_failed": sum(not r.succeeded for r in tasks),

@@ -98,7 +98,7 @@ def concretise_mission(doc: MissionDocument) -> ConcreteMission:
         floor = world.floor(goal.floor.name)
         yaw = math.radians(goal.heading_deg) if goal.heading_deg is not None else None
         goals.append(ConcreteGoal(goal.name, floor.name, floor.x, floor.y, yaw, goal.tolerance,
-                                  goal.timeout))
+                                  goal.timeout, math.radians(goal.heading_tolerance_deg)))
     return ConcreteMission(mission.name, mission.path, world, tuple(goals), mission.cycles,
                            mission.effective_time_limit(), mission.max_speed)
 

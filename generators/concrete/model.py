@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 from rei.catalogue import ObjectType
+from rei.lang.mission.model import DEFAULT_HEADING_TOLERANCE
 
 Role = Literal["static", "dynamic", "human", "robot"]
 
@@ -117,8 +118,13 @@ class ConcreteGoal:
     x: float
     y: float
     yaw: float | None
+    """Radians, or None when any heading will do."""
     tolerance: float
+    """Metres."""
     timeout: float
+    """Seconds."""
+    heading_tolerance: float = math.radians(DEFAULT_HEADING_TOLERANCE)
+    """Radians the final heading may be off ``yaw``."""
 
 
 @dataclass(frozen=True)

@@ -23,13 +23,16 @@ from rei.lang.vepl.document import load_vepl
 from rei.lang.vepl.linker import NAMED_STATES
 
 OUTPUT = "automata.py"
-FORMAT_VERSION = 2
-"""Must equal rei.runtime.monitor.automata.FORMAT_VERSION (2: reads laser_clearance)."""
-INTERPOLATED = {"laser_min", "laser_clearance", "speed", "time", "odom_error"}
+FORMAT_VERSION = 3
+"""Must equal rei.runtime.monitor.automata.FORMAT_VERSION (3: commands, approach, failure
+causes, scenario facts, requirement premises)."""
+INTERPOLATED = {"laser_min", "laser_clearance", "speed", "time", "odom_error", "turn_rate"}
 """Measures that change continuously between samples (crossings are replayed in order)."""
 
 
 def _states(kind: str) -> tuple[str, ...]:
+    if kind == "task_failure":
+        return vm.TASK_FAILURES
     return vm.TASK_STATES if kind == "task_state" else NAMED_STATES[kind]
 
 
@@ -83,6 +86,10 @@ class _Writer:
                 return "w.robot_floor"
             if e.function == "state":
                 return "w.task_state"
+            if e.function == "failure":
+                return "w.task_failure"
+            if e.function == "approach":
+                return "w.approach"
             args = "".join(", " + c(a) for a in e.args)
             return f"w.call({e.function!r}{args})"
         if isinstance(e, vm.Arith):
@@ -113,6 +120,8 @@ class _Writer:
     def _state_kind(e: vm.Expr) -> str:
         if isinstance(e, vm.Call) and e.function == "state":
             return "task_state"
+        if isinstance(e, vm.Call) and e.function == "failure":
+            return "task_failure"
         assert isinstance(e, vm.Measure)
         return e.name
 

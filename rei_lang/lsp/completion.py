@@ -155,7 +155,8 @@ def mission_completions(text_before: str, room: Room | None,
         return _floors(room)
     if prev == "in":
         return [Candidate(f'"{name}"', "file", "room file") for name in room_files]
-    if prev in ("cycles", "time_limit", "max_speed", "tolerance", "heading", "timeout"):
+    if prev in ("cycles", "time_limit", "max_speed", "tolerance", "heading",
+                "heading_tolerance", "timeout"):
         return []
     if ctx.blocks:
         return _keywords(w for w in grammar_keywords("mission") if w not in ("mission", "in"))

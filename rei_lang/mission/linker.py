@@ -11,7 +11,13 @@ from pathlib import Path
 from typing import Any
 
 from rei.lang.errors import Diagnostic, Span
-from rei.lang.mission.model import DEFAULT_TIMEOUT, DEFAULT_TOLERANCE, Goal, Mission
+from rei.lang.mission.model import (
+    DEFAULT_HEADING_TOLERANCE,
+    DEFAULT_TIMEOUT,
+    DEFAULT_TOLERANCE,
+    Goal,
+    Mission,
+)
 from rei.lang.numbers import read_number
 from rei.lang.parsing import span_of
 from rei.lang.room.checks import passable_floors
@@ -92,7 +98,7 @@ def _goal(item: Any, index: int, span: Any, number: Any, diagnostics: list[Diagn
                                       f"expected a unique goal name, found '{name}' again (first "
                                       f"at line {names[name].line})"))
     names.setdefault(name, goal_span)
-    tolerance = heading = timeout = None
+    tolerance = heading = heading_tolerance = timeout = None
     given: set[str] = set()
     for option in item.options:
         kind = type(option).__name__
@@ -105,6 +111,10 @@ def _goal(item: Any, index: int, span: Any, number: Any, diagnostics: list[Diagn
         if kind == "Tolerance":
             tolerance = number(option.metres, option, f"tolerance of goal '{name}' (metres)",
                                low=0.0, high=100.0, low_open=True)
+        elif kind == "HeadingTolerance":
+            heading_tolerance = number(option.degrees, option,
+                                       f"heading_tolerance of goal '{name}' (degrees)",
+                                       low=0.0, high=180.0, low_open=True)
         elif kind == "GoalHeading":
             heading = number(option.degrees, option, f"heading of goal '{name}' (degrees)",
                              low=-360.0, high=360.0)
@@ -113,7 +123,9 @@ def _goal(item: Any, index: int, span: Any, number: Any, diagnostics: list[Diagn
                              low=0.0, high=MAX_TIME, low_open=True)
     return Goal(name, NameRef(item.floor.name, span(item.floor)),
                 tolerance if tolerance is not None else DEFAULT_TOLERANCE, heading,
-                timeout if timeout is not None else DEFAULT_TIMEOUT, goal_span)
+                timeout if timeout is not None else DEFAULT_TIMEOUT, goal_span,
+                heading_tolerance if heading_tolerance is not None
+                else DEFAULT_HEADING_TOLERANCE)
 
 
 def _check_against_room(mission: Mission, room_doc: RoomDocument) -> list[Diagnostic]:

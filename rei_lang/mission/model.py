@@ -11,6 +11,8 @@ DEFAULT_TOLERANCE = 0.25
 """Metres; the ROS navigation stack's usual xy goal tolerance."""
 DEFAULT_TIMEOUT = 120.0
 """Seconds per goal."""
+DEFAULT_HEADING_TOLERANCE = 15.0
+"""Degrees; how far the final heading may be off a goal's heading (ignored without one)."""
 
 
 @dataclass(frozen=True)
@@ -21,6 +23,7 @@ class Goal:
     heading_deg: float | None
     timeout: float
     span: Span
+    heading_tolerance_deg: float = DEFAULT_HEADING_TOLERANCE
 
 
 @dataclass(frozen=True)

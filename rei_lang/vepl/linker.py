@@ -23,7 +23,7 @@ from rei.lang.suggest import did_you_mean
 from rei.lang.vepl import model as m
 
 MAX_WINDOW_MS = 1e9
-BUILTINS = {"distance": 2, "on": 2, "state": 1}
+BUILTINS = {"distance": 2, "on": 2, "state": 1, "failure": 1, "approach": 1}
 NAMED_STATES = {"mission_state": m.MISSION_STATES,
                 "nav_state": ("idle", "pending", "active", "succeeded", "aborted", "preempted")}
 ROBOT = "robot"
@@ -208,8 +208,8 @@ class _Linker:
         if isinstance(e, m.Var):
             return "var:" + self.scope[e.name].domain if e.name in self.scope else "robot"
         if isinstance(e, m.Call):
-            return {"distance": "num", "on": "bool", "state": "task_state"}.get(
-                e.function, "num")
+            return {"distance": "num", "on": "bool", "state": "task_state",
+                    "failure": "task_failure", "approach": "num"}.get(e.function, "num")
         return "bool"
 
     def _expr(self, e: Any) -> m.Expr | None:
@@ -278,8 +278,9 @@ class _Linker:
         for op, left, right in zip(e.ops, operands, operands[1:], strict=False):
             assert left is not None and right is not None
             lk, rk = self.kind_of(left), self.kind_of(right)
-            if lk in ("task_state", *NAMED_STATES):
-                allowed = m.TASK_STATES if lk == "task_state" else NAMED_STATES[lk]
+            if lk in ("task_state", "task_failure", *NAMED_STATES):
+                allowed = m.TASK_STATES if lk == "task_state" else (
+                    m.TASK_FAILURES if lk == "task_failure" else NAMED_STATES[lk])
                 name = right.name if isinstance(right, m.StateName) else None
                 if op not in ("==", "!=") or name not in allowed:
                     self.error(e, "VEPL-TYPE", f"expected '== STATE' with STATE one of "
@@ -317,7 +318,8 @@ class _Linker:
         typed = [a for a in args if a is not None]
         kinds = [self.kind_of(a) for a in typed]
         expected = {"distance": ["robot", "var:object"], "on": ["robot", "var:floor"],
-                    "state": ["var:task"]}.get(name)
+                    "state": ["var:task"], "failure": ["var:task"],
+                    "approach": ["var:object"]}.get(name)
         if expected is not None and kinds != expected:
             shown = {"robot": "robot", "var:object": "an object parameter",
                      "var:floor": "a floor parameter", "var:task": "a task parameter"}
@@ -337,7 +339,8 @@ class _Linker:
             return m.Measure(name)
         if name == ROBOT:
             return m.Var(ROBOT)
-        states = {*m.TASK_STATES, *(s for v in NAMED_STATES.values() for s in v)}
+        states = {*m.TASK_STATES, *m.TASK_FAILURES,
+                  *(s for v in NAMED_STATES.values() for s in v)}
         if name in states:
             return m.StateName(name)
         known = [*self.scope, *self.parameters, *m.SCALAR_MEASURES, *NAMED_STATES, ROBOT]
@@ -501,8 +504,13 @@ class _Linker:
                     ok &= ms is not None
                     window = None if ms is None else ms / 1000.0
                 clauses.append(m.Whenever(c.trigger, tuple(c.targets), window))
+        premise = getattr(tx, "premise", None) or None
+        if premise is not None and premise not in self.queries:
+            self.error(tx, "VEPL-UNKNOWN", f"{what}: 'when' expected a query, found "
+                                           f"'{premise}'" + did_you_mean(premise, self.queries))
+            ok = False
         return m.Requirement(tx.name, tx.description or "", tuple(clauses),
-                             self.span(tx)) if ok else None
+                             self.span(tx), premise) if ok else None
 
 
 def _ends_in_unwindowed_not(p: m.Pattern) -> bool:

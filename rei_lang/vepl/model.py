@@ -18,9 +18,19 @@ CompareOp = Literal["<", "<=", ">", ">=", "==", "!="]
 
 TASK_STATES = ("pending", "active", "succeeded", "failed")
 MISSION_STATES = ("pending", "running", "ended")
+TASK_FAILURES = ("none", "aborted", "preempted", "timeout", "position", "heading", "abandoned",
+                 "cut")
+"""Why a task failed (``failure(t)``): none (it did not fail), aborted or preempted by the
+robot, timeout (outlived its timeout), position (claimed success outside the goal's
+tolerance), heading (claimed success with the wrong heading), abandoned (the mission's time
+limit ran out first, or the run broke), cut (the run was stopped early by the user's
+``--duration``: the task's end was never observed)."""
 SCALAR_MEASURES = ("laser_min", "laser_clearance", "speed", "time", "odom_error",
-                   "robot_inradius", "robot_circumradius")
-"""Names an expression may read from the robot description without arguments."""
+                   "robot_inradius", "robot_circumradius", "cmd_speed", "cmd_turn",
+                   "turn_rate", "yaw", "speed_limit", "turn_limit", "humans",
+                   "dynamic_objects", "cycles", "headed_goals")
+"""Names an expression may read from the robot description (and the scenario's facts)
+without arguments; docs/vepl.md says what each means."""
 
 
 # ---- query expressions -------------------------------------------------------------------
@@ -226,6 +236,8 @@ class Requirement:
     description: str
     clauses: tuple[Clause, ...]
     span: Span
+    premise: str | None = None
+    """A query: the requirement applies only to runs where it held at some time."""
 
 
 @dataclass(frozen=True)

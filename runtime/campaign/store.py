@@ -35,7 +35,7 @@ from typing import IO, Any
 from rei.runtime.campaign.errors import CampaignError
 from rei.runtime.campaign.execute import RunResult
 from rei.runtime.campaign.plan import CampaignPlan, RunSpec
-from rei.runtime.results import RunSummary
+from rei.runtime.results import RunSummary, RunVerdict, failed_verdicts, judge
 
 FORMAT = "rei-campaign"
 RECORD_FORMAT = "rei-run-record"
@@ -58,11 +58,16 @@ class RunRecord:
     summary: RunSummary | None
 
     @property
+    def verdict(self) -> RunVerdict:
+        """The run's judgement by the one pass rule (rei.runtime.results.judge); a run that
+        crashed, hung or left no summary is an error."""
+        if self.status != "ran" or self.summary is None:
+            return "error"
+        return judge(self.summary)
+
+    @property
     def passed(self) -> bool:
-        """The run ran, completed its mission, and every requirement passed (like `rei run`'s
-        exit status 0: a failed task or a time-out fails the run even before any verdict)."""
-        return (self.status == "ran" and self.summary is not None and self.summary.passed
-                and self.summary.outcome == "completed")
+        return self.verdict == "pass"
 
     @property
     def outcome(self) -> str:
@@ -328,6 +333,23 @@ def _scan_records(root: Path, plan: CampaignPlan) -> Iterator[RunRecord]:
 # -- the results table ------------------------------------------------------------------
 
 
+def verdict_reason(record: RunRecord) -> str:
+    """Why the run did not pass, in words ('' when it passed): the first failed (or
+    undecided) requirement with its reason, or what broke the run."""
+    if record.status != "ran" or record.summary is None:
+        return f"{record.status}: {record.message}".strip(": ")
+    summary = record.summary
+    if summary.outcome in ("error", "interrupted"):
+        return f"{summary.outcome}: {summary.reason}"
+    blocking = failed_verdicts(summary)
+    if blocking:
+        first = blocking[0]
+        return f"{first.requirement} {first.status}: {first.reason}"
+    if not summary.verdicts:
+        return "no requirement was checked"
+    return ""
+
+
 def record_row(record: RunRecord) -> dict[str, Any]:
     """The flat row of one run (signal counts as ``signal:NAME``, verdicts as ``req:NAME``)."""
     spec, summary = record.spec, record.summary
@@ -338,8 +360,11 @@ def record_row(record: RunRecord) -> dict[str, Any]:
         "mission_file": spec.mission_file, "seed": spec.seed, "repeat": spec.repeat,
         "pair": spec.pair, "static_pair": spec.static_pair,
         "controller": (summary.controller if summary else spec.controller) or "",
-        "status": record.status, "outcome": record.outcome, "passed": record.passed,
-        "reason": record.reason,
+        "status": record.status, "outcome": record.outcome, "verdict": record.verdict,
+        "passed": record.passed, "reason": record.reason,
+        "failed_requirements": " ".join(v.requirement for v in failed_verdicts(summary))
+        if summary else "",
+        "failure": verdict_reason(record),
         "total_utility": summary.total_utility if summary else None,
         "duration": summary.duration if summary else None,
         "wall_time": round(record.wall_time, 3), "exit_code": record.exit_code,

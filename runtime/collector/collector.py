@@ -1,14 +1,15 @@
 """The data collector: samples the run at the monitor configuration's rate (thesis 5.1.4, 9.1).
 
 It turns the simulator's ground truth and the robot's belief into typed ``Sample``s and
-publishes them, in order, to every attached ``SampleSink``. Mission events are buffered and
-delivered with the next sample, so none is lost between samples. This module must never
-import pybullet or change the run: it only observes.
+publishes them, in order, to every attached ``SampleSink``. Mission events and the robot's
+physical contacts (reported every physics step) are buffered and delivered with the next
+sample, so none is lost between samples. This module must never import pybullet or change
+the run: it only observes.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 
 import numpy as np
 
@@ -32,6 +33,7 @@ class DataCollector:
         self.seq = 0
         self.last_time: float | None = None
         self._events: list[MissionEvent] = []
+        self._contacts: set[int] = set()
         self._last_scan_time: float | None = None
         self.started = False
 
@@ -43,6 +45,11 @@ class DataCollector:
     def event(self, events: Sequence[MissionEvent]) -> None:
         self._events.extend(events)
 
+    def touch(self, indices: Iterable[int]) -> None:
+        """Bodies (indices into the header's objects) the robot touches at this physics step;
+        the next sample carries every body touched since the previous one."""
+        self._contacts.update(indices)
+
     @property
     def has_pending_events(self) -> bool:
         return bool(self._events)
@@ -51,14 +58,15 @@ class DataCollector:
                robot_twist: tuple[float, float, float], poses: np.ndarray, twists: np.ndarray,
                odom: tuple[float, float, float], odom_twist: tuple[float, float],
                scan: LaserScan | None, scan_time: float | None, nav_state: NavState,
-               task: str | None) -> Sample:
+               task: str | None, cmd: tuple[float, float] = (0.0, 0.0)) -> Sample:
         fresh = scan if scan is not None and scan_time != self._last_scan_time else None
         self._last_scan_time = scan_time
         laser_min = float(scan.ranges.min()) if scan is not None else self.laser_max_range
-        belief = RobotBelief(odom, odom_twist, laser_min, fresh, nav_state, task)
+        belief = RobotBelief(odom, odom_twist, laser_min, fresh, nav_state, task, cmd)
         sample = Sample(self.seq, time, robot_pose, robot_twist, poses, twists, belief,
-                        tuple(self._events))
+                        tuple(self._events), tuple(sorted(self._contacts)))
         self._events = []
+        self._contacts = set()
         self.seq += 1
         self.last_time = time
         for sink in self.sinks:

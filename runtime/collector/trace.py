@@ -23,9 +23,12 @@ import numpy as np
 from rei.catalogue import Box, Cylinder, Footprint, Polygon, Tile
 from rei.runtime.errors import RunError
 from rei.runtime.messages import (
+    FAILURE_CAUSES,
     SCHEMA_VERSION,
+    GoalFacts,
     LaserScan,
     MissionEvent,
+    MissionFacts,
     NavState,
     ObservedObject,
     RobotBelief,
@@ -80,11 +83,22 @@ def header_json(h: StreamHeader) -> dict[str, Any]:
             "world": h.world, "mission": h.mission, "seed": h.seed, "rate": h.rate,
             "robot": _object_json(h.robot), "objects": [_object_json(o) for o in h.objects],
             "tile_size": h.tile_size, "floors": [list(f) for f in h.floors],
-            "laser_mount": list(h.laser_mount)}
+            "laser_mount": list(h.laser_mount),
+            "mission_facts": _facts_json(h.mission_facts) if h.mission_facts else None}
+
+
+def _facts_json(f: MissionFacts) -> dict[str, Any]:
+    goals = [{"name": g.name, "x": g.x, "y": g.y, "heading": g.heading,
+              "tolerance": g.tolerance, "heading_tolerance": g.heading_tolerance,
+              "timeout": g.timeout} for g in f.goals]
+    return {"goals": goals, "cycles": f.cycles, "time_limit": f.time_limit,
+            "speed_limit": f.speed_limit, "turn_limit": f.turn_limit,
+            "mission_max_speed": f.mission_max_speed}
 
 
 def _event_json(e: MissionEvent) -> dict[str, Any]:
-    return {"kind": e.kind, "time": e.time, "task": e.task, "index": e.index, "reason": e.reason}
+    return {"kind": e.kind, "time": e.time, "task": e.task, "index": e.index, "reason": e.reason,
+            "cause": e.cause}
 
 
 class TraceWriter:
@@ -126,8 +140,9 @@ class TraceWriter:
             "twists": self._changed(sample.twists, self._twists),
             "belief": {"odom": list(b.odom), "odom_twist": list(b.odom_twist),
                        "laser_min": b.laser_min, "scan": scan, "nav_state": b.nav_state.value,
-                       "task": b.task},
+                       "task": b.task, "cmd": list(b.cmd)},
             "events": [_event_json(e) for e in sample.events],
+            "contacts": list(sample.contacts),
         }
         self._file.write(_dumps(line) + "\n")
         # Only what was written is the base of the next sample's changed rows.
@@ -166,17 +181,90 @@ def _header(data: dict[str, Any], path: Path) -> StreamHeader:
                         data["rate"], _object(data["robot"]),
                         tuple(_object(o) for o in data["objects"]), data["tile_size"],
                         tuple((f[0], f[1], f[2]) for f in data["floors"]),
-                        _pair(data["laser_mount"], path, "laser_mount"))
+                        _pair(data["laser_mount"], path, "laser_mount"),
+                        _mission_facts(data["mission_facts"], f"{path}:1: mission_facts"))
 
 
-def _pair(value: Any, path: Path, what: str) -> tuple[float, float]:
-    """Two finite numbers of the header (the edge rejects what the monitor cannot use)."""
-    if not (isinstance(value, list) and len(value) == 2
-            and all(isinstance(v, (int, float)) and not isinstance(v, bool)
-                    and math.isfinite(v) for v in value)):
-        raise TraceError(f"{path}:1: {what}: expected two finite numbers [x, y], found "
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) \
+        and math.isfinite(value)
+
+
+def _pair(value: Any, path: Path, what: str, line: int = 1,
+          form: str = "[x, y]") -> tuple[float, float]:
+    """Two finite numbers (the edge rejects what the monitor cannot use)."""
+    if not (isinstance(value, list) and len(value) == 2 and all(map(_is_number, value))):
+        raise TraceError(f"{path}:{line}: {what}: expected two finite numbers {form}, found "
                          f"{value!r}")
     return float(value[0]), float(value[1])
+
+
+def _number(data: dict[str, Any], key: str, where: str, *, low: float = -math.inf,
+            high: float = math.inf, low_open: bool = False) -> float:
+    """A finite number of the mission facts in its range; ``where`` locates the object."""
+    value = data[key]
+    if _is_number(value) and (value > low if low_open else value >= low) and value <= high:
+        return float(value)
+    bounds = []
+    if math.isfinite(low):
+        bounds.append(f"{'>' if low_open else '>='} {low:g}")
+    if math.isfinite(high):
+        bounds.append(f"<= {high:g}")
+    expected = " ".join(("a finite number", " and ".join(bounds))).strip()
+    raise TraceError(f"{where}.{key}: expected {expected}, found {value!r}")
+
+
+def _optional(data: dict[str, Any], key: str, where: str, **bounds: Any) -> float | None:
+    return None if data[key] is None else _number(data, key, where, **bounds)
+
+
+def _mission_facts(data: Any, where: str) -> MissionFacts | None:
+    """The header's mission facts, every number checked: a requirement reading a NaN goal or
+    a zero speed limit would give verdicts about nothing."""
+    if data is None:
+        return None
+    if not isinstance(data, dict) or not isinstance(data.get("goals"), list):
+        raise TraceError(f"{where}: expected an object with a list of goals, found {data!r}")
+    goals = []
+    for i, g in enumerate(data["goals"]):
+        at = f"{where}.goals[{i}]"
+        if not isinstance(g, dict) or not isinstance(g.get("name"), str):
+            raise TraceError(f"{at}: expected a goal with a name, found {g!r}")
+        goals.append(GoalFacts(
+            g["name"], _number(g, "x", at), _number(g, "y", at),
+            _optional(g, "heading", at, low=-math.pi, high=math.pi),
+            _number(g, "tolerance", at, low=0.0, low_open=True),
+            _number(g, "heading_tolerance", at, low=0.0, low_open=True, high=math.pi),
+            _number(g, "timeout", at, low=0.0, low_open=True)))
+    if not goals:
+        raise TraceError(f"{where}.goals: expected at least one goal, found none")
+    cycles = data["cycles"]
+    if not (isinstance(cycles, int) and not isinstance(cycles, bool) and cycles >= 1):
+        raise TraceError(f"{where}.cycles: expected a whole number >= 1, found {cycles!r}")
+    positive: dict[str, Any] = {"low": 0.0, "low_open": True}
+    return MissionFacts(tuple(goals), cycles, _number(data, "time_limit", where, **positive),
+                        _number(data, "speed_limit", where, **positive),
+                        _number(data, "turn_limit", where, **positive),
+                        _optional(data, "mission_max_speed", where, **positive))
+
+
+def _event(e: dict[str, Any], path: Path, lineno: int) -> MissionEvent:
+    cause = e["cause"]
+    allowed = FAILURE_CAUSES if e["kind"] == "task_fail" else ("",)
+    if cause not in allowed:
+        raise TraceError(f"{path}:{lineno}: events: a '{e['kind']}' event's cause expected one "
+                         f"of {', '.join(map(repr, allowed))}, found {cause!r}")
+    return MissionEvent(e["kind"], e["time"], e["task"], e["index"], e["reason"], cause)
+
+
+def _contacts(value: Any, n: int, path: Path, lineno: int) -> tuple[int, ...]:
+    """Indices of touched objects: a bad one would make the monitor see a collision with the
+    wrong body, or none."""
+    if not isinstance(value, list) or not all(
+            isinstance(i, int) and not isinstance(i, bool) and 0 <= i < n for i in value):
+        raise TraceError(f"{path}:{lineno}: contacts: expected indices of the header's "
+                         f"{n} objects (0 to {n - 1}), found {value!r}")
+    return tuple(value)
 
 
 def _samples(lines: Iterator[tuple[int, str]], n: int, path: Path) -> Iterator[Sample]:
@@ -197,13 +285,13 @@ def _samples(lines: Iterator[tuple[int, str]], n: int, path: Path) -> Iterator[S
                 s = b["scan"]
                 scan = LaserScan(s["angle_min"], s["angle_increment"], s["range_min"],
                                  s["range_max"], np.array(s["ranges"], dtype=float))
+            cmd = _pair(b["cmd"], path, "belief.cmd", lineno, "[linear, angular]")
             belief = RobotBelief(tuple(b["odom"]), tuple(b["odom_twist"]),
-                                 b["laser_min"], scan, NavState(b["nav_state"]), b["task"])
-            events = tuple(MissionEvent(e["kind"], e["time"], e["task"], e["index"], e["reason"])
-                           for e in d["events"])
+                                 b["laser_min"], scan, NavState(b["nav_state"]), b["task"], cmd)
+            events = tuple(_event(e, path, lineno) for e in d["events"])
             yield Sample(d["seq"], d["time"], tuple(d["robot_pose"]),
                          tuple(d["robot_twist"]), poses.copy(), twists.copy(),
-                         belief, events)
+                         belief, events, _contacts(d["contacts"], n, path, lineno))
         except (KeyError, IndexError, TypeError, ValueError) as exc:
             raise TraceError(f"{path}:{lineno}: damaged sample line ({exc})") from None
 

@@ -20,7 +20,7 @@ from rei.runtime.evaluator.summary import merge_summary, write_summary
 from rei.runtime.monitor import MonitorSink, generate_automata
 from rei.runtime.monitor.automata import load_generated
 from rei.runtime.monitor.errors import MonitorError
-from rei.runtime.results import RESULTS_VERSION, Outcome, RunSummary
+from rei.runtime.results import RESULTS_VERSION, Outcome, RunSummary, judge
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -80,6 +80,9 @@ def run(args: argparse.Namespace) -> int:
         print(f"rei replay: error: {exc}", file=sys.stderr)
         return EXIT_RUN_ERROR
     for v in summary.verdicts:
-        print(f"{v.requirement}: {v.status} ({v.reason})")
-    print(f"total utility {summary.total_utility:g}; wrote {args.output / 'events.csv'}")
-    return 0 if all(v.status == "pass" for v in summary.verdicts) else 1
+        print(f"{v.requirement}: {v.status.replace('_', ' ')} ({v.reason})")
+    verdict = judge(summary)
+    print(f"verdict: {verdict.upper()}; total utility {summary.total_utility:g}; wrote "
+          f"{args.output / 'events.csv'}")
+    # the one pass rule of `rei run`; a recorded run error stays an error
+    return 0 if verdict == "pass" else EXIT_RUN_ERROR if verdict == "error" else 1

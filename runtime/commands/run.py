@@ -24,7 +24,7 @@ from rei.runtime.collector import SampleSink, TraceWriter, load_monitor_config
 from rei.runtime.errors import RunError
 from rei.runtime.evaluator import merge_summary, write_summary
 from rei.runtime.monitor import MonitorSink, generate_automata
-from rei.runtime.results import RunSummary
+from rei.runtime.results import RunSummary, judge
 from rei.runtime.robot import BUILT_IN, make_controller
 from rei.runtime.run import RunConfig, RunRecord, generate_world, run_mission, summary_of
 from rei.runtime.world import load_manifest
@@ -167,15 +167,27 @@ def run(args: argparse.Namespace) -> int:
           f"{m['tasks_failed']} failed, {m['collisions']} collision(s); "
           f"{rtf:.0f}x real time ({cpu_rtf:.0f}x per CPU second); outputs in {args.output}",
           file=sys.stderr)
-    if summary.outcome == "error":
+    return exit_status(summary, args.output, monitored=not args.no_monitor)
+
+
+def exit_status(summary: RunSummary, out_dir: Path, monitored: bool = True) -> int:
+    """Print the verdicts and return the exit status of the one pass rule
+    (rei.runtime.results.judge): 0 pass (or, without the monitor, unjudged), 1 fail or
+    inconclusive, 3 run error, 130 interrupted."""
+    verdict = judge(summary)
+    if verdict == "error":
         print(f"rei run: error: {summary.reason}", file=sys.stderr)
         return EXIT_RUN_ERROR
-    if summary.outcome == "interrupted":
+    if verdict == "interrupted":
         return EXIT_INTERRUPTED
-    if not args.no_monitor:
-        for verdict in summary.verdicts:
-            print(f"  {verdict.requirement}: {verdict.status} ({verdict.reason})", file=sys.stderr)
-        print(f"  total utility {summary.total_utility:g}; events in "
-              f"{args.output / EVENTS}", file=sys.stderr)
-        return EXIT_OK if summary.passed else EXIT_FAILED
-    return EXIT_OK if summary.outcome == "completed" else EXIT_FAILED
+    if not monitored:
+        print("  not judged (--no-monitor): judge the trace with `rei replay`", file=sys.stderr)
+        return EXIT_OK
+    for v in summary.verdicts:
+        at = f" at t={v.decided_at:g} s" if v.decided_at is not None and v.status in (
+            "fail", "inconclusive") else ""
+        print(f"  {v.requirement}: {v.status.replace('_', ' ')}{at} ({v.reason})",
+              file=sys.stderr)
+    print(f"  verdict: {verdict.upper()}; total utility {summary.total_utility:g}; events in "
+          f"{out_dir / EVENTS}", file=sys.stderr)
+    return EXIT_OK if verdict == "pass" else EXIT_FAILED

@@ -22,11 +22,6 @@ class MonitorResult:
     measurements: dict[str, Any]
     duration: float
 
-    @property
-    def exit_status(self) -> int:
-        """0 when every requirement passed, 1 when one failed or none could be decided."""
-        return 0 if all(v.status == "pass" for v in self.verdicts) else 1
-
 
 def merge_summary(base: RunSummary, result: MonitorResult) -> RunSummary:
     return replace(base, total_utility=result.total_utility,

@@ -34,14 +34,17 @@ class _ClauseState:
     absence: bool = False
     """Decided by something not happening (so bad samples make it inconclusive)."""
     span: tuple[float, float] = (0.0, math.inf)
+    objects: tuple[str, ...] = ()
     count: int = 0
     pending: list[float] = field(default_factory=list)
     last_target: float = -math.inf
 
     def decide(self, status: VerdictStatus, at: float, reason: str, absence: bool = False,
-               span: tuple[float, float] | None = None) -> None:
+               span: tuple[float, float] | None = None,
+               objects: tuple[str, ...] = ()) -> None:
         if self.status is None:
             self.status, self.decided_at, self.reason, self.absence = status, at, reason, absence
+            self.objects = objects
             if span is not None:
                 self.span = span
 
@@ -49,9 +52,12 @@ class _ClauseState:
 class RequirementChecker:
     """Watches one run; ``verdicts()`` at the end."""
 
-    def __init__(self, requirements: tuple[RequirementSpec, ...], queries: set[str]) -> None:
+    def __init__(self, requirements: tuple[RequirementSpec, ...], queries: set[str],
+                 describe: Callable[[tuple[str, ...]], str] | None = None) -> None:
         self.requirements = requirements
         self.queries = queries
+        self.describe = describe or (lambda objects: ", ".join(objects))
+        """Words for the objects of a deciding event (a failed task: the executor's reason)."""
         self.states = {r.name: [_ClauseState(c) for c in r.clauses] for r in requirements}
         self.query_held: dict[str, float] = {}
         """The last time each watched query was seen holding (now, while it holds)."""
@@ -69,8 +75,9 @@ class RequirementChecker:
         return names
 
     def watched_queries(self) -> set[str]:
-        return {t for r in self.requirements for c in r.clauses if isinstance(c, vm.Whenever)
-                for t in c.targets if t in self.queries}
+        premises = {r.premise for r in self.requirements if r.premise is not None}
+        return premises | {t for r in self.requirements for c in r.clauses
+                           if isinstance(c, vm.Whenever) for t in c.targets if t in self.queries}
 
     def _expire(self, st: _ClauseState, now: float) -> None:
         c = st.clause
@@ -85,19 +92,22 @@ class RequirementChecker:
                           absence=True, span=(t, t + c.window))
                 return
 
-    def on_event(self, name: str, time: float) -> None:
+    def on_event(self, name: str, time: float, objects: tuple[str, ...] = ()) -> None:
+        involved = f" ({self.describe(objects)})" if objects else ""
         for states in self.states.values():
             for st in states:
                 c = st.clause
                 if isinstance(c, vm.Never) and c.event == name:
-                    st.decide("fail", time, f"{name} occurred at t={time:g} s")
+                    st.decide("fail", time, f"{name} occurred at t={time:g} s{involved}",
+                              objects=objects)
                 elif isinstance(c, vm.Eventually) and c.event == name:
-                    st.decide("pass", time, f"{name} occurred at t={time:g} s")
+                    st.decide("pass", time, f"{name} occurred at t={time:g} s", objects=objects)
                 elif isinstance(c, vm.CountBound) and c.event == name:
                     st.count += 1
                     if c.op in ("<", "<=") and not _CMP[c.op](st.count, c.bound):
                         st.decide("fail", time, f"{name} occurred {st.count} times by "
-                                                f"t={time:g} s; expected {c.op} {c.bound:g}")
+                                                f"t={time:g} s{involved}; expected {c.op} "
+                                                f"{c.bound:g}", objects=objects)
                     elif c.op in (">", ">=") and _CMP[c.op](st.count, c.bound):
                         st.decide("pass", time, f"{name} occurred {st.count} times by "
                                                 f"t={time:g} s")
@@ -144,6 +154,17 @@ class RequirementChecker:
                  why_unfinished: str = "") -> tuple[Verdict, ...]:
         out: list[Verdict] = []
         for req in self.requirements:
+            if req.premise is not None and req.premise not in self.query_held \
+                    and req.premise not in self.holding:
+                if problems.total:
+                    out.append(Verdict(req.name, "inconclusive", None,
+                                       f"its premise {req.premise} never held, but "
+                                       f"{problems.total} sample(s) were bad or missing"))
+                else:
+                    out.append(Verdict(req.name, "not_applicable", None,
+                                       f"not applicable: its premise {req.premise} never held "
+                                       f"in this run"))
+                continue
             for st in self.states[req.name]:
                 self._finish(st, end_time)
                 if st.absence and (problems.within(*st.span) or problems.counts["missing"]):
@@ -158,7 +179,8 @@ class RequirementChecker:
             unknown = [s for s in states if s.status == "inconclusive"]
             if fails:
                 first = min(fails, key=lambda s: s.decided_at or 0.0)
-                out.append(Verdict(req.name, "fail", first.decided_at, first.reason))
+                out.append(Verdict(req.name, "fail", first.decided_at, first.reason,
+                                   first.objects))
             elif unknown:
                 out.append(Verdict(req.name, "inconclusive", unknown[0].decided_at,
                                    unknown[0].reason))

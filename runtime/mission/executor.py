@@ -3,8 +3,10 @@
 It sends each task's goal, waits for its result and emits the mission events the SIG_MISSION_*
 signals come from. A task fails when the controller aborts or preempts it, when it outlives its
 timeout (the goal is then cancelled), and when the controller claims success but the ground
-truth puts the robot outside the goal's tolerance. Cycles repeat the goal sequence. This module
-must never import pybullet or judge anything but task outcomes.
+truth puts the robot outside the goal's position tolerance or, for a goal with a heading,
+turned farther from it than the heading tolerance. Every failure carries a human-readable
+reason and a machine-readable cause (messages.FAILURE_CAUSES). Cycles repeat the goal
+sequence. This module must never import pybullet or judge anything but task outcomes.
 """
 
 from __future__ import annotations
@@ -35,6 +37,8 @@ class TaskResult:
     start: float
     end: float
     final_distance: float
+    cause: str = ""
+    """One of messages.FAILURE_CAUSES when the task failed, else ''."""
 
 
 class MissionExecutor:
@@ -61,20 +65,21 @@ class MissionExecutor:
             fb = client.feedback()
             distance = self._distance(truth)
             reason: str | None = None
+            cause = ""
             ok = False
             if fb.state == NavState.SUCCEEDED:
-                ok = distance <= goal.tolerance
-                reason = "" if ok else (f"outside tolerance: the robot is {distance:.3f} m from "
-                                        f"the goal, tolerance {goal.tolerance:g} m")
+                reason, cause = self._judge_arrival(goal, truth, distance)
+                ok = not cause
             elif fb.state == NavState.ABORTED:
                 reason = f"aborted: {fb.message}" if fb.message else "aborted"
+                cause = "aborted"
             elif fb.state == NavState.PREEMPTED:
-                reason = "preempted"
+                reason, cause = "preempted", "preempted"
             elif time - self._start >= goal.timeout:
                 client.cancel_goal()
-                reason = f"timeout after {goal.timeout:g} s"
+                reason, cause = f"timeout after {goal.timeout:g} s", "timeout"
             if reason is not None:
-                events.append(self._end_task(time, ok, reason, distance))
+                events.append(self._end_task(time, ok, reason, cause, distance))
         if self._current is None:
             next_index = len(self.results)
             if next_index < len(self.tasks):
@@ -95,27 +100,49 @@ class MissionExecutor:
         self.begun = True
         return [MissionEvent("begin", time)]
 
+    @staticmethod
+    def _judge_arrival(goal: ConcreteGoal, truth: tuple[float, float, float],
+                       distance: float) -> tuple[str, str]:
+        """(reason, cause) of a claimed success by the ground truth; ('', '') if it holds.
+
+        The position is judged first: a robot in the wrong place has no heading worth naming.
+        """
+        if distance > goal.tolerance:
+            return (f"outside tolerance: the robot is {distance:.3f} m from the goal, "
+                    f"tolerance {goal.tolerance:g} m", "position")
+        if goal.yaw is not None:
+            off = abs(math.remainder(truth[2] - goal.yaw, math.tau))
+            if off > goal.heading_tolerance:
+                return (f"heading off by {math.degrees(off):.1f}° (tolerance "
+                        f"{math.degrees(goal.heading_tolerance):g}°)", "heading")
+        return "", ""
+
     def _distance(self, truth: tuple[float, float, float]) -> float:
         """Ground-truth distance from the robot to the running task's goal."""
         assert self._current is not None
         goal = self.tasks[self._current]
         return math.hypot(truth[0] - goal.x, truth[1] - goal.y)
 
-    def _end_task(self, time: float, ok: bool, reason: str, distance: float) -> MissionEvent:
+    def _end_task(self, time: float, ok: bool, reason: str, cause: str,
+                  distance: float) -> MissionEvent:
         assert self._current is not None
         index, goal = self._current, self.tasks[self._current]
-        self.results.append(TaskResult(index, goal.name, ok, reason, self._start, time, distance))
+        self.results.append(TaskResult(index, goal.name, ok, reason, self._start, time, distance,
+                                       cause))
         self._current = None
-        return MissionEvent("task_success" if ok else "task_fail", time, goal.name, index, reason)
+        return MissionEvent("task_success" if ok else "task_fail", time, goal.name, index, reason,
+                            cause)
 
-    def abandon(self, time: float, reason: str,
-                truth: tuple[float, float, float]) -> list[MissionEvent]:
-        """End the mission early (time limit, error, interruption): fail the running task."""
+    def abandon(self, time: float, reason: str, truth: tuple[float, float, float],
+                cause: str = "abandoned") -> list[MissionEvent]:
+        """End the mission early (time limit, error, interruption; ``cause`` 'cut' when the
+        user's duration limit stopped the run): fail the running task."""
         if self.finished:
             return []
         events = self._begin(time)
         if self._current is not None:
-            events.append(self._end_task(time, False, reason, self._distance(truth)))
+            events.append(self._end_task(time, False, reason, cause,
+                                         self._distance(truth)))
         self.finished = True
         events.append(MissionEvent("end", time, reason=reason))
         return events

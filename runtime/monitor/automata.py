@@ -8,6 +8,7 @@ stable: generated modules on disk depend on it. This module must never import th
 from __future__ import annotations
 
 import importlib.util
+import math
 import sys
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -21,9 +22,10 @@ from rei.lang.vepl import model as vm
 from rei.runtime.monitor.cep import Occurrence
 from rei.runtime.monitor.errors import MonitorError
 
-FORMAT_VERSION = 2
+FORMAT_VERSION = 3
 """Bumped when the generated module's contract changes; the host refuses other versions
-(2: QueryInputs gained ``laser_clearance``)."""
+(2: QueryInputs gained ``laser_clearance``; 3: commanded velocity, yaw, approach speed,
+task failure causes, scenario facts and requirement premises)."""
 
 
 @dataclass(frozen=True)
@@ -54,6 +56,8 @@ class RequirementSpec:
     name: str
     description: str
     clauses: tuple[vm.Clause, ...]
+    premise: str | None = None
+    """A query; the requirement is not applicable to a run where it never held."""
 
 
 @dataclass
@@ -81,6 +85,29 @@ class QueryInputs:
     mission_state: int
     nav_state: int
     functions: Mapping[str, Callable[..., Any]] = field(default_factory=dict)
+    approach: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    """Per object: how fast (m/s) the robot's own commanded motion closes the footprint
+    distance to it (positive: driving towards it; a body moving into a still robot is 0)."""
+    task_failure: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    """Per task: index into TASK_FAILURES (0: did not fail)."""
+    cmd_speed: float = 0.0
+    """|linear| of the robot's last command as sent, before the motor clips it (m/s)."""
+    cmd_turn: float = 0.0
+    """|angular| of the last command as sent (rad/s)."""
+    turn_rate: float = 0.0
+    """|angular velocity| the robot actually turns at (rad/s, ground truth)."""
+    yaw: float = 0.0
+    """Ground-truth heading (rad, counter-clockwise from +x)."""
+    speed_limit: float = math.inf
+    """The tighter of the drive's and the mission's linear limits (m/s)."""
+    turn_limit: float = math.inf
+    """The drive's angular limit (rad/s)."""
+    humans: float = 0.0
+    dynamic_objects: float = 0.0
+    """Counts of the scenario's humans and other moving objects."""
+    cycles: float = 1.0
+    headed_goals: float = 0.0
+    """The mission's cycles and how many of its goals carry a heading."""
 
     @property
     def n_object(self) -> int:

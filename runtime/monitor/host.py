@@ -76,13 +76,14 @@ class AutomataHost:
         self.atomic: Subject[Occurrence] = Subject()
         self.events = module.build_automata(self.atomic, self.scheduler)
         self.log = SignalLog({s.name: s.utility for s in module.SIGNALS})
-        self.checker = RequirementChecker(module.REQUIREMENTS, set(self.domains))
+        self.checker = RequirementChecker(module.REQUIREMENTS, set(self.domains),
+                                          self.model.describe)
         self.watched_queries = sorted(self.checker.watched_queries())
         self._last_holding: tuple[bool, ...] = ()
         for name in sorted(self.checker.watched_events()):
             if name in self.events:
                 self.events[name].subscribe(
-                    lambda e, n=name: self.checker.on_event(n, e.time))
+                    lambda e, n=name: self.checker.on_event(n, e.time, e.objects))
         module.build_signals(self.events).subscribe(self._on_signal)
         signal_names = {s.name for s in module.SIGNALS}
         self._signal_watch = signal_names & self.checker.watched_events()
@@ -99,7 +100,7 @@ class AutomataHost:
     def _on_signal(self, e: Occurrence) -> None:
         self.log.add(e.name, e.time, e.objects)
         if e.name in self._signal_watch:
-            self.checker.on_event(e.name, e.time)
+            self.checker.on_event(e.name, e.time, e.objects)
 
     # ---- samples ----------------------------------------------------------------------------
 
@@ -226,6 +227,8 @@ class AutomataHost:
         return {
             "min_distance_to_human": None if math.isinf(m.min_distance_to_human)
             else m.min_distance_to_human,
+            "min_distance_to_human_moving": None if math.isinf(m.min_distance_to_human_moving)
+            else m.min_distance_to_human_moving,
             "path_length": m.path_length,
             "time_to_goal": goals,
             "samples": self.samples,

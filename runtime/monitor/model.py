@@ -18,7 +18,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from rei.lang.vepl.linker import NAMED_STATES
-from rei.lang.vepl.model import MISSION_STATES, TASK_STATES
+from rei.lang.vepl.model import MISSION_STATES, TASK_FAILURES, TASK_STATES
 from rei.runtime.messages import MissionEvent, Sample, StreamHeader
 from rei.runtime.monitor.automata import QueryInputs
 from rei.runtime.monitor.geometry import FootprintSet
@@ -31,6 +31,14 @@ PROBLEM_KINDS = ("non_finite", "out_of_order", "duplicate", "missing", "malforme
 TASK_CODE = {s: i for i, s in enumerate(TASK_STATES)}
 MISSION_CODE = {s: i for i, s in enumerate(MISSION_STATES)}
 NAV_CODE = {s: i for i, s in enumerate(NAMED_STATES["nav_state"])}
+FAILURE_CODE = {s: i for i, s in enumerate(TASK_FAILURES)}
+APPROACH_RANGE = 0.5
+"""m: the approach speed is worked out for objects nearer than this (others read 0): it
+only matters at contact, and the extra footprint distance costs time."""
+APPROACH_LOOKAHEAD = 0.05
+"""s: the commanded motion is projected this far ahead to see whether it closes in."""
+MOVING = 0.05
+"""m/s: above this ground-truth speed the robot counts as moving (personal space)."""
 
 
 @dataclass
@@ -60,6 +68,10 @@ class TaskRecord:
     started: float
     ended: float | None = None
     status: str = "active"
+    cause: str = "none"
+    """TASK_FAILURES entry: why it failed ('none' while it has not)."""
+    reason: str = ""
+    """The mission executor's words for the failure."""
 
 
 class RuntimeModel:
@@ -94,7 +106,19 @@ class RuntimeModel:
         self.mission_ended: float | None = None
         self.path_length = 0.0
         self.min_distance_to_human = math.inf
+        self.min_distance_to_human_moving = math.inf
+        """Personal space: the closest the robot came to a person while it was moving."""
         self._last_xy: tuple[float, float] | None = None
+        self.task_failures = np.zeros(0, dtype=np.int64)
+        roles = [o.role for o in header.objects]
+        self.humans = float(roles.count("human"))
+        self.dynamic_objects = float(roles.count("dynamic"))
+        facts = header.mission_facts
+        self.speed_limit = facts.speed_limit if facts is not None else math.inf
+        self.turn_limit = facts.turn_limit if facts is not None else math.inf
+        self.cycles = float(facts.cycles) if facts is not None else 1.0
+        self.headed_goals = float(sum(g.heading is not None for g in facts.goals)) \
+            if facts is not None else 0.0
 
     # ---- per sample -----------------------------------------------------------------------
 
@@ -104,12 +128,41 @@ class RuntimeModel:
                            np.zeros(len(self.floor_names), dtype=bool), self.task_codes.copy(),
                            FAR_AWAY, FAR_AWAY, 0.0, 0.0, 0.0, self.inradius,
                            self.circumradius,
-                           MISSION_CODE["pending"], NAV_CODE["idle"])
+                           MISSION_CODE["pending"], NAV_CODE["idle"],
+                           approach=np.zeros(n), task_failure=self.task_failures.copy(),
+                           speed_limit=self.speed_limit, turn_limit=self.turn_limit,
+                           humans=self.humans, dynamic_objects=self.dynamic_objects,
+                           cycles=self.cycles, headed_goals=self.headed_goals)
+
+    def _approach(self, s: Sample, distance: np.ndarray) -> np.ndarray:
+        """How fast the robot's own commanded motion (as the motor executes it: clipped to
+        the limits) closes the footprint distance to each near object, m/s. A body that
+        moves into a robot standing still gets 0: the contact is not the robot's doing."""
+        out = np.zeros(len(distance))
+        near = distance < APPROACH_RANGE
+        linear, angular = s.belief.cmd
+        if not near.any() or (linear == 0.0 and angular == 0.0):
+            return out
+        v = min(max(linear, -self.speed_limit), self.speed_limit)
+        w = min(max(angular, -self.turn_limit), self.turn_limit)
+        x, y, yaw = s.robot_pose
+        dt = APPROACH_LOOKAHEAD
+        ahead = (x + v * math.cos(yaw) * dt, y + v * math.sin(yaw) * dt, yaw + w * dt)
+        later = self.footprints.refine(distance.copy(), near, ahead, s.poses)
+        out[near] = (distance[near] - later[near]) / dt
+        return out
+
 
     def observe(self, s: Sample) -> QueryInputs:
         """The query inputs of an accepted sample (and the run's measurements updated)."""
         x, y, _ = s.robot_pose
         distance = self.footprints.distances(s.robot_pose, s.poses, self.cutoff)
+        approach = self._approach(s, distance)  # from the geometry, before contacts count
+        if s.contacts:
+            # A physical contact is always a collision: pybullet saw the bodies touch, maybe
+            # between two samples, while the sampled footprints may stand a little apart.
+            touched = np.asarray(s.contacts, dtype=np.intp)
+            distance[touched] = np.minimum(distance[touched], 0.0)
         if self._any_human:
             humans = distance[self.human_mask]
             # refine only when a human might beat the run's minimum so far
@@ -126,12 +179,23 @@ class RuntimeModel:
         if scan is not None:
             self.laser_clearance = clearance(scan, self.beam_edges.of(scan))
         ox, oy, _ = s.belief.odom
+        speed = math.hypot(s.robot_twist[0], s.robot_twist[1])
+        if self._any_human and speed > MOVING and float(
+                distance[self.human_mask].min()) < self.min_distance_to_human_moving:
+            self.min_distance_to_human_moving = self.footprints.nearest(
+                distance, distance <= self.cutoff, self.human_mask, s.robot_pose, s.poses)
         return QueryInputs(
             distance, self.kind_masks, self._robot_floor(x, y), self.task_codes.copy(),
-            float(s.belief.laser_min), self.laser_clearance,
-            math.hypot(s.robot_twist[0], s.robot_twist[1]),
+            float(s.belief.laser_min), self.laser_clearance, speed,
             s.time, math.hypot(ox - x, oy - y), self.inradius, self.circumradius,
-            self.mission_state, NAV_CODE.get(s.belief.nav_state.value, 0))
+            self.mission_state, NAV_CODE.get(s.belief.nav_state.value, 0),
+            approach=approach, task_failure=self.task_failures.copy(),
+            cmd_speed=abs(s.belief.cmd[0]), cmd_turn=abs(s.belief.cmd[1]),
+            turn_rate=abs(s.robot_twist[2]), yaw=s.robot_pose[2],
+            # the scenario's facts, constant through the run
+            speed_limit=self.speed_limit, turn_limit=self.turn_limit, humans=self.humans,
+            dynamic_objects=self.dynamic_objects, cycles=self.cycles,
+            headed_goals=self.headed_goals)
 
     def _robot_floor(self, x: float, y: float) -> np.ndarray:
         mask = np.zeros(len(self.floor_names), dtype=bool)
@@ -160,14 +224,37 @@ class RuntimeModel:
                     record = TaskRecord(key, e.task or key, e.index, e.time)
                     self.tasks.append(record)
                     self.task_codes = np.append(self.task_codes, TASK_CODE["active"])
+                    self.task_failures = np.append(self.task_failures, FAILURE_CODE["none"])
                 else:
                     record.status, record.started, record.ended = "active", e.time, None
+                    record.cause, record.reason = "none", ""
                     self.task_codes[self.tasks.index(record)] = TASK_CODE["active"]
+                    self.task_failures[self.tasks.index(record)] = FAILURE_CODE["none"]
             elif record is not None:
                 record.status = "succeeded" if e.kind == "task_success" else "failed"
                 record.ended = e.time
                 self.task_codes[self.tasks.index(record)] = TASK_CODE[record.status]
-        return replace(w, task_state=self.task_codes.copy(), mission_state=self.mission_state)
+                if e.kind == "task_fail":
+                    # an unknown or missing cause still fails the task: it reads 'aborted'
+                    record.cause = e.cause if e.cause in FAILURE_CODE and e.cause != "none" \
+                        else "aborted"
+                    record.reason = e.reason
+                    self.task_failures[self.tasks.index(record)] = FAILURE_CODE[record.cause]
+        return replace(w, task_state=self.task_codes.copy(), mission_state=self.mission_state,
+                       task_failure=self.task_failures.copy())
+
+    def describe(self, objects: tuple[str, ...]) -> str:
+        """Words for the objects an event involved: a failed task adds the executor's
+        reason, so a verdict says why the goal was missed."""
+        parts = []
+        for name in objects:
+            failed = [t for t in self.tasks if t.name == name and t.status == "failed"]
+            if failed:
+                t = failed[-1]
+                parts.append(f"task {name} (#{t.index}) failed: {t.reason or t.cause}")
+            else:
+                parts.append(name)
+        return "; ".join(parts)
 
     def names(self, domain: str) -> tuple[str, ...]:
         if domain == "object":
@@ -185,6 +272,7 @@ def interpolate(a: QueryInputs, b: QueryInputs, f: float) -> QueryInputs:
                    laser_clearance=a.laser_clearance + f * (b.laser_clearance
                                                             - a.laser_clearance),
                    speed=a.speed + f * (b.speed - a.speed),
+                   turn_rate=a.turn_rate + f * (b.turn_rate - a.turn_rate),
                    time=a.time + f * (b.time - a.time),
                    odom_error=a.odom_error + f * (b.odom_error - a.odom_error))
 
@@ -216,8 +304,10 @@ def check_sample(s: Sample, header: StreamHeader) -> str | None:
     twists = np.asarray(s.twists)
     if poses.shape != (n, 3) or twists.shape != (n, 3):
         return "malformed"
+    if not all(isinstance(i, (int, np.integer)) and 0 <= i < n for i in s.contacts):
+        return "malformed"
     scalars = (s.time, *s.robot_pose, *s.robot_twist, *s.belief.odom, *s.belief.odom_twist,
-               s.belief.laser_min)
+               s.belief.laser_min, *s.belief.cmd)
     if not all(map(math.isfinite, scalars)):
         return "non_finite"
     scan = s.belief.scan

@@ -1,4 +1,9 @@
-"""The self-contained HTML report of a campaign (report.html): no scripts, no external files.
+"""The self-contained HTML report of a campaign (report.html): no external files.
+
+Top to bottom: the verdict counts and the pass rule, the mission × requirement matrix, the
+failures grouped into clusters, one collapsed section per mission with each run's verdict,
+reason, re-run command and (for failed runs) its map, then the thesis's tables and plots. One
+small inline script sorts the matrix; the page reads fine without it.
 
 Plots are inline SVG, maps PNG data URIs, the style sheet is inlined, so the page can be
 attached to a CI job or mailed. Rendered with jinja2 (autoescaped). This module must never
@@ -8,13 +13,17 @@ write files.
 from __future__ import annotations
 
 import math
+from collections import Counter
+from dataclasses import dataclass
 from importlib import resources
 
 import jinja2
 
 from rei.runtime.campaign.stats import by_mission
+from rei.runtime.campaign.store import RunRecord, verdict_reason
 from rei.runtime.report import plots
-from rei.runtime.report.data import CampaignData
+from rei.runtime.report.data import CampaignData, read_events
+from rei.runtime.report.overview import clusters, failures, requirement_matrix
 from rei.runtime.report.tables import (
     execution_summary,
     group_success_table,
@@ -25,8 +34,6 @@ from rei.runtime.report.tables import (
 
 MAX_MAPS = 40
 """Failed runs drawn from above (each ~40 kB of PNG); the rest are listed without a map."""
-MAX_FAILURES = 200
-"""Failures listed in full; the rest are in junit.xml and results.csv."""
 
 
 def _number(value: object) -> str:
@@ -53,34 +60,74 @@ def _environment() -> jinja2.Environment:
     return env
 
 
+@dataclass(frozen=True)
+class MissionSection:
+    name: str
+    runs: tuple[RunRecord, ...]
+    passed: int
+    flaky: bool
+    open: bool
+    """Failed missions start open when there are few, so the page stays short."""
+
+
 def render_html(data: CampaignData, rerun: dict[str, str]) -> str:
     records = list(data.records)
-    failures = [r for r in records if not r.passed]
+    failed = [r for r in records if not r.passed]
     missions = mission_success(records)
     tables = [execution_summary(records)]
     if len({r.spec.group for r in records}) > 1:
         tables.append(execution_summary(records, key=lambda r: r.spec.group,
                                         label="Group"))
-    maps = []
-    for record in failures[:MAX_MAPS]:
+    maps = {}
+    for record in failed[:MAX_MAPS]:
         image = plots.failure_map(data, record)
-        maps.append((record, image))
-    passed = sum(r.passed for r in records)
+        if image:
+            maps[record.spec.run_id] = image
+    runs_of: dict[str, list[RunRecord]] = {}
+    for record in records:
+        runs_of.setdefault(by_mission(record), []).append(record)
+    rates = {m.key: m for m in missions}
+    few = sum(1 for m in missions if m.passed < m.runs) <= 3
+    sections = [MissionSection(name, tuple(runs), rates[name].passed, rates[name].flaky,
+                               few and rates[name].passed < rates[name].runs)
+                for name, runs in sorted(runs_of.items(),
+                                         key=lambda kv: (rates[kv[0]].rate, kv[0]))]
+    verdicts = Counter(r.verdict for r in records)
+    not_applicable = sum(v.status == "not_applicable" for r in records if r.summary
+                         for v in r.summary.verdicts)
     css = resources.files("rei.runtime.report").joinpath("templates/report.css").read_text(
         encoding="utf-8")
+    mission_count = len(runs_of)
     return _environment().get_template("report.html.j2").render(
-        title=f"REI campaign — {data.root.name}",
-        css=css,
-        planned=len(data.plan.runs), recorded=len(records), passed=passed,
-        failed=len(failures), flaky=[m for m in missions if m.flaky],
+        title=f"REI campaign: {mission_count} mission{'s' if mission_count != 1 else ''} × "
+              f"{data.plan.repeat} repeat{'s' if data.plan.repeat != 1 else ''}",
+        folder=data.root.name, css=css,
+        planned=len(data.plan.runs), recorded=len(records), passed=verdicts["pass"],
+        counts={"fail": verdicts["fail"], "inconclusive": verdicts["inconclusive"],
+                "error": verdicts["error"] + verdicts["interrupted"]},
+        not_applicable=not_applicable,
+        flaky=[m for m in missions if m.flaky],
         repeat=data.plan.repeat, seed=data.plan.seed,
-        failures=failures[:MAX_FAILURES], more_failures=max(0, len(failures) - MAX_FAILURES),
-        rerun=rerun, mission_of=by_mission,
+        matrix=requirement_matrix(records),
+        clusters=clusters(failures(failed, data.run_dir)),
+        missions=sections, rerun=rerun, mission_of=by_mission, reason_of=verdict_reason,
         success_tables=[success_table(missions, "Mission"), group_success_table(records)],
         summary_tables=tables, signal_table=signal_counts(records),
         utility_plot=plots.utility_over_time(data),
         signal_plot=plots.signal_distribution(records),
         descriptor_plot=plots.success_by_descriptor(records),
-        maps=maps, more_maps=max(0, len(failures) - MAX_MAPS),
+        utilities=utility_legend(data),
+        maps=maps, more_maps=max(0, len(failed) - MAX_MAPS),
         provenance=data.manifest.get("sessions", []),
     )
+
+
+def utility_legend(data: CampaignData) -> list[tuple[str, float]]:
+    """(signal, utility) of every signal seen in the campaign's event logs."""
+    seen: dict[str, float] = {}
+    for record in data.records:
+        if record.summary is None or set(record.summary.signal_counts) <= set(seen):
+            continue
+        for event in read_events(data.run_dir(record)):
+            seen.setdefault(event.signal, event.utility)
+    return sorted(seen.items())

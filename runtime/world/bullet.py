@@ -40,6 +40,9 @@ def _import_pybullet() -> ModuleType:
 
 p = _import_pybullet()
 
+CONTACT_DISTANCE = 1e-3
+"""Metres: a contact point of pybullet at most this far apart is a touch."""
+
 
 def _quat(yaw: float) -> tuple[float, float, float, float]:
     return (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
@@ -72,6 +75,9 @@ class BulletWorld:
         self._names = {bid: b.name for bid, b in zip(self.wall_ids, manifest.walls, strict=False)}
         self._names.update({bid: b.name for bid, b in
                             zip(self.object_ids, manifest.objects, strict=True)})
+        # The stream names bodies by their index in manifest.observed (walls, then objects),
+        # which is the order of StreamHeader.objects.
+        self._observed_index = {bid: i for i, bid in enumerate(self.wall_ids + self.object_ids)}
         # Bodies that move but are not animated (free dynamic objects) are kept planar after
         # every step; animated ones are driven by the animator.
         self.free_ids = [bid for bid, b in zip(self.object_ids, manifest.objects, strict=False)
@@ -138,10 +144,21 @@ class BulletWorld:
                                 physicsClientId=self.client)
         p.stepSimulation(physicsClientId=self.client)
 
+    def _touching(self) -> set[int]:
+        """Body ids the robot touches now: a contact point closer than 1 mm (pybullet keeps
+        points a little apart as well; those are not touches)."""
+        points = p.getContactPoints(bodyA=self.robot_id, physicsClientId=self.client)
+        return {pt[2] for pt in points if pt[8] < CONTACT_DISTANCE}
+
     def robot_contacts(self) -> list[str]:
         """Names of the bodies the robot touches now (sorted)."""
-        points = p.getContactPoints(bodyA=self.robot_id, physicsClientId=self.client)
-        return sorted({self._names.get(pt[2], str(pt[2])) for pt in points if pt[8] < 1e-3})
+        return sorted(self._names.get(bid, str(bid)) for bid in self._touching())
+
+    def robot_contact_indices(self) -> list[int]:
+        """Indices into manifest.observed (the stream's objects) of the bodies the robot
+        touches now, sorted; the same test as ``robot_contacts``."""
+        index = self._observed_index
+        return sorted(index[bid] for bid in self._touching() if bid in index)
 
     def object_states(self) -> tuple[np.ndarray, np.ndarray]:
         """(N, 3) poses and twists of manifest.objects, in order."""

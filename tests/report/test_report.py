@@ -76,7 +76,7 @@ def test_junit_has_a_suite_per_mission_and_a_case_per_requirement(campaign: Path
     nav = suites[1]
     assert (nav.get("tests"), nav.get("failures"), nav.get("errors")) == ("6", "1", "0")
     (failure,) = nav.iter("failure")
-    assert failure.get("message") == "task 2 timed out"
+    assert failure.get("message") == "all_tasks_succeed fail at t=11 s: task 2 timed out"
     assert "re-run: rei run " in (failure.text or "") and "--seed" in (failure.text or "")
     small = suites[3]
     (error,) = small.iter("error")
@@ -117,18 +117,36 @@ def test_html_is_self_contained_and_deterministic(campaign: Path, tmp_path: Path
     build_report(copy)
     assert (copy / "report.html").read_text(encoding="utf-8") == first
     page = etree.HTML(first)
-    assert page.xpath("//script") == []
+    (script,) = page.xpath("//script")  # only the matrix sorter, inline
+    assert script.get("src") is None
     assert all(src.startswith("data:image/png;base64,") for src in page.xpath("//img/@src"))
     assert not page.xpath("//link[@rel='stylesheet']")
     headings = page.xpath("//h2/text()")
-    for heading in ("Failures", "Success rates", "Execution summary", "Signals",
-                    "Utility over time", "Failed runs from above", "Provenance"):
+    assert headings[:3] == ["Requirements per mission", "Failures, grouped", "Missions"]
+    for heading in ("Success rates", "Execution summary", "Signals", "Utility over time",
+                    "What utilities mean", "Provenance"):
         assert heading in headings
     assert len(page.xpath("//div[@id='utility-plot']//*[local-name()='svg']")) == 1
     assert len(page.xpath("//div[@id='signal-plot']//*[local-name()='svg']")) == 1
-    assert len(page.xpath("//div[@class='failure']")) == 5
-    assert len(page.xpath("//div[@class='maps']/figure/img")) == 5
-    assert "rei run " in "".join(page.xpath("//div[@class='failure']//code/text()"))
+    # the matrix: a row per mission, worst first; a column per requirement
+    matrix = page.xpath("//table[@id='requirement-matrix']")[0]
+    assert [th.text for th in matrix.xpath(".//thead//th")][:2] == ["Mission", "Runs passed"]
+    rows = matrix.xpath(".//tbody/tr")
+    assert [r.xpath("./td[1]/a/text()")[0] for r in rows] == [
+        "medium_sparse", "navigation", "small_dense", "simple_wall"]
+    assert rows[0].xpath("./td[2]/text()") == ["0/3"]
+    # clusters: the three medium_sparse failures and navigation's one are one cluster
+    clusters = page.xpath("//table[@id='failure-clusters']/tbody/tr")
+    first_cluster = [td.xpath("string(.)") for td in clusters[0].xpath("./td")]
+    assert first_cluster[0] == "all_tasks_succeed" and first_cluster[3] == "4"
+    assert "task 2 timed out" in first_cluster[5]
+    assert any("crashed" in c.xpath("string(.)") for c in clusters)
+    # a collapsed section per mission: each run's verdict, reason and re-run command
+    sections = page.xpath("//details")
+    assert len(sections) == 4
+    assert len(page.xpath("//details//tr[starts-with(@id, 'run-')]")) == 12
+    assert "rei run " in "".join(page.xpath("//details//code/text()"))
+    assert len(page.xpath("//details//figure[@class='map']/img")) == 5
 
 
 def _chromium(campaign: Path, tmp_path: Path, *args: str) -> subprocess.CompletedProcess[str]:
@@ -145,11 +163,12 @@ def test_report_renders_in_headless_chromium(campaign: Path, tmp_path: Path) -> 
     build_report(campaign)
     dom = _chromium(campaign, tmp_path, "--dump-dom").stdout
     page = etree.HTML(dom)
-    assert page.xpath("//h1/text()") == ["REI campaign — campaign"]
-    assert len(page.xpath("//table")) == 5
+    assert page.xpath("//h1/text()") == ["REI campaign: 4 missions × 3 repeats"]
+    assert page.xpath("//table[@id='requirement-matrix']")
+    assert page.xpath("//table[@id='failure-clusters']")
     shot = tmp_path / "report.png"
-    _chromium(campaign, tmp_path, f"--screenshot={shot}", "--window-size=1280,2000")
+    _chromium(campaign, tmp_path, f"--screenshot={shot}", "--window-size=1400,2000")
     data = shot.read_bytes()
     assert data[:8] == b"\x89PNG\r\n\x1a\n"
-    assert int.from_bytes(data[16:20], "big") == 1280  # IHDR width: the page was laid out
+    assert int.from_bytes(data[16:20], "big") == 1400  # IHDR width: the page was laid out
     assert len(data) > 50_000  # a blank page compresses to a few kB; this one has content

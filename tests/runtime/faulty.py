@@ -96,3 +96,15 @@ class ClaimsSuccess(_Base):
         if self.tracker.state.value == "active":
             self.tracker.succeed()
         return VelocityCommand(0.0, 0.0)
+
+
+class AbortsAtOnce(_Base):
+    """Accepts every goal and aborts it at once, standing still: it never touches anything,
+    so only a requirement on the goals can tell that it did nothing."""
+
+    def step(self, observation: Observation) -> VelocityCommand:
+        if self.tracker.state.value == "pending":
+            self.tracker.accept()
+        if self.tracker.state.value == "active":
+            self.tracker.abort("no path to the goal")
+        return VelocityCommand(0.0, 0.0)

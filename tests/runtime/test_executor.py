@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import math
+
+import pytest
+
 from rei.generators.concrete import ConcreteGoal
 from rei.runtime.messages import NavState
 from rei.runtime.mission import MissionExecutor
@@ -61,6 +65,10 @@ def test_events_reasons_and_cycles() -> None:
     # The last goal was claimed, but the robot stands 2 m away: ground truth decides.
     assert reasons[3].startswith("outside tolerance: the robot is 2.000 m")
     assert client.sent == ["a", "b", "a", "b"]
+    causes = [e.cause for e in events if e.kind == "task_fail"]
+    assert causes == ["aborted", "timeout", "position"]
+    assert [r.cause for r in executor.results] == ["", "aborted", "timeout", "position"]
+    assert all(e.cause == "" for e in events if e.kind != "task_fail")
 
 
 def test_abandon_fails_the_running_task_and_ends() -> None:
@@ -69,4 +77,38 @@ def test_abandon_fails_the_running_task_and_ends() -> None:
     executor.tick(0.0, client, (0.0, 0.0, 0.0))
     events = executor.abandon(1.0, "interrupted", (0.0, 0.0, 0.0))
     assert [e.kind for e in events] == ["task_fail", "end"]
+    assert (events[0].reason, events[0].cause) == ("interrupted", "abandoned")
     assert executor.finished and executor.abandon(2.0, "again", (0.0, 0.0, 0.0)) == []
+
+
+@pytest.mark.parametrize(("heading_deg", "tolerance_deg", "yaw", "cause", "reason"), [
+    (None, 15.0, 2.0, "", ""),  # no heading: any will do
+    (90.0, 15.0, 0.0, "heading", "heading off by 90.0° (tolerance 15°)"),
+    (10.0, 15.0, 0.0, "", ""),
+    (15.0, 15.0, 0.0, "", ""),  # the tolerance itself still counts
+    (-40.0, 45.0, 0.0, "", ""),
+    (180.0, 15.0, -3.1, "", ""),  # the difference wraps round at ±180°
+    (-170.0, 15.0, 2.8, "heading", "heading off by 29.6° (tolerance 15°)"),
+])
+def test_a_claimed_success_is_judged_by_the_heading_too(
+        heading_deg: float | None, tolerance_deg: float, yaw: float, cause: str,
+        reason: str) -> None:
+    goal = ConcreteGoal("g", "g", 0.0, 0.0,
+                        None if heading_deg is None else math.radians(heading_deg), 0.3, 5.0,
+                        math.radians(tolerance_deg))
+    executor = MissionExecutor((goal,))
+    client = ScriptedClient(["ok"])
+    executor.tick(0.0, client, (0.0, 0.0, yaw))
+    events = executor.tick(0.1, client, (0.1, 0.0, yaw))
+    assert executor.results[0].succeeded == (cause == "")
+    assert (events[0].cause, events[0].reason) == (cause, reason)
+    assert events[0].kind == ("task_success" if cause == "" else "task_fail")
+
+
+def test_a_robot_in_the_wrong_place_fails_by_position_whatever_its_heading() -> None:
+    goal = ConcreteGoal("g", "g", 1.0, 0.0, math.radians(90.0), 0.3, 5.0)
+    executor = MissionExecutor((goal,))
+    client = ScriptedClient(["ok"])
+    executor.tick(0.0, client, (0.0, 0.0, 0.0))
+    [fail, _end] = executor.tick(0.1, client, (0.0, 0.0, 0.0))
+    assert fail.cause == "position" and fail.reason.startswith("outside tolerance")

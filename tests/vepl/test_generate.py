@@ -27,7 +27,8 @@ def test_generate_command_writes_an_importable_module(tmp_path: Path) -> None:
     module = load_generated(path)
     assert module.SPEC_NAME == "default"
     assert {s.name for s in module.SIGNALS} >= {"SIG_GEOM_FAR_TRANSIT_CLOSE"}
-    assert module.DISTANCE_CUTOFF == module.PARAMETERS["eps_close"]
+    params = module.PARAMETERS
+    assert module.DISTANCE_CUTOFF == max(params["eps_close"], params["slow_zone"])
 
 
 def test_generation_is_deterministic() -> None:

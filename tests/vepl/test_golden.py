@@ -1,7 +1,7 @@
 """Golden files: the module generated from the default .vepl, and the event log of the
 synthetic teleop wall drive. Regenerate after an intended change with
 
-    REI_REGENERATE_GOLDEN=1 /work/venv/bin/pytest tests/vepl/test_golden.py
+    REI_REGENERATE_GOLDEN=1 .venv/bin/python -m pytest tests/vepl/test_golden.py
 
 and review the diff like code."""
 
