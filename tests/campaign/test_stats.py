@@ -120,3 +120,16 @@ def test_mission_verdicts_of_a_campaign_and_the_rate_it_required(tmp_path: Path)
     assert required_pass_rate(manifest) == 1.0
     sessions = [{"pass_rate": 0.5}, {"pass_rate": 0.8}, {"command": ["rei"]}]
     assert required_pass_rate({"sessions": sessions}) == 0.8
+
+
+def test_the_exit_status_follows_the_mission_verdicts(tmp_path: Path,
+                                                      capsys: pytest.CaptureFixture[str]) -> None:
+    from rei.lang.cli_support import EXIT_FAILED, EXIT_OK
+    from rei.runtime.commands.campaign import finish
+
+    write_campaign(tmp_path)
+    assert finish(tmp_path, no_report=True) == EXIT_FAILED  # default: every run must pass
+    assert "FAIL   medium_sparse: 0/3 passed" in capsys.readouterr().err
+    assert finish(tmp_path, no_report=True, pass_rate=0.5) == EXIT_FAILED  # flaky ones
+    assert "FLAKY  navigation: 2/3 passed" in capsys.readouterr().err
+    assert finish(tmp_path, no_report=True, pass_rate=0.0) == EXIT_OK
