@@ -13,6 +13,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from rei.lang.vepl import load_vepl
+from rei.runtime.monitor.automata import load_generated
 from rei.runtime.monitor.geometry import FootprintSet
 from tests.monitor.helpers import default_automata, geom, monitor
 from tests.monitor.streams import ROBOT, drive, header, human, sample, straight, wall
@@ -96,7 +97,9 @@ def test_automata_agree_with_table_2(trace: list[list[float]], automata: Path,
         poses = np.array([[hx + 0.25 + a, 0, 0], [-hx - 0.25 - b, 0, 0], [0, hy + 0.25 + c, 0]])
         samples.append(sample(i, i * 0.1, (0.0, 0.0, 0.0), poses))
     fs = FootprintSet.build(ROBOT.footprint, [o.footprint for o in h.objects], 1.0)
-    measured = [fs.distances(s.robot_pose, s.poses, EPS_CLOSE).tolist() for s in samples]
+    # the same broad phase as the automata (exact within their largest distance threshold)
+    cutoff = load_generated(automata).DISTANCE_CUTOFF
+    measured = [fs.distances(s.robot_pose, s.poses, cutoff).tolist() for s in samples]
     rows, _ = monitor(h, samples, tmp_path / f"run{len(list(tmp_path.iterdir()))}",
                       automata=automata)
     expected = table2([s.time for s in samples], measured)

@@ -157,9 +157,10 @@ def test_a_wrong_heading_fails_the_task_with_cause_heading(tmp_path: Path) -> No
     assert facts.speed_limit == 0.2 and facts.turn_limit == pytest.approx(1.82)
 
 
-def test_a_task_cut_short_by_the_time_limit_is_abandoned(tmp_path: Path) -> None:
+def test_a_task_cut_short_by_the_duration_limit_is_cut(tmp_path: Path) -> None:
     summary, _ = run_into(_lane(tmp_path, "wall"), tmp_path / "out", "tests.runtime.faulty:Idle",
                           duration=1.0, monitor=False)
     _, rows = read_trace(tmp_path / "out" / "trace.jsonl")
     [fail] = [e for s in rows for e in s.events if e.kind == "task_fail"]
-    assert fail.cause == "abandoned" and fail.reason == "duration limit of 1 s reached"
+    # the user's --duration stopped the run: the task's end was never seen
+    assert fail.cause == "cut" and fail.reason == "duration limit of 1 s reached"

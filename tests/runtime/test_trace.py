@@ -167,7 +167,7 @@ def _set(*keys_and_value: Any) -> Callable[[dict[str, Any]], None]:
     (_set("contacts", "0"), r":3: contacts: .* found '0'"),
     (_set("events", [{"kind": "task_fail", "time": 0.2, "task": "goal", "index": 0,
                       "reason": "", "cause": "bad luck"}]),
-     r":3: events: a 'task_fail' event's cause expected one of 'aborted', .*'abandoned', "
+     r":3: events: a 'task_fail' event's cause expected one of 'aborted', .*'abandoned', 'cut', "
      r"found 'bad luck'"),
     (_set("events", [{"kind": "begin", "time": 0.2, "task": None, "index": None,
                       "reason": "", "cause": "timeout"}]),
