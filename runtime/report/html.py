@@ -19,8 +19,13 @@ from importlib import resources
 
 import jinja2
 
-from rei.runtime.campaign.stats import by_mission
-from rei.runtime.campaign.store import RunRecord, verdict_reason
+from rei.runtime.campaign.stats import (
+    by_mission,
+    campaign_passed,
+    classify_pairs,
+    mission_verdicts,
+)
+from rei.runtime.campaign.store import RunRecord, required_pass_rate, verdict_reason
 from rei.runtime.report import plots
 from rei.runtime.report.data import CampaignData, read_events
 from rei.runtime.report.overview import clusters, failures, requirement_matrix
@@ -68,6 +73,11 @@ class MissionSection:
     flaky: bool
     open: bool
     """Failed missions start open when there are few, so the page stays short."""
+    verdict: str
+    """pass / fail / flaky against the required pass rate; 'static twin' for --pair-static."""
+    why: str
+    pair: str
+    """With --pair-static: 'fails with people only', 'fails in the static room too', ..."""
 
 
 def render_html(data: CampaignData, rerun: dict[str, str]) -> str:
@@ -87,11 +97,22 @@ def render_html(data: CampaignData, rerun: dict[str, str]) -> str:
     for record in records:
         runs_of.setdefault(by_mission(record), []).append(record)
     rates = {m.key: m for m in missions}
+    required = required_pass_rate(data.manifest)
+    judged = {v.mission: v for v in mission_verdicts(records, required)}
+    pairs = {p.mission: p.cause for p in classify_pairs(records)}
     few = sum(1 for m in missions if m.passed < m.runs) <= 3
-    sections = [MissionSection(name, tuple(runs), rates[name].passed, rates[name].flaky,
-                               few and rates[name].passed < rates[name].runs)
-                for name, runs in sorted(runs_of.items(),
-                                         key=lambda kv: (rates[kv[0]].rate, kv[0]))]
+
+    def section(name: str, runs: list[RunRecord]) -> MissionSection:
+        rate = rates[name]
+        mv = judged.get(name)
+        return MissionSection(name, tuple(runs), rate.passed, rate.flaky,
+                              few and rate.passed < rate.runs,
+                              mv.verdict if mv is not None else "static twin",
+                              mv.reason if mv is not None else "the room without its people "
+                              "and moving objects (--pair-static); not judged",
+                              pairs.get(name, ""))
+    sections = [section(name, runs) for name, runs in
+                sorted(runs_of.items(), key=lambda kv: (rates[kv[0]].rate, kv[0]))]
     verdicts = Counter(r.verdict for r in records)
     not_applicable = sum(v.status == "not_applicable" for r in records if r.summary
                          for v in r.summary.verdicts)
@@ -103,6 +124,8 @@ def render_html(data: CampaignData, rerun: dict[str, str]) -> str:
               f"{data.plan.repeat} repeat{'s' if data.plan.repeat != 1 else ''}",
         folder=data.root.name, css=css,
         planned=len(data.plan.runs), recorded=len(records), passed=verdicts["pass"],
+        campaign_pass=campaign_passed(judged.values()) and len(records) == len(data.plan.runs),
+        required=required, mission_counts=Counter(v.verdict for v in judged.values()),
         counts={"fail": verdicts["fail"], "inconclusive": verdicts["inconclusive"],
                 "error": verdicts["error"] + verdicts["interrupted"]},
         not_applicable=not_applicable,

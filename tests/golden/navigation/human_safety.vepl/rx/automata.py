@@ -43,7 +43,7 @@ from rei.runtime.monitor.automata import (
 from rei.runtime.monitor.cep import Occurrence, match_pattern
 
 SPEC_NAME = 'human_safety'
-FORMAT_VERSION = 2
+FORMAT_VERSION = 3
 PARAMETERS: dict[str, float] = {
     'eps_close': 0.25,
     'eps_collision': 0.02,
