@@ -16,8 +16,9 @@ HEADING_GAIN = 3.0
 
 
 class ExceedsDriveLimit(ReferenceNavigator):
-    """Defect: plans and commands with a top speed 2.5 times the drive's (the motor clips
-    the command, so the robot itself never goes faster than its drive allows).
+    """Defect: plans and commands with a top speed 2.5 times the drive's: at cruise it
+    commands 1.3 to 2.5 times the drive's limit (the motor clips the command, so the robot
+    itself moves much as the reference does; only the command is wrong).
 
     Imitates: a controller configuration copied from a faster base (`max_vel_x` of another
     robot), or a unit error in the speed limit.

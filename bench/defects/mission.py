@@ -66,13 +66,14 @@ class ClaimsSuccessEarly(ReferenceNavigator):
     name = "claims-success-early"
 
     def step(self, observation: Observation) -> VelocityCommand:
+        cmd = super().step(observation)
         tracker, goal = self._tracker, self._tracker.goal
         if tracker.state == NavState.ACTIVE and goal is not None:
             x, y, _ = observation.odom_pose
             if math.hypot(goal.x - x, goal.y - y) <= EARLY:
                 tracker.succeed("within the goal checker's tolerance")
                 return STOP
-        return super().step(observation)
+        return cmd
 
 
 class _SilentTracker(GoalTracker):
