@@ -14,7 +14,8 @@ is assumed here), "inconclusive" verdicts apart, and the runs whose only failure
 outcome ("task:failed", "task:timeout", ...). Then: detection rate (defects flagged on every
 seed / defects; and flagged seed-campaigns / defect seed-campaigns), the reference's
 false-alarm rate (its campaigns with any failed run), which defects were caught only by task
-outcomes, and each navigator's campaign wall time relative to the reference's on the same seed.
+outcomes, and each navigator's campaign wall time (noisy on a shared machine) and simulated seconds
+(deterministic: longer missions, time-outs) relative to the reference's on the same seed.
 
 Writes bench/out/bugs.json (every run's verdicts); ``--markdown`` prints the table for
 bench/RESULTS.md. ``--quick`` is a smoke test: the first seed, 2 rooms, one run per mission.
@@ -72,6 +73,8 @@ class RunOutcome:
     outcome: str
     status: str
     reason: str
+    simulated: float
+    """Simulation seconds of the run (0 without a summary)."""
     failed: tuple[str, ...]
     """Requirements whose verdict was "fail"."""
     inconclusive: tuple[str, ...]
@@ -100,6 +103,10 @@ class CampaignOutcome:
     def flagged(self) -> bool:
         return any(not r.passed for r in self.runs)
 
+    @property
+    def simulated(self) -> float:
+        return sum(r.simulated for r in self.runs)
+
 
 def navigators(only: list[str] | None) -> list[Navigator]:
     found = [Navigator(REFERENCE, "correct", REFERENCE, "nothing (the correct navigator)")]
@@ -123,6 +130,7 @@ def outcome_of(record: RunRecord) -> RunOutcome:
     return RunOutcome(
         run_id=record.spec.run_id, seed=record.spec.seed, passed=record.passed,
         outcome=record.outcome, status=record.status, reason=record.reason,
+        simulated=s.duration if s is not None else 0.0,
         failed=tuple(v.requirement for v in verdicts if v.status == "fail"),
         inconclusive=tuple(v.requirement for v in verdicts if v.status == "inconclusive"),
         reasons={v.requirement: v.reason for v in verdicts if v.status == "fail"})
@@ -154,12 +162,14 @@ def catchers(campaigns: list[CampaignOutcome]) -> Counter[str]:
 def summarise(navs: list[Navigator], results: dict[str, list[CampaignOutcome]],
               seeds: list[int]) -> dict[str, object]:
     ref_wall = {c.seed: c.wall for c in results[REFERENCE]}
+    ref_sim = {c.seed: c.simulated for c in results[REFERENCE]}
     rows = []
     for nav in navs:
         camps = results[nav.name]
         caught = catchers([c for c in camps if c.flagged])
         named = sorted(k for k in caught if not k.startswith((TASK, INCONCLUSIVE)))
         ratios = [c.wall / ref_wall[c.seed] for c in camps if ref_wall.get(c.seed)]
+        sim = [c.simulated / ref_sim[c.seed] for c in camps if ref_sim.get(c.seed)]
         rows.append({
             "navigator": nav.name, "kind": nav.kind, "spec": nav.spec,
             "expected_catcher": nav.expected,
@@ -169,6 +179,7 @@ def summarise(navs: list[Navigator], results: dict[str, list[CampaignOutcome]],
             "caught_by": dict(caught.most_common()),
             "caught_by_requirement": bool(named),
             "time_vs_reference": sum(ratios) / len(ratios) if ratios else None,
+            "simulated_vs_reference": sum(sim) / len(sim) if sim else None,
         })
     defects = [r for r in rows if r["navigator"] != REFERENCE]
     ref = next(r for r in rows if r["navigator"] == REFERENCE)
@@ -195,15 +206,16 @@ def table(summary: dict[str, object], markdown: bool) -> str:
     rows = summary["rows"]
     assert isinstance(rows, list)
     lines = ["| navigator | kind | flagged seeds | failed runs | caught by (failed runs) "
-             "| expected catcher | campaign time vs reference |",
-             "|---|---|---:|---:|---|---|---:|"]
+             "| expected catcher | campaign time vs reference | simulated s vs reference |",
+             "|---|---|---:|---:|---|---|---:|---:|"]
     for r in rows:
         caught = ", ".join(f"{k} × {n}" for k, n in r["caught_by"].items()) or "—"
-        ratio = r["time_vs_reference"]
+        ratio, sim = r["time_vs_reference"], r["simulated_vs_reference"]
         expected = r["expected_catcher"] if markdown else r["expected_catcher"][:60]
         lines.append(f"| {r['navigator']} | {r['kind']} | {r['seeds_flagged']}/{r['seeds']} "
                      f"| {r['runs_failed']}/{r['runs']} | {caught} | {expected} | "
-                     f"{'—' if ratio is None else f'{ratio:.2f}'} |")
+                     f"{'—' if ratio is None else f'{ratio:.2f}'} | "
+                     f"{'—' if sim is None else f'{sim:.2f}'} |")
 
     def pct(key: str) -> str:
         value = summary[key]
