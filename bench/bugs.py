@@ -6,16 +6,19 @@ campaign seed with each navigator: the correct `reference` (the baseline, measur
 invocation) and every defective navigator of bench/defects (one realistic defect each). A run
 fails as `rei campaign` counts it: it did not complete its mission (a failed task, a time-out,
 a crash) or a requirement's verdict is not "pass". A navigator is *flagged* on a seed when any
-run of that campaign fails.
+run of that campaign fails; it is *caught* on a seed when it fails a run (same mission, repeat
+and seed) that the reference passed: failures both share are the suite's (a mission the
+correct navigator cannot complete either), not detections.
 
-Reported per navigator: seeds flagged, failed runs, and what caught them: each requirement whose
-verdict was "fail" (counted over failed runs; names are read from the runs' summary.json, none
-is assumed here), "inconclusive" verdicts apart, and the runs whose only failure is the task
-outcome ("task:failed", "task:timeout", ...). Then: detection rate (defects flagged on every
-seed / defects; and flagged seed-campaigns / defect seed-campaigns), the reference's
-false-alarm rate (its campaigns with any failed run), which defects were caught only by task
-outcomes, and each navigator's campaign wall time (noisy on a shared machine) and simulated seconds
-(deterministic: longer missions, time-outs) relative to the reference's on the same seed.
+Reported per navigator: seeds caught (and flagged), failed runs, and what caught them: each
+requirement whose verdict was "fail" (counted over the failed runs the reference passed; names
+are read from the runs' summary.json, none is assumed here), "inconclusive" verdicts apart, and
+the runs whose only failure is the task outcome ("task:failed (timeout)", "task:crashed", ...).
+Then: detection rate (defects caught on every seed / defects; and caught seed-campaigns /
+defect seed-campaigns), the reference's false-alarm rate (its campaigns with any failed run),
+which defects were caught only by task outcomes, and each navigator's campaign wall time (noisy
+on a shared machine) and simulated seconds (deterministic: longer missions, time-outs) relative
+to the reference's on the same seed.
 
 Writes bench/out/bugs.json (every run's verdicts); ``--markdown`` prints the table for
 bench/RESULTS.md. ``--quick`` is a smoke test: the first seed, 2 rooms, one run per mission.
@@ -23,7 +26,8 @@ bench/RESULTS.md. ``--quick`` is a smoke test: the first seed, 2 rooms, one run 
 humans and no goal headings or speed limits, so some defects cannot show in the demo suite.
 
 Usage: python bench/bugs.py [--seeds S ...] [--workers N] [--only NAME ...] [--quick]
-       [--count N] [--repeat K] [--preset small|medium|large] [--examples] [--markdown]
+       [--count N] [--repeat K] [--preset small|medium|large] [--examples] [--resume]
+       [--markdown] [--out DIR]
 """
 
 from __future__ import annotations
@@ -38,6 +42,7 @@ import time
 from collections import Counter
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import Any
 
 REPO = Path(__file__).resolve().parent.parent
 # The defects are `bench.defects.MODULE:Class`: importable here and in every run's process
@@ -75,6 +80,8 @@ class RunOutcome:
     reason: str
     simulated: float
     """Simulation seconds of the run (0 without a summary)."""
+    task_failures: tuple[str, ...]
+    """Why tasks failed, by kind ("timeout", "aborted", "outside tolerance", ...)."""
     failed: tuple[str, ...]
     """Requirements whose verdict was "fail"."""
     inconclusive: tuple[str, ...]
@@ -88,7 +95,9 @@ class RunOutcome:
             return []
         found = list(self.failed) + [INCONCLUSIVE + r for r in self.inconclusive]
         if self.status != "ran" or self.outcome != "completed":
-            found.append(TASK + (self.outcome if self.status == "ran" else self.status))
+            kinds = "/".join(self.task_failures)
+            found.append(TASK + (self.outcome if self.status == "ran" else self.status)
+                         + (f" ({kinds})" if kinds else ""))
         return found
 
 
@@ -124,23 +133,34 @@ def navigators(only: list[str] | None) -> list[Navigator]:
     return found
 
 
+def failure_kind(reason: str) -> str:
+    """A task's failure reason without its figures: "timeout after 30 s" -> "timeout"."""
+    kind = reason.split(":")[0].strip()
+    return "timeout" if kind.startswith("timeout") else kind
+
+
 def outcome_of(record: RunRecord) -> RunOutcome:
     s = record.summary
     verdicts = s.verdicts if s is not None else ()
+    tasks = s.measurements.get("tasks", []) if s is not None else []
+    kinds = sorted({failure_kind(str(t.get("reason", ""))) for t in tasks
+                    if isinstance(t, dict) and not t.get("succeeded", True)})
     return RunOutcome(
         run_id=record.spec.run_id, seed=record.spec.seed, passed=record.passed,
         outcome=record.outcome, status=record.status, reason=record.reason,
         simulated=s.duration if s is not None else 0.0,
+        task_failures=tuple(kinds),
         failed=tuple(v.requirement for v in verdicts if v.status == "fail"),
         inconclusive=tuple(v.requirement for v in verdicts if v.status == "inconclusive"),
         reasons={v.requirement: v.reason for v in verdicts if v.status == "fail"})
 
 
 def run_one(nav: Navigator, inputs: list[Path], seed: int, repeat: int, workers: int,
-            root: Path) -> CampaignOutcome:
+            root: Path, resume: bool) -> CampaignOutcome:
     plan = plan_campaign(inputs, repeat=repeat, seed=seed,
                          controller=None if nav.spec == REFERENCE else nav.spec)
-    shutil.rmtree(root, ignore_errors=True)  # a fresh campaign: never resume older code's runs
+    if not resume:  # a fresh campaign: never mix in runs of older code
+        shutil.rmtree(root, ignore_errors=True)
     start = time.perf_counter()
     result = run_campaign(plan, root, LocalEngine(workers), {"command": ["bench/bugs.py"]},
                           stream=io.StringIO())
@@ -160,82 +180,104 @@ def catchers(campaigns: list[CampaignOutcome]) -> Counter[str]:
 
 
 def summarise(navs: list[Navigator], results: dict[str, list[CampaignOutcome]],
-              seeds: list[int]) -> dict[str, object]:
-    ref_wall = {c.seed: c.wall for c in results[REFERENCE]}
-    ref_sim = {c.seed: c.simulated for c in results[REFERENCE]}
-    rows = []
+              seeds: list[int]) -> dict[str, Any]:
+    """Per navigator and overall figures. Runs are paired with the reference's run of the same
+    mission, repeat and seed: a defect is *caught* on a seed when it fails a run the reference
+    passed (a failure both share, such as a mission the reference cannot complete either, is
+    the suite's, not a detection)."""
+    ref_camps = results[REFERENCE]
+    ref_wall = {c.seed: c.wall for c in ref_camps}
+    ref_sim = {c.seed: c.simulated for c in ref_camps}
+    ref_passed = {(c.seed, r.run_id) for c in ref_camps for r in c.runs if r.passed}
+    rows: list[dict[str, Any]] = []
     for nav in navs:
         camps = results[nav.name]
-        caught = catchers([c for c in camps if c.flagged])
+        new = [[r for r in c.runs if not r.passed and (c.seed, r.run_id) in ref_passed]
+               for c in camps]
+        caught = Counter(k for runs in new for r in runs for k in r.catchers)
         named = sorted(k for k in caught if not k.startswith((TASK, INCONCLUSIVE)))
         ratios = [c.wall / ref_wall[c.seed] for c in camps if ref_wall.get(c.seed)]
         sim = [c.simulated / ref_sim[c.seed] for c in camps if ref_sim.get(c.seed)]
         rows.append({
             "navigator": nav.name, "kind": nav.kind, "spec": nav.spec,
             "expected_catcher": nav.expected,
-            "seeds_flagged": sum(c.flagged for c in camps), "seeds": len(camps),
-            "runs_failed": sum(not r.passed for c in camps for r in c.runs),
+            "seeds": len(camps),
+            "seeds_flagged": sum(c.flagged for c in camps),
+            "seeds_caught": sum(bool(runs) for runs in new),
             "runs": sum(len(c.runs) for c in camps),
+            "runs_failed": sum(not r.passed for c in camps for r in c.runs),
+            "runs_failed_reference_passed": sum(len(runs) for runs in new),
             "caught_by": dict(caught.most_common()),
+            "caught_by_all_failed_runs": dict(catchers(camps).most_common()),
             "caught_by_requirement": bool(named),
             "time_vs_reference": sum(ratios) / len(ratios) if ratios else None,
             "simulated_vs_reference": sum(sim) / len(sim) if sim else None,
         })
     defects = [r for r in rows if r["navigator"] != REFERENCE]
-    ref = next(r for r in rows if r["navigator"] == REFERENCE)
-    every = [r["navigator"] for r in defects if r["seeds_flagged"] == r["seeds"]]
-    flagged_camps = sum(int(str(r["seeds_flagged"])) for r in defects)
-    all_camps = sum(int(str(r["seeds"])) for r in defects)
+    ref = rows[0]
+
+    def rate(key: str, every: bool) -> float | None:
+        if not defects:
+            return None
+        if every:
+            return sum(r[key] == r["seeds"] for r in defects) / len(defects)
+        return sum(r[key] for r in defects) / sum(r["seeds"] for r in defects)
+
     return {
         "seeds": seeds,
         "rows": rows,
-        "detection_rate_every_seed": len(every) / len(defects) if defects else None,
-        "defects_flagged_every_seed": every,
-        "defects_never_flagged": [r["navigator"] for r in defects if r["seeds_flagged"] == 0],
-        "detection_rate_per_seed_campaign": flagged_camps / all_camps if all_camps else None,
-        "false_alarm_rate": (int(str(ref["seeds_flagged"])) / int(str(ref["seeds"]))
-                             if ref["seeds"] else None),
-        "flagged_only_by_task_outcome": [r["navigator"] for r in defects
-                                         if r["seeds_flagged"] and not r["caught_by_requirement"]],
-        "flagged_by_a_requirement": [r["navigator"] for r in defects
-                                     if r["caught_by_requirement"]],
+        "detection_rate_every_seed": rate("seeds_caught", True),
+        "detection_rate_per_seed_campaign": rate("seeds_caught", False),
+        "flagged_rate_every_seed": rate("seeds_flagged", True),
+        "flagged_rate_per_seed_campaign": rate("seeds_flagged", False),
+        "false_alarm_rate": ref["seeds_flagged"] / ref["seeds"] if ref["seeds"] else None,
+        "reference_failed_runs": ref["runs_failed"],
+        "defects_caught_every_seed": [r["navigator"] for r in defects
+                                      if r["seeds_caught"] == r["seeds"]],
+        "defects_never_caught": [r["navigator"] for r in defects if r["seeds_caught"] == 0],
+        "caught_only_by_task_outcome": [r["navigator"] for r in defects
+                                        if r["seeds_caught"] and not r["caught_by_requirement"]],
+        "caught_by_a_requirement": [r["navigator"] for r in defects
+                                    if r["caught_by_requirement"]],
     }
 
 
-def table(summary: dict[str, object], markdown: bool) -> str:
-    rows = summary["rows"]
-    assert isinstance(rows, list)
-    lines = ["| navigator | kind | flagged seeds | failed runs | caught by (failed runs) "
-             "| expected catcher | campaign time vs reference | simulated s vs reference |",
+def table(summary: dict[str, Any], markdown: bool) -> str:
+    lines = ["| navigator | kind | seeds caught (flagged) | failed runs the reference passed "
+             "(all failed) | caught by (runs the reference passed) | expected catcher "
+             "| campaign time vs reference | simulated s vs reference |",
              "|---|---|---:|---:|---|---|---:|---:|"]
-    for r in rows:
+    for r in summary["rows"]:
         caught = ", ".join(f"{k} × {n}" for k, n in r["caught_by"].items()) or "—"
         ratio, sim = r["time_vs_reference"], r["simulated_vs_reference"]
-        expected = r["expected_catcher"] if markdown else r["expected_catcher"][:60]
-        lines.append(f"| {r['navigator']} | {r['kind']} | {r['seeds_flagged']}/{r['seeds']} "
-                     f"| {r['runs_failed']}/{r['runs']} | {caught} | {expected} | "
-                     f"{'—' if ratio is None else f'{ratio:.2f}'} | "
-                     f"{'—' if sim is None else f'{sim:.2f}'} |")
+        expected = r["expected_catcher"] if markdown else r["expected_catcher"][:50] + "…"
+        lines.append(
+            f"| {r['navigator']} | {r['kind']} | {r['seeds_caught']}/{r['seeds']} "
+            f"({r['seeds_flagged']}) | {r['runs_failed_reference_passed']}/{r['runs']} "
+            f"({r['runs_failed']}) | {caught} | {expected} | "
+            f"{'—' if ratio is None else f'{ratio:.2f}'} | "
+            f"{'—' if sim is None else f'{sim:.2f}'} |")
 
     def pct(key: str) -> str:
         value = summary[key]
-        return "—" if value is None else f"{100 * float(str(value)):.0f} %"
+        return "—" if value is None else f"{100 * value:.0f} %"
 
-    every = summary["defects_flagged_every_seed"]
-    assert isinstance(every, list)
-    n_defects = len(rows) - 1
+    n_defects = len(summary["rows"]) - 1
     lines += [
         "",
-        f"* Detection rate (defects flagged on every seed): {len(every)}/{n_defects} = "
+        f"* Detection rate (defects caught on every seed, i.e. failing a run the reference "
+        f"passed): {len(summary['defects_caught_every_seed'])}/{n_defects} = "
         f"{pct('detection_rate_every_seed')}; per seed-campaign: "
-        f"{pct('detection_rate_per_seed_campaign')}.",
+        f"{pct('detection_rate_per_seed_campaign')}. Flagged at all (any failed run, shared "
+        f"failures included): {pct('flagged_rate_every_seed')}; per seed-campaign: "
+        f"{pct('flagged_rate_per_seed_campaign')}.",
         f"* False-alarm rate (reference campaigns with any failed run): "
-        f"{pct('false_alarm_rate')}.",
-        f"* Never flagged: {', '.join(summary['defects_never_flagged']) or 'none'}.",  # type: ignore[arg-type]
-        f"* Flagged only by task outcomes (no requirement failed): "
-        f"{', '.join(summary['flagged_only_by_task_outcome']) or 'none'}.",  # type: ignore[arg-type]
-        f"* Flagged by a named requirement: "
-        f"{', '.join(summary['flagged_by_a_requirement']) or 'none'}.",  # type: ignore[arg-type]
+        f"{pct('false_alarm_rate')} ({summary['reference_failed_runs']} failed run(s)).",
+        f"* Never caught: {', '.join(summary['defects_never_caught']) or 'none'}.",
+        f"* Caught only by task outcomes (no requirement failed): "
+        f"{', '.join(summary['caught_only_by_task_outcome']) or 'none'}.",
+        f"* Caught by a named requirement: "
+        f"{', '.join(summary['caught_by_a_requirement']) or 'none'}.",
     ]
     return "\n".join(lines)
 
@@ -256,6 +298,10 @@ def main() -> int:
     parser.add_argument("--examples", action="store_true",
                         help="add the bundled examples (humans, a goal heading) to every "
                              "campaign")
+    parser.add_argument("--resume", action="store_true",
+                        help="keep the campaigns of an earlier invocation with the same "
+                             "settings and run only what they miss (campaign time ratios are "
+                             "then meaningless)")
     parser.add_argument("--markdown", action="store_true",
                         help="print the table for bench/RESULTS.md (full expected catchers)")
     parser.add_argument("--out", type=Path, default=REPO / "bench" / "out",
@@ -272,7 +318,7 @@ def main() -> int:
         inputs = suite(out / "suites", count, args.preset, seed, args.examples)
         for nav in navs:
             camp = run_one(nav, inputs, seed, repeat, args.workers,
-                           out / "bugs" / f"seed{seed}" / nav.name)
+                           out / "bugs" / f"seed{seed}" / nav.name, args.resume)
             results[nav.name].append(camp)
             failed = sum(not r.passed for r in camp.runs)
             print(f"seed {seed} {nav.name}: {failed}/{len(camp.runs)} runs failed "
@@ -280,6 +326,7 @@ def main() -> int:
     summary = summarise(navs, results, seeds)
     settings = {"seeds": seeds, "count": count, "repeat": repeat, "preset": args.preset,
                 "examples": args.examples, "workers": args.workers, "quick": args.quick,
+                "resumed": args.resume,
                 "wall_seconds": time.perf_counter() - started}
     report = {"settings": settings, "summary": summary,
               "campaigns": [asdict(c) for camps in results.values() for c in camps]}
