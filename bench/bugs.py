@@ -90,7 +90,8 @@ class RunOutcome:
 
     @property
     def catchers(self) -> list[str]:
-        """What made this run fail: its failed requirements, else its outcome."""
+        """What made this run fail: its failed (and inconclusive) requirements, and its outcome
+        when it did not complete its mission."""
         if self.passed:
             return []
         found = list(self.failed) + [INCONCLUSIVE + r for r in self.inconclusive]
