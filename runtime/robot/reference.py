@@ -16,6 +16,14 @@ progress for ``BLOCKED_AFTER`` seconds and every recovery has been tried since (
 latest, after ``BLOCKED_AFTER + ABORT_GRACE`` seconds; blocked or oscillating, thesis 7.4.4),
 and a goal with no path. It reads only its observation (odometry and laser), never the ground
 truth, and never commands a motion that brings its footprint into a point the laser sees.
+
+Slow zone (what a people-aware stack does, and what a requirement may check): a laser point
+farther than ``UNMAPPED_BEYOND`` from every obstacle of the static map is not explained by the
+map (a person, a moving object, another robot). While such a point is within
+``SLOW_ZONE_RADIUS`` + ``SLOW_ZONE_LEAD`` of the footprint, every command is scaled down along
+its arc so that the linear speed is at most ``SLOW_ZONE_SPEED``. The lead makes the robot slow
+already by the time the point is within ``SLOW_ZONE_RADIUS`` (a laser period and the drive's
+deceleration later).
 This module must never import pybullet.
 """
 
@@ -26,6 +34,7 @@ import math
 import networkx as nx
 import numpy as np
 
+from rei.runtime.messages import LaserScan
 from rei.runtime.robot.protocol import (
     STOP,
     ControllerContext,
@@ -63,6 +72,17 @@ OSCILLATE_AFTER = 10.0
 TIGHT_MARGIN = 0.01
 """Metres kept from laser points by the local planner for ``TIGHT_FOR`` s after a recovery."""
 TIGHT_FOR = 10.0
+SLOW_ZONE_RADIUS = 0.8
+"""Metres from the footprint: an unmapped laser point this close puts the robot in its slow
+zone (the promise requirements may check, with ``SLOW_ZONE_SPEED``)."""
+SLOW_ZONE_SPEED = 0.12
+"""m/s: the largest linear speed commanded while in the slow zone."""
+SLOW_ZONE_LEAD = 0.25
+"""Metres beyond ``SLOW_ZONE_RADIUS`` from which the navigator already keeps to the cap."""
+UNMAPPED_BEYOND = 0.15
+"""Metres: a laser point farther than this from every static map obstacle is unmapped."""
+MAP_FIT_RES = 0.05
+"""Metres per cell of the fine distance-to-map grid the laser points are checked against."""
 
 
 def clearance_field(xs: np.ndarray, ys: np.ndarray, ctx: ControllerContext,
@@ -126,7 +146,10 @@ class ReferenceNavigator:
             limit = min(limit, context.max_speed)
         self._vmax = limit
         self._wmax = context.drive.max_angular
+        self._points_of: LaserScan | None = None
+        self._points = np.zeros((0, 2))
         self._build_grid(context)
+        self._build_map_fit(context)
         self._build_rollouts()
         laser = context.laser
         # Backing up is only done where the laser sees behind the robot.
@@ -144,6 +167,40 @@ class ReferenceNavigator:
         self._clear = clear
         self._graph, self._free_cells = self._grid_graph(self._radius + 0.01)
         self._reduced: tuple[nx.Graph, np.ndarray] | None = None
+
+    def _build_map_fit(self, ctx: ControllerContext) -> None:
+        """The fine distance-to-map grid that tells mapped laser points from unmapped ones."""
+        x0, y0, x1, y1 = ctx.bounds
+        nx_ = int(math.ceil((x1 - x0) / MAP_FIT_RES))
+        ny_ = int(math.ceil((y1 - y0) / MAP_FIT_RES))
+        xs = x0 + (np.arange(nx_) + 0.5) * MAP_FIT_RES
+        ys = y0 + (np.arange(ny_) + 0.5) * MAP_FIT_RES
+        self._fit = clearance_field(xs, ys, ctx, UNMAPPED_BEYOND + 0.05)
+
+    def _unmapped(self, points: np.ndarray, pose: tuple[float, float, float]) -> np.ndarray:
+        """Which laser points (robot frame) lie farther than ``UNMAPPED_BEYOND`` from the map."""
+        if not len(points):
+            return np.zeros(0, dtype=bool)
+        x, y, yaw = pose
+        c, s = math.cos(yaw), math.sin(yaw)
+        wx = x + c * points[:, 0] - s * points[:, 1]
+        wy = y + s * points[:, 0] + c * points[:, 1]
+        x0, y0 = self._ctx.bounds[:2]  # type: ignore[union-attr]
+        i = np.clip(np.floor((wx - x0) / MAP_FIT_RES).astype(np.int64), 0, self._fit.shape[0] - 1)
+        j = np.clip(np.floor((wy - y0) / MAP_FIT_RES).astype(np.int64), 0, self._fit.shape[1] - 1)
+        far: np.ndarray = self._fit[i, j] > UNMAPPED_BEYOND
+        return far
+
+    def _in_slow_zone(self, pose: tuple[float, float, float], points: np.ndarray) -> bool:
+        """Whether an unmapped laser point is within the slow zone (and its lead)."""
+        if not len(points):
+            return False
+        hx, hy = self._half
+        qx = np.abs(points[:, 0]) - hx
+        qy = np.abs(points[:, 1]) - hy
+        gap = np.hypot(np.maximum(qx, 0.0), np.maximum(qy, 0.0))
+        near = points[gap < SLOW_ZONE_RADIUS + SLOW_ZONE_LEAD]
+        return bool(self._unmapped(near, pose).any())
 
     def _grid_graph(self, inflate: float) -> tuple[nx.Graph, np.ndarray]:
         """The planning graph of the cells farther than ``inflate`` from the static map."""
@@ -291,6 +348,15 @@ class ReferenceNavigator:
     _pose: tuple[float, float, float] | None = None
 
     def step(self, observation: Observation) -> VelocityCommand:
+        cmd = self._navigate(observation)
+        if abs(cmd.linear) > SLOW_ZONE_SPEED and self._in_slow_zone(
+                observation.odom_pose, self._laser_points(observation)):
+            # Scaling both keeps the arc the local planner checked against the laser.
+            k = SLOW_ZONE_SPEED / abs(cmd.linear)
+            return VelocityCommand(cmd.linear * k, cmd.angular * k)
+        return cmd
+
+    def _navigate(self, observation: Observation) -> VelocityCommand:
         tracker = self._tracker
         self._pose = observation.odom_pose
         if not tracker.running or tracker.goal is None:
@@ -425,10 +491,12 @@ class ReferenceNavigator:
         return point
 
     def _laser_points(self, observation: Observation) -> np.ndarray:
-        """Laser endpoints near the robot, in the robot's frame."""
+        """Laser endpoints near the robot, in the robot's frame (computed once per scan)."""
         scan = observation.scan
         if scan is None:
             return np.zeros((0, 2))
+        if scan is self._points_of:
+            return self._points
         r = scan.ranges
         key = (scan.angle_min, scan.angle_increment, len(r))
         if self._trig_key != key:
@@ -438,7 +506,9 @@ class ReferenceNavigator:
         cos, sin = self._trig
         keep = (r < min(SENSE_RADIUS, scan.range_max - 1e-6)) & (r >= scan.range_min)
         mx, my = self._ctx.laser.mount_x, self._ctx.laser.mount_y  # type: ignore[union-attr]
-        return np.stack((mx + r[keep] * cos[keep], my + r[keep] * sin[keep]), axis=1)
+        self._points_of = scan
+        self._points = np.stack((mx + r[keep] * cos[keep], my + r[keep] * sin[keep]), axis=1)
+        return self._points
 
     def _choose(self, pose: tuple[float, float, float], points: np.ndarray,
                 dist: float, margin: float = MARGIN) -> VelocityCommand | None:

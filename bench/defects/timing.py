@@ -1,0 +1,72 @@
+"""Timing defects: the navigator acts on old information, or its commands arrive late."""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import replace
+
+from rei.runtime.messages import LaserScan
+from rei.runtime.robot.protocol import STOP, ControllerContext, Observation, VelocityCommand
+from rei.runtime.robot.reference import ReferenceNavigator
+
+SCAN_EVERY = 5
+"""StaleScans uses one scan in this many."""
+LATENCY = 0.5
+"""Seconds ControlLatency's commands are late."""
+
+
+class StaleScans(ReferenceNavigator):
+    """Defect: uses only every 5th laser scan and keeps acting on it until the next one (at a
+    5 Hz laser, a view up to a second old, as if the world had stood still meanwhile).
+
+    Imitates: a throttled laser topic (a `throttle` node left in the launch file from a
+    bandwidth test) or a callback queue that drops most messages under load.
+
+    Expected catcher: the collision requirements with moving humans
+    (MISSION_WITH_HUMAN_TRAJECTORY), HUMAN_SLOW_ZONE; collisions with static obstacles when
+    the robot turns near them.
+    """
+
+    name = "stale-scans"
+
+    def reset(self, context: ControllerContext) -> None:
+        super().reset(context)
+        self._scans_seen = 0
+        self._last_scan_time: float | None = None
+        self._held: tuple[LaserScan, float | None] | None = None
+
+    def step(self, observation: Observation) -> VelocityCommand:
+        scan = observation.scan
+        if scan is not None and (self._held is None
+                                 or observation.scan_time != self._last_scan_time):
+            self._last_scan_time = observation.scan_time
+            if self._scans_seen % SCAN_EVERY == 0:
+                self._held = (scan, observation.scan_time)
+            self._scans_seen += 1
+        held, held_time = self._held if self._held is not None else (None, None)
+        return super().step(replace(observation, scan=held, scan_time=held_time))
+
+
+class ControlLatency(ReferenceNavigator):
+    """Defect: every command reaches the drive 0.5 s after the navigator decided it (the
+    navigator plans as if it took effect at once).
+
+    Imitates: a command path through a congested network or a deep message queue (a
+    `cmd_vel` relay with a large buffer, a velocity smoother with a long window).
+
+    Expected catcher: the collision requirements (overshooting into obstacles), task
+    failures from overshooting goals (MISSION_GOALS_REACHED), HUMAN_SLOW_ZONE (slows late).
+    """
+
+    name = "control-latency"
+
+    def reset(self, context: ControllerContext) -> None:
+        super().reset(context)
+        self._queue: deque[tuple[float, VelocityCommand]] = deque()
+        self._released = STOP
+
+    def step(self, observation: Observation) -> VelocityCommand:
+        self._queue.append((observation.time, super().step(observation)))
+        while self._queue and self._queue[0][0] <= observation.time - LATENCY + 1e-9:
+            self._released = self._queue.popleft()[1]
+        return self._released
