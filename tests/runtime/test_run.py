@@ -193,6 +193,8 @@ def test_the_reference_navigator_completes_every_example_without_collision(
     summary, _ = run_into(EXAMPLES / example / f"{example}.mission", tmp_path)
     assert summary.outcome == "completed", summary.measurements["tasks"]
     assert summary.measurements["collisions"] == 0
+    # correct software passes every applicable requirement of the default specification
+    assert summary.verdict == "pass", [v for v in summary.verdicts if v.status != "pass"]
 
 
 def test_an_attached_sink_sees_exactly_the_recorded_stream(tmp_path: Path) -> None:
