@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 from rei.catalogue import ObjectType
+from rei.lang.room.model import DEFAULT_BEHAVIOUR, Behaviour
 
 Role = Literal["static", "dynamic", "human", "robot"]
 
@@ -62,6 +63,8 @@ class ConcreteObject:
     floor: str
     pose: Pose2D
     trajectory: TimedTrajectory | None = None
+    behaviour: Behaviour = DEFAULT_BEHAVIOUR
+    """How a human reacts to the robot; other roles are always ``scripted``."""
 
 
 @dataclass(frozen=True)
