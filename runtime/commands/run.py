@@ -63,6 +63,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.add_argument("--laser-noise", type=float, default=None, metavar="SIGMA",
                         help="standard deviation (m) of the laser's range error (default: the "
                              "robot's catalogue type, 0.01 for the TurtleBot3 Waffle; 0: exact)")
+    parser.add_argument("--no-vary", action="store_true",
+                        help="walk every human exactly as written (default: the seed draws "
+                             "each human's start delay and speed scale)")
     parser.add_argument("--vepl", type=Path, default=None, metavar="FILE",
                         help="monitoring specification: queries, event patterns, signals with "
                              "utilities and requirements (default: REI's default.vepl)")
@@ -82,7 +85,7 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
              physics_rate: float = 100.0, odom_drift: float = 0.0,
              sinks: Sequence[SampleSink] = (), progress: IO[str] | None = None,
              vepl: Path | None = None, monitor: bool = True, laser_noise: float | None = None,
-             ) -> tuple[RunSummary, RunRecord]:
+             vary: bool = True) -> tuple[RunSummary, RunRecord]:
     """Everything `rei run` does: generate, run, monitor with the .vepl's automata (the
     default specification unless ``vepl``; none when ``monitor`` is False), write outputs.
     Extra ``sinks`` see the same stream as the trace and the monitor."""
@@ -113,7 +116,8 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
     monitor_config = load_monitor_config(world_dir)
     robot = make_controller(controller)
     config = RunConfig(seed=seed, physics_rate=physics_rate, duration=duration,
-                       watchdog=watchdog, odom_drift=odom_drift, laser_noise=laser_noise)
+                       watchdog=watchdog, odom_drift=odom_drift, laser_noise=laser_noise,
+                       vary=vary)
     for stale in (out_dir / SUMMARY, out_dir / TRACE, out_dir / EVENTS):
         stale.unlink(missing_ok=True)
 
@@ -152,7 +156,7 @@ def run(args: argparse.Namespace) -> int:
     summary, record = run_into(args.mission, args.output, args.controller, args.seed,
                                args.duration, args.watchdog, args.physics_rate, args.odom_drift,
                                progress=progress, vepl=args.vepl, monitor=not args.no_monitor,
-                               laser_noise=args.laser_noise)
+                               laser_noise=args.laser_noise, vary=not args.no_vary)
     rtf = record.duration / record.wall_seconds if record.wall_seconds > 0 else math.inf
     cpu_rtf = record.duration / record.cpu_seconds if record.cpu_seconds > 0 else math.inf
     m = summary.measurements

@@ -229,13 +229,17 @@ def test_bad_laser_noise_and_bad_vepl_are_located_input_errors(tmp_path: Path, c
 def test_laser_noise_makes_the_seed_matter(tmp_path: Path) -> None:
     runs = {}
     for name, seed, noise in (("a", "1", None), ("b", "1", None), ("c", "2", None),
-                              ("d", "1", "0"), ("e", "2", "0")):
+                              ("d", "1", "0"), ("e", "2", "0"), ("f", "1", "0"),
+                              ("g", "2", "0")):
         args = ["run", str(NAVIGATION), "-o", str(tmp_path / name), "--seed", seed,
                 "--duration", "6", "--quiet", "--no-monitor"]
-        main(args + (["--laser-noise", noise] if noise is not None else []))
+        main(args + (["--laser-noise", noise] if noise is not None else [])
+             + (["--no-vary"] if name in "de" else []))
         runs[name] = (tmp_path / name / "trace.jsonl").read_bytes()
     assert runs["a"] == runs["b"]  # same seed, same run
     assert runs["a"] != runs["c"]  # another seed draws other range errors
-    # Without noise the seed only names the run (in the header): the samples are the same.
+    # Without noise and human variations the seed only names the run (in the header).
     assert runs["d"] != runs["e"]
     assert runs["d"].splitlines()[1:] == runs["e"].splitlines()[1:]
+    # Without noise the seed still varies the humans.
+    assert runs["f"].splitlines()[1:] != runs["g"].splitlines()[1:]
