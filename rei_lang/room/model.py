@@ -22,6 +22,9 @@ spline regardless, ``yielding`` waits while the robot is in its way, ``social`` 
 around it by a social force. ``scripted`` is the default so hand-written rooms keep the
 thesis's behaviour."""
 DEFAULT_BEHAVIOUR: Behaviour = "scripted"
+WALKING_SPEEDS = (0.5, 1.4)
+"""m/s: the range of human walking speeds (generated rooms and seeded variations keep
+humans in it; a hand-written trajectory may leave it)."""
 
 
 class Side(Enum):

@@ -24,19 +24,19 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rei.lang.room.model import DEFAULT_BEHAVIOUR, Behaviour
+from rei.lang.room.model import DEFAULT_BEHAVIOUR, WALKING_SPEEDS, Behaviour
 from rei.runtime.animator.reactive import (
     Agent,
     SocialForce,
     YieldRule,
+    gap_in_the_way,
     limit_speed,
     social_acceleration,
-    yield_factor,
+    speed_share,
 )
 from rei.runtime.animator.spline import CatmullRom
 from rei.runtime.animator.variation import (
     NO_VARIATION,
-    WALKING_SPEEDS,
     HumanVariation,
     draw_variations,
     mean_speed,
@@ -147,6 +147,9 @@ class Animator:
         """Reactive bodies: share of full path speed their path time advances at."""
         self._velocity = [(0.0, 0.0)] * len(items)
         """Social humans: velocity from the social force model."""
+        self._stood = [0.0] * len(items)
+        """Yielding humans: seconds stood with the robot in the way."""
+        self._giving_way = [False] * len(items)
         self._last_correct: int | None = None
         self._path_speed = [item.variation.speed_scale * mean_speed(item.spline)
                             for item in items]
@@ -182,10 +185,39 @@ class Animator:
             vx, vy = item.spline.velocity(s)
             if item.behaviour == "yielding":
                 walking = step / self.rate >= item.variation.phase_s
-                self._advance[k] = 0.0 if not walking else 1.0 if robot is None else \
-                    yield_factor(self.reactions.yielding, pose[0], pose[1], item.radius,
-                                 (vx, vy), robot)
+                gap = None if robot is None or not walking else gap_in_the_way(
+                    self.reactions.yielding, pose[0], pose[1], item.radius, (vx, vy), robot)
+                self._advance[k] = self._yield(k, gap, dt) if walking else 0.0
+                if self._giving_way[k] and robot is not None:
+                    cx, cy = self._step_away(pose, robot, gap)
             self._feedback[k] = (cx, cy, _turn(item.face_motion, vx, vy, pose[2], 1e-3))
+
+    def _yield(self, k: int, gap: float | None, dt: float) -> float:
+        """The share of path speed a yielding human walks at; 0 while it gives way."""
+        rule = self.reactions.yielding
+        if self._giving_way[k]:
+            if gap is not None:
+                return 0.0
+            self._giving_way[k] = False  # the robot is out of the way: back to the path
+        share = speed_share(rule, gap)
+        # The share falls off with the gap, so a human closes in on stop_gap ever slower:
+        # one creeping at a tenth of its speed is waiting as much as one standing.
+        self._stood[k] = self._stood[k] + dt if share < 0.1 else 0.0
+        if self._stood[k] >= rule.patience:
+            self._giving_way[k], self._stood[k] = True, 0.0
+            return 0.0
+        return share
+
+    def _step_away(self, pose: Pose, robot: Agent, gap: float | None) -> tuple[float, float]:
+        """A human giving way steps straight away from the robot (not back along its path,
+        which at a turning point leads into the robot) until give_way_gap, then stands; its
+        pull brings it back to its path once the robot is out of the way."""
+        rule = self.reactions.yielding
+        dx, dy = pose[0] - robot.x, pose[1] - robot.y
+        dist = math.hypot(dx, dy)
+        if gap is None or gap >= rule.give_way_gap or dist < 1e-9:
+            return 0.0, 0.0
+        return rule.give_way_speed * dx / dist, rule.give_way_speed * dy / dist
 
     def _social(self, k: int, item: Animated, pose: Pose, dt: float,
                 others: list[Agent]) -> None:

@@ -5,7 +5,12 @@ as often as a human-blind one; reactive humans make the test fair.
 
 * ``yielding``: a human slows down, then stands, while the robot's footprint is in a cone
   ahead of it along its walking direction, and walks on when the way is clear. Its path
-  time only advances while it walks, so it resumes where it stopped.
+  time only advances while it walks, so it resumes where it stopped. A human that has stood
+  for ``patience`` seconds with the robot still in its way gives way: it steps straight
+  away from the robot until the robot is ``give_way_gap`` away, stands there until the
+  robot is out of its way, and returns to its path. Without that, a
+  human standing in a one-tile passage and a robot waiting for it to move would wait for
+  each other until the goal times out.
 * ``social``: the social force model of Helbing and Molnár (Phys. Rev. E 51, 4282, 1995):
   a driving force relaxes the human's velocity towards its desired velocity (towards a
   target point moving along its spline) over the relaxation time; the robot and the other
@@ -35,6 +40,12 @@ class YieldRule:
     """m between footprints below which a human in whose way the robot is slows down."""
     stop_gap: float = 0.45
     """m between footprints at which it stands still."""
+    patience: float = 3.0
+    """s a human stands with the robot in its way before it gives way."""
+    give_way_speed: float = 0.4
+    """m/s at which a human giving way steps away from the robot."""
+    give_way_gap: float = 1.5
+    """m between footprints at which a human giving way stops stepping back."""
 
 
 @dataclass(frozen=True)
@@ -69,16 +80,14 @@ class Agent:
     radius: float
 
 
-def yield_factor(rule: YieldRule, x: float, y: float, radius: float, direction: Vec,
-                 robot: Agent) -> float:
-    """1 to walk at full path speed, 0 to stand: how much the robot leaves the way free.
-
-    ``direction`` is the walking direction (need not be unit length; zero means the human
-    is not walking, and nothing is in its way).
-    """
+def gap_in_the_way(rule: YieldRule, x: float, y: float, radius: float, direction: Vec,
+                   robot: Agent) -> float | None:
+    """The gap (m) between the footprints when the robot is in the cone ahead of the human,
+    None when it is not. ``direction`` is the walking direction (need not be unit length;
+    zero means the human is not walking, and nothing is in its way)."""
     norm = math.hypot(*direction)
     if norm < 1e-9:
-        return 1.0
+        return None
     ex, ey = direction[0] / norm, direction[1] / norm
     dx, dy = robot.x - x, robot.y - y
     ahead = dx * ex + dy * ey
@@ -86,13 +95,23 @@ def yield_factor(rule: YieldRule, x: float, y: float, radius: float, direction: 
     # The footprint is in the cone when its nearest point is: widen the cone by both radii.
     reach = radius + robot.radius
     if ahead <= -reach or side > math.tan(rule.cone_half_angle) * max(ahead, 0.0) + reach:
-        return 1.0
-    gap = math.hypot(dx, dy) - reach
-    if gap >= rule.slow_gap:
+        return None
+    return math.hypot(dx, dy) - reach
+
+
+def speed_share(rule: YieldRule, gap: float | None) -> float:
+    """1 to walk at full path speed, 0 to stand, for the robot ``gap`` metres ahead."""
+    if gap is None or gap >= rule.slow_gap:
         return 1.0
     if gap <= rule.stop_gap:
         return 0.0
     return (gap - rule.stop_gap) / (rule.slow_gap - rule.stop_gap)
+
+
+def yield_factor(rule: YieldRule, x: float, y: float, radius: float, direction: Vec,
+                 robot: Agent) -> float:
+    """How much of its path speed a human walks at with the robot where it is."""
+    return speed_share(rule, gap_in_the_way(rule, x, y, radius, direction, robot))
 
 
 def social_acceleration(model: SocialForce, x: float, y: float, vx: float, vy: float,

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rei.lang.room.model import WALKING_SPEEDS
 from rei.runtime.animator.spline import CatmullRom
 
 VARIATION_STREAM = 1
@@ -22,9 +23,6 @@ MAX_PHASE_INTERVALS = 1.0
 """The start delay is drawn from [0, this many mean vertex intervals of the trajectory)."""
 SPEED_SPREAD = 0.15
 """The speed scale is drawn from [1 - spread, 1 + spread]."""
-WALKING_SPEEDS = (0.5, 1.4)
-"""m/s: the range of human walking speeds. A drawn scale never takes a trajectory's mean
-speed out of it; a trajectory written outside it keeps its own speed at the nearest end."""
 
 
 @dataclass(frozen=True)
@@ -45,7 +43,7 @@ NO_VARIATION = HumanVariation()
 
 
 def clamp_scale(scale: float, mean_speed: float) -> float:
-    """``scale`` limited so ``scale * mean_speed`` stays in the walking range (or, for a
+    """``scale`` limited so ``scale * mean_speed`` stays in WALKING_SPEEDS (or, for a
     trajectory written outside it, no farther out than written)."""
     if mean_speed <= 0.0:
         return scale
