@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 from rei.generators.errors import GenerationError
 from rei.lang.room.model import BEHAVIOURS, WALKING_SPEEDS
+from rei.lang.suggest import did_you_mean
 
 FACTOR_NAMES: tuple[str, ...] = (
     "shape", "size", "objects", "mix", "humans", "vertices", "speed", "loop", "crossing",
@@ -228,12 +229,12 @@ def parse_row(levels: Mapping[str, str], static_names: tuple[str, ...]) -> RoomP
     behaviour = levels["behaviour"]
     if behaviour not in BEHAVIOUR_LEVELS:
         raise ParameterError("behaviour", f"one of {', '.join(BEHAVIOUR_LEVELS)}",
-                             f"'{behaviour}'")
+                             f"'{behaviour}'" + did_you_mean(behaviour, BEHAVIOUR_LEVELS))
     heading_text = levels["heading"]
     if heading_text not in YES_NO:
         raise ParameterError("heading", "yes or no", f"'{heading_text}'")
     limit_text = levels["max_speed"]
-    max_speed = None if limit_text == NO_LIMIT else _float("max_speed", limit_text, 0.0,
+    max_speed = None if limit_text == NO_LIMIT else _float("max-speed", limit_text, 0.0,
                                                              MAX_ROBOT_SPEED)
     return RoomParameters(
         shape=shape, width=width, height=height, objects=objects, density=density, mix=mix,
