@@ -165,13 +165,16 @@ class Animator:
     def correct(self, step: int, poses: list[Pose], robot_pose: Pose | None = None,
                 robot_twist: Pose | None = None) -> None:
         """Refresh each body's pull back to its curve from its ground-truth pose, and the
-        reactive humans' decisions from the robot's (``robot_twist``: world-frame vx, vy, wz;
-        reserved for velocity-aware reactions, the current ones need the pose only)."""
+        reactive humans' decisions from the robot's (``robot_twist``: world-frame vx, vy, wz,
+        which the social force uses to repel earlier from a robot coming closer)."""
         dt = 0.0 if self._last_correct is None else (step - self._last_correct) / self.rate
         self._last_correct = step
+        rvx, rvy = (robot_twist[0], robot_twist[1]) if robot_twist is not None else (0.0, 0.0)
         robot = (None if robot_pose is None
-                 else Agent(robot_pose[0], robot_pose[1], self.robot_radius))
-        humans = [(j, Agent(p[0], p[1], item.radius))
+                 else Agent(robot_pose[0], robot_pose[1], self.robot_radius, rvx, rvy))
+        # Other humans' velocities: a social human's own, the others' path velocity is not
+        # worth a second look-up (they are repelled by distance alone).
+        humans = [(j, Agent(p[0], p[1], item.radius, *self._velocity[j]))
                   for j, (item, p) in enumerate(zip(self.items, poses, strict=True))
                   if item.face_motion]
         for k, (item, pose) in enumerate(zip(self.items, poses, strict=True)):

@@ -15,8 +15,11 @@ as often as a human-blind one; reactive humans make the test fair.
   a driving force relaxes the human's velocity towards its desired velocity (towards a
   target point moving along its spline) over the relaxation time; the robot and the other
   humans repel it with a force decaying exponentially with the gap between footprints
-  (the circular form of Helbing, Farkas and Vicsek, Nature 407, 487, 2000), weighted by
-  how far ahead the other is (the anisotropy of Helbing and Molnár's angle of sight).
+  (the form of Helbing, Farkas and Vicsek, Nature 407, 487, 2000), weighted by how far
+  ahead the other is (the anisotropy of Helbing and Molnár's angle of sight). The gap is
+  measured with Helbing and Molnár's elliptical distance b, which accounts for the other's
+  step v * step_time, so a robot driving towards a human repels it earlier than one
+  standing or driving away.
   Walls are not part of the force: the spline keeps clear of them, and a pushed human
   meets them as real contacts.
 
@@ -66,6 +69,9 @@ class SocialForce:
     robot is otherwise an equilibrium where the human stands until its target gives up."""
     max_speed_factor: float = 1.3
     """v_max / v0: how much faster than its path a human hurries (Helbing and Molnár: 1.3)."""
+    step_time: float = 1.0
+    """s: the others' step v * step_time that shapes the elliptical distance (Helbing and
+    Molnár use 2 s between pedestrians; 1 s keeps a robot crossing far ahead harmless)."""
     cutoff: float = 3.0
     """m between footprints beyond which another agent exerts no force (cheap, and smooth
     enough: A exp(-3/0.5) is 0.015 m/s^2)."""
@@ -73,11 +79,13 @@ class SocialForce:
 
 @dataclass(frozen=True)
 class Agent:
-    """Another body a human reacts to: where it is and its footprint's radius."""
+    """Another body a human reacts to: where it is, its footprint's radius, its velocity."""
 
     x: float
     y: float
     radius: float
+    vx: float = 0.0
+    vy: float = 0.0
 
 
 def gap_in_the_way(rule: YieldRule, x: float, y: float, radius: float, direction: Vec,
@@ -124,8 +132,11 @@ def social_acceleration(model: SocialForce, x: float, y: float, vx: float, vy: f
     for other in others:
         dx, dy = x - other.x, y - other.y
         dist = math.hypot(dx, dy)
-        gap = dist - radius - other.radius
-        if gap > model.cutoff or dist < 1e-9:
+        if dist < 1e-9:
+            continue
+        gap = elliptical_distance(dx, dy, other.vx * model.step_time,
+                                  other.vy * model.step_time) - radius - other.radius
+        if gap > model.cutoff:
             continue
         nx, ny = dx / dist, dy / dist
         # cos of the angle between where the human heads and where the other is.
@@ -139,6 +150,17 @@ def social_acceleration(model: SocialForce, x: float, y: float, vx: float, vy: f
             ax += turn * hy
             ay += turn * -hx
     return ax, ay
+
+
+def elliptical_distance(dx: float, dy: float, sx: float, sy: float) -> float:
+    """Helbing and Molnár's b: the semi-minor axis of the ellipse through the human, with
+    foci at the other's position and one step (sx, sy) ahead of it; the plain distance for
+    a standing other, shorter for one coming closer, longer for one moving away."""
+    step = math.hypot(sx, sy)
+    if step < 1e-9:
+        return math.hypot(dx, dy)
+    major = math.hypot(dx, dy) + math.hypot(dx - sx, dy - sy)
+    return 0.5 * math.sqrt(max(major * major - step * step, 0.0))
 
 
 def limit_speed(vx: float, vy: float, limit: float) -> Vec:

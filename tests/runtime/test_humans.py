@@ -15,7 +15,14 @@ import pytest
 
 from rei.lang.room.model import WALKING_SPEEDS
 from rei.runtime.animator import HumanVariation, draw_variations
-from rei.runtime.animator.reactive import Agent, YieldRule, yield_factor
+from rei.runtime.animator.reactive import (
+    Agent,
+    SocialForce,
+    YieldRule,
+    elliptical_distance,
+    social_acceleration,
+    yield_factor,
+)
 from rei.runtime.animator.variation import mean_speed
 from rei.runtime.collector import SampleList, load_monitor_config
 from rei.runtime.robot import ControllerContext, GoalFeedback, NavGoal, Observation, VelocityCommand
@@ -148,3 +155,14 @@ def test_the_yield_rule_looks_ahead_in_a_cone(robot: tuple[float, float],
                                               expected: float) -> None:
     factor = yield_factor(YieldRule(), 0.0, 0.0, 0.25, (1.0, 0.0), Agent(*robot, 0.2))
     assert math.isclose(factor, expected)
+
+
+def test_a_robot_coming_closer_repels_a_social_human_more_than_one_driving_away() -> None:
+    model = SocialForce()
+    towards = Agent(2.0, 0.0, 0.2, -0.26, 0.0)
+    away = Agent(2.0, 0.0, 0.2, 0.26, 0.0)
+    standing = Agent(2.0, 0.0, 0.2)
+    push = [social_acceleration(model, 0.0, 0.0, 1.0, 0.0, 0.25, (1.0, 0.0), [a])[0]
+            for a in (towards, standing, away)]
+    assert push[0] < push[1] < push[2] < 0.0  # all push back; the oncoming robot most
+    assert elliptical_distance(2.0, 0.0, 0.0, 0.0) == 2.0
