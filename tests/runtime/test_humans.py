@@ -166,3 +166,31 @@ def test_a_robot_coming_closer_repels_a_social_human_more_than_one_driving_away(
             for a in (towards, standing, away)]
     assert push[0] < push[1] < push[2] < 0.0  # all push back; the oncoming robot most
     assert elliptical_distance(2.0, 0.0, 0.0, 0.0) == 2.0
+
+
+SCENES = Path(__file__).parent / "scenes"
+
+
+def _reference_run(folder: Path, room_text: str) -> RunRecord:
+    from rei.runtime.robot.select import make_controller  # noqa: PLC0415
+
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "crossing.room").write_text(room_text, encoding="utf-8")
+    (folder / "crossing.mission").write_text((SCENES / "crossing.mission").read_text("utf-8"),
+                                             encoding="utf-8")
+    mission = generate_world(folder / "crossing.mission", folder / "world")
+    return run_mission(mission, load_manifest(folder / "world"),
+                       load_monitor_config(folder / "world"), make_controller("reference"), [],
+                       RunConfig(seed=0, watchdog=None))
+
+
+def test_reactive_humans_make_the_test_fair_to_a_correct_navigator(tmp_path: Path) -> None:
+    """The crossing scene: a yielding and a social human in the robot's way. The reference
+    navigator passes it; with the same humans scripted it is walked into."""
+    room = (SCENES / "crossing.room").read_text("utf-8")
+    reactive = _reference_run(tmp_path / "reactive", room)
+    assert reactive.outcome == "completed" and reactive.measurements["collisions"] == 0
+    scripted = _reference_run(tmp_path / "scripted",
+                              room.replace(" behaviour yielding", "")
+                              .replace(" behaviour social", ""))
+    assert scripted.measurements["collisions"] > 0
