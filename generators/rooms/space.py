@@ -86,10 +86,10 @@ class ParameterSpace:
 
 PRESETS: Mapping[str, Mapping[str, tuple[str, ...]]] = {
     # Thesis 7.4.4: a small room, densely furnished; the robot crosses from one side to the
-    # other. It is the demo's preset, so it exercises every verdict: a reactive human
-    # crossing the robot's route, a final goal with a heading, a one-tile doorway (the
-    # joined shape's door, one tile wide across 5 tiles) and a speed-limited mission, each
-    # in some rooms.
+    # other. It is the demo's preset, so its rooms exercise what the requirements watch: a
+    # reactive human crossing the robot's route, a final goal with a heading, a one-tile
+    # doorway (the joined shape's door across 5 tiles) and a speed-limited mission (below
+    # the Waffle's 0.26 m/s), each in some rooms.
     "small": {
         "shape": ("rect", "joined"), "size": ("7x5", "8x5"), "objects": ("6", "8"),
         "mix": ("mixed", "furniture"), "humans": ("1",), "vertices": ("2",),
