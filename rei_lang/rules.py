@@ -72,6 +72,7 @@ RULES: tuple[Rule, ...] = (
     Rule("TRAJ-CROSSES", "room", "the straight way between consecutive trajectory vertices "
          "stays on floors free of walls and standing objects"),
     Rule("TRAJ-UNREACHABLE", "room", "trajectory vertices lie where the robot can reach"),
+    Rule("HUMAN-BEHAVIOUR", "room", "a human's behaviour is scripted, yielding or social"),
     Rule("MISSION-ROOM", "mission", "the imported room exists and is valid"),
     Rule("MISSION-GOALS", "mission", "a mission has at least two goals (start and final place)",
          "thesis 4.1.2, 4.3.1"),

@@ -25,7 +25,8 @@ import numpy as np
 
 from rei.catalogue import Box, Cylinder
 from rei.generators.concrete import ConcreteMission
-from rei.runtime.animator import Animated, Animator, spline_of
+from rei.runtime.animator import Animator
+from rei.runtime.animator.animator import animated_bodies, variations_record
 from rei.runtime.collector import DataCollector, MonitorConfig, SampleSink
 from rei.runtime.errors import RunError
 from rei.runtime.messages import (
@@ -72,6 +73,9 @@ class RunConfig:
     """Standard deviation (m) of the laser's range error; None: the catalogue's value."""
     jitter: StartJitter | None = START_JITTER
     """Seeded start-pose jitter of the robot; None starts it exactly at the declared pose."""
+    vary: bool = True
+    """Draw each human's start delay and speed scale from the seed (its own stream, so the
+    laser noise is unchanged); False walks every trajectory exactly as written."""
 
 
 @dataclass(frozen=True)
@@ -233,9 +237,10 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
     guard = GuardedController(controller, config.watchdog)
     world = BulletWorld(manifest, config.physics_rate)
     try:
-        animated = [Animated(world.object_ids[i], spline_of(b.trajectory), b.role == "human")
-                    for i, b in enumerate(manifest.objects) if b.trajectory is not None]
-        animator = Animator(animated, config.physics_rate)
+        named = animated_bodies(manifest.objects, world.object_ids, config.seed, config.vary)
+        animated = [a for _, a in named]
+        animator = Animator(animated, config.physics_rate,
+                            robot_spec.footprint.circumradius())
         collector.start()
         scan: LaserScan | None = None
         scan_time: float | None = None
@@ -311,7 +316,8 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
                 if final:
                     break
                 if k % every_control == 0 and animated:
-                    animator.correct(k, [world.pose(item.body) for item in animated])
+                    animator.correct(k, [world.pose(item.body) for item in animated], truth,
+                                     world.twist(world.robot_id))
                 for body, vx, vy, wz in animator.commands(k):
                     world.set_planar_velocity(body, vx, vy, wz)
                 world.drive_robot(cmd.linear, cmd.angular, truth[2])
@@ -354,6 +360,7 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
         "samples": collector.seq,
         "physics_steps": steps,
         "incomplete": outcome == "interrupted",
+        "variations": variations_record(named),
     }
     # Other variations (the humans') record themselves under the same key: merge, never replace.
     variations = measurements.setdefault("variations", {})

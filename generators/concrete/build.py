@@ -73,7 +73,7 @@ def concretise_room(doc: RoomDocument) -> ConcreteWorld:
         pose = Pose2D(x, y, math.radians(obj.heading_deg or 0.0))
         trajectory = _timed(obj.trajectory, room, cells) if obj.trajectory is not None else None
         concrete = ConcreteObject(obj.name, obj.role, _type(catalogue, obj.type), obj.floor.name,
-                                  pose, trajectory)
+                                  pose, trajectory, obj.behaviour)
         if obj.role == "robot":
             robot = concrete
         else:

@@ -8,6 +8,7 @@ from typing import Literal
 
 from rei.catalogue import ObjectType
 from rei.lang.mission.model import DEFAULT_HEADING_TOLERANCE
+from rei.lang.room.model import DEFAULT_BEHAVIOUR, Behaviour
 
 Role = Literal["static", "dynamic", "human", "robot"]
 
@@ -63,6 +64,8 @@ class ConcreteObject:
     floor: str
     pose: Pose2D
     trajectory: TimedTrajectory | None = None
+    behaviour: Behaviour = DEFAULT_BEHAVIOUR
+    """How a human reacts to the robot; other roles are always ``scripted``."""
 
 
 @dataclass(frozen=True)

@@ -44,7 +44,7 @@ from rei.generators.rooms.geometry import (
     stays_connected,
     swept_cells,
 )
-from rei.generators.rooms.space import RoomParameters, door_width
+from rei.generators.rooms.space import MIX_BEHAVIOURS, RoomParameters, door_width
 from rei.lang.room.checks import rotated_half_extents
 
 GRID = "area"
@@ -83,6 +83,7 @@ class HumanPlan:
     vertices: tuple[Cell, ...]
     loop: bool
     total_time: float
+    behaviour: str = "scripted"
 
 
 @dataclass(frozen=True)
@@ -252,9 +253,18 @@ def _human(params: RoomParameters, index: int, floors: set[Cell], outside: CellM
         length = float(np.hypot(steps[:, 0], steps[:, 1]).sum())
         total = max(1.0, round(length / params.speed, 1))  # tiles are 1 m
         swept = swept_cells(spline) | swept_cells(straight)
-        return HumanPlan(f"walker_{index + 1}", tuple(vertices), params.loop, total), swept
+        return HumanPlan(f"walker_{index + 1}", tuple(vertices), params.loop, total,
+                         behaviour_of(params, index)), swept
     raise AttemptFailed("vertices", f"no clear trajectory for human {index + 1} after "
                                     f"{HUMAN_TRIES} tries")
+
+
+def behaviour_of(params: RoomParameters, index: int) -> str:
+    """Human ``index``'s behaviour: the level, or for ``mix`` yielding and social in turn
+    (by index, not drawn, so the mix never changes the room's random stream)."""
+    if params.behaviour == "mix":
+        return MIX_BEHAVIOURS[index % len(MIX_BEHAVIOURS)]
+    return params.behaviour
 
 
 def construct(params: RoomParameters, facts: CatalogueFacts, rng: random.Random) -> RoomPlan:

@@ -16,11 +16,18 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 from rei.generators.errors import GenerationError
+from rei.lang.room.model import BEHAVIOURS, WALKING_SPEEDS
+from rei.lang.suggest import did_you_mean
 
 FACTOR_NAMES: tuple[str, ...] = (
     "shape", "size", "objects", "mix", "humans", "vertices", "speed", "loop", "crossing",
-    "goals", "spacing", "cycles",
+    "goals", "spacing", "cycles", "behaviour", "heading", "max_speed",
 )
+
+BEHAVIOUR_LEVELS = (*BEHAVIOURS, "mix")
+"""A human behaviour for every human of a room, or ``mix``: yielding and social in turn."""
+MIX_BEHAVIOURS = ("yielding", "social")
+NO_LIMIT = "none"
 
 SHAPES = ("rect", "L", "joined")
 CROSSINGS = ("cross", "any")
@@ -39,7 +46,7 @@ MAX_HUMANS = 20
 MAX_VERTICES = 20
 MAX_GOALS = 50
 MAX_CYCLES = 100
-MAX_SPEED = 3.0
+MAX_ROBOT_SPEED = 10.0
 
 
 class ParameterError(GenerationError):
@@ -78,13 +85,17 @@ class ParameterSpace:
 
 
 PRESETS: Mapping[str, Mapping[str, tuple[str, ...]]] = {
-    # Thesis 7.4.4: a small room, densely furnished (about 10 objects), no moving objects;
-    # the robot crosses from one side to the other.
+    # Thesis 7.4.4: a small room, densely furnished; the robot crosses from one side to the
+    # other. It is the demo's preset, so its rooms exercise what the requirements watch: a
+    # reactive human crossing the robot's route, a final goal with a heading, a one-tile
+    # doorway (the joined shape's door across 5 tiles) and a speed-limited mission (below
+    # the Waffle's 0.26 m/s), each in some rooms.
     "small": {
-        "shape": ("rect",), "size": ("6x5", "7x5", "7x6"), "objects": ("9", "10", "11"),
-        "mix": ("mixed", "furniture"), "humans": ("0",), "vertices": ("3",),
-        "speed": ("0.8",), "loop": ("yes",), "crossing": ("any",), "goals": ("2",),
-        "spacing": ("4",), "cycles": ("1", "2"),
+        "shape": ("rect", "joined"), "size": ("7x5", "8x5"), "objects": ("6", "8"),
+        "mix": ("mixed", "furniture"), "humans": ("1",), "vertices": ("2",),
+        "speed": ("0.8",), "loop": ("yes",), "crossing": ("cross",), "goals": ("2",),
+        "spacing": ("4",), "cycles": ("1", "2"), "behaviour": ("yielding", "social"),
+        "heading": ("yes", "no"), "max_speed": ("none", "0.18"),
     },
     # Thesis 7.4.5: a medium room, sparsely furnished, with one moving human.
     "medium": {
@@ -92,7 +103,8 @@ PRESETS: Mapping[str, Mapping[str, tuple[str, ...]]] = {
         "objects": ("3", "5", "7"), "mix": ("mixed", "furniture", "clutter"),
         "humans": ("1",), "vertices": ("3", "4", "5"), "speed": ("0.6", "1.0"),
         "loop": ("yes", "no"), "crossing": ("cross", "any"), "goals": ("3", "4"),
-        "spacing": ("5", "8"), "cycles": ("1", "2"),
+        "spacing": ("5", "8"), "cycles": ("1", "2"), "behaviour": ("social", "yielding"),
+        "heading": ("no", "yes"), "max_speed": (NO_LIMIT,),
     },
     # Thesis 7.4.6: a fairly large room.
     "large": {
@@ -100,7 +112,8 @@ PRESETS: Mapping[str, Mapping[str, tuple[str, ...]]] = {
         "objects": ("15", "30"), "mix": ("mixed", "furniture"), "humans": ("0", "1", "2"),
         "vertices": ("4", "6"), "speed": ("0.8", "1.2"), "loop": ("yes",),
         "crossing": ("cross", "any"), "goals": ("3", "5"), "spacing": ("10", "16"),
-        "cycles": ("1",),
+        "cycles": ("1",), "behaviour": ("mix", "social"), "heading": ("no",),
+        "max_speed": (NO_LIMIT,),
     },
 }
 
@@ -130,6 +143,12 @@ class RoomParameters:
     goals: int
     spacing: float
     cycles: int
+    behaviour: str
+    """One of BEHAVIOUR_LEVELS."""
+    heading: bool
+    """Whether the final goal must be reached facing a given way."""
+    max_speed: float | None
+    """The mission's speed limit (m/s), None for the drive's own."""
     levels: tuple[tuple[str, str], ...]
     """The levels as written, factor by factor (for the index and the metadata)."""
 
@@ -164,6 +183,12 @@ def _float(option: str, text: str, low: float, high: float, low_open: bool = Tru
         raise ParameterError(option, f"a finite number in {bracket}{low:g}, {high:g}]",
                              f"'{text}'")
     return value
+
+
+def _walking_speed(text: str) -> float:
+    """Humans walk at human speeds: a faster 'human' is a test no navigator can pass."""
+    low, high = WALKING_SPEEDS
+    return _float("speed", text, low, high, low_open=False)
 
 
 def parse_row(levels: Mapping[str, str], static_names: tuple[str, ...]) -> RoomParameters:
@@ -201,15 +226,26 @@ def parse_row(levels: Mapping[str, str], static_names: tuple[str, ...]) -> RoomP
     crossing = levels["crossing"]
     if crossing not in CROSSINGS:
         raise ParameterError("crossing", f"one of {', '.join(CROSSINGS)}", f"'{crossing}'")
+    behaviour = levels["behaviour"]
+    if behaviour not in BEHAVIOUR_LEVELS:
+        raise ParameterError("behaviour", f"one of {', '.join(BEHAVIOUR_LEVELS)}",
+                             f"'{behaviour}'" + did_you_mean(behaviour, BEHAVIOUR_LEVELS))
+    heading_text = levels["heading"]
+    if heading_text not in YES_NO:
+        raise ParameterError("heading", "yes or no", f"'{heading_text}'")
+    limit_text = levels["max_speed"]
+    max_speed = None if limit_text == NO_LIMIT else _float("max-speed", limit_text, 0.0,
+                                                             MAX_ROBOT_SPEED)
     return RoomParameters(
         shape=shape, width=width, height=height, objects=objects, density=density, mix=mix,
         humans=_int("humans", levels["humans"], 0, MAX_HUMANS),
         vertices=_int("vertices", levels["vertices"], 2, MAX_VERTICES),
-        speed=_float("speed", levels["speed"], 0.0, MAX_SPEED),
+        speed=_walking_speed(levels["speed"]),
         loop=loop_text == "yes", crossing=crossing,
         goals=_int("goals", levels["goals"], 2, MAX_GOALS),
         spacing=_float("spacing", levels["spacing"], 0.0, float(2 * MAX_SIDE)),
         cycles=_int("cycles", levels["cycles"], 1, MAX_CYCLES),
+        behaviour=behaviour, heading=heading_text == "yes", max_speed=max_speed,
         levels=tuple((n, levels[n]) for n in FACTOR_NAMES),
     )
 

@@ -66,9 +66,16 @@ def room_text(name: str, plan: RoomPlan, provenance: Provenance) -> str:
         lines.append(f"    human {human.name} on {cell_name(human.vertices[0])} trajectory "
                      f"total {_fmt(human.total_time)} {end} {{")
         lines += [f"        {cell_name(v)}" for v in human.vertices]
-        lines.append("    }")
+        lines.append(f"    }} behaviour {human.behaviour}")
     lines.append("}")
     return "\n".join(lines) + "\n"
+
+
+def arrival_heading(previous: tuple[int, int], goal: tuple[int, int]) -> float:
+    """Degrees: the way from the previous goal, rounded to a quarter turn, so the robot
+    must turn at the goal to meet it (a heading requirement that can pass and can fail)."""
+    angle = math.degrees(math.atan2(goal[1] - previous[1], goal[0] - previous[0]))
+    return float((round(angle / 90.0) * 90) % 360)
 
 
 def mission_text(name: str, room_file: str, plan: RoomPlan) -> str:
@@ -80,16 +87,25 @@ def mission_text(name: str, room_file: str, plan: RoomPlan) -> str:
     ]
     if p.cycles > 1:
         lines.append(f"    cycles {p.cycles}")
+    speed = ROBOT_SPEED
+    if p.max_speed is not None:
+        lines.append(f"    max_speed {_fmt(p.max_speed)}")
+        speed = min(speed, p.max_speed)
+    last = len(plan.goals) - 1
     for k, goal in enumerate(plan.goals):
-        if k == 0:
+        if k == 0 and p.cycles == 1:
             timeout = 30.0
         else:
+            # The first goal is the start, and in later cycles the end of the way back.
             leg = math.dist(plan.goals[k - 1], goal)
             # Straight distance times the route's tortuosity bound, at a third of top speed.
             timeout = 30.0 + 10.0 * math.ceil(3 * leg * max(1.0, plan.descriptors.tortuosity)
-                                              / ROBOT_SPEED / 10.0)
-        lines.append(f"    goal goal_{k + 1} at {cell_name(goal)} tolerance {GOAL_TOLERANCE:g} "
-                     f"timeout {_fmt(timeout)}")
+                                              / speed / 10.0)
+        heading = ""
+        if p.heading and k == last and k > 0:
+            heading = f" heading {_fmt(arrival_heading(plan.goals[k - 1], goal))}"
+        lines.append(f"    goal goal_{k + 1} at {cell_name(goal)} tolerance {GOAL_TOLERANCE:g}"
+                     f"{heading} timeout {_fmt(timeout)}")
     lines.append("}")
     return "\n".join(lines) + "\n"
 

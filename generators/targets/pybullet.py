@@ -2,7 +2,8 @@
 
 One URDF per body *type* (``urdf/<type>.urdf``; walls get ``urdf/wall_<type>.urdf`` of the
 room's tile size) and a manifest, ``world.json``, that places every instance: name, role,
-type, URDF, pose, footprint, height, and the timed trajectory of animated bodies. A URDF per
+type, URDF, pose, footprint, height, and the timed trajectory and behaviour (scripted,
+yielding, social) of animated bodies. A URDF per
 type rather than one world file because pybullet loads a URDF at any pose with
 ``useFixedBase`` per instance, the same file serves every instance of a type, and the
 manifest keeps what pybullet cannot hold (roles, footprints, trajectories, laser and drive
@@ -35,7 +36,8 @@ from rei.generators.templating import (
 )
 
 MANIFEST = "world.json"
-MANIFEST_VERSION = 2
+MANIFEST_VERSION = 3
+"""3: animated bodies carry a ``behaviour``."""
 
 
 def footprint_json(otype: ObjectType, tile: float) -> dict[str, Any]:
@@ -76,6 +78,7 @@ def _body(obj: ConcreteObject, urdf: str, fixed: bool, tile: float) -> dict[str,
     if obj.trajectory is not None:
         body["trajectory"] = {"loop": obj.trajectory.loop,
                               "points": [[p.t, p.x, p.y] for p in obj.trajectory.points]}
+        body["behaviour"] = obj.behaviour
     return body
 
 

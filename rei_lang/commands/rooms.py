@@ -23,6 +23,10 @@ OVERRIDES = (
     ("goals", "goals per mission, the robot's start included (>= 2)"),
     ("spacing", "least straight distance between consecutive goals, metres"),
     ("cycles", "how often the mission repeats its goals"),
+    ("behaviour", "how humans react to the robot: scripted, yielding, social, mix (yielding "
+                  "and social in turn)"),
+    ("heading", "whether the final goal has a heading: yes, no"),
+    ("max_speed", "the mission's speed limit, m/s, or none"),
 )
 
 
@@ -60,7 +64,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.add_argument("--prefix", default="room",
                         help="file and room name prefix (default 'room')")
     for name, text in OVERRIDES:
-        parser.add_argument(f"--{name}", default=None, metavar="LEVELS", help=text)
+        parser.add_argument(f"--{name.replace('_', '-')}", default=None, metavar="LEVELS",
+                            help=text)
     parser.add_argument("--quiet", action="store_true", help="do not print the coverage report")
     parser.set_defaults(func=run)
 
@@ -86,7 +91,8 @@ def run(args: argparse.Namespace) -> int:
         if value is not None:
             levels = tuple(v.strip() for v in value.split(",") if v.strip())
             if not levels or len(set(levels)) != len(levels):
-                raise ParameterError(name, "a comma-separated list of distinct levels",
+                raise ParameterError(name.replace("_", "-"),
+                                     "a comma-separated list of distinct levels",
                                      f"'{value}'")
             overrides[name] = levels
     space = preset_space(args.preset).replaced(overrides)

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from importlib import resources
 
 from rei.catalogue import Catalogue, default_catalogue
-from rei.lang.room.model import Room
+from rei.lang.room.model import BEHAVIOURS, Room
 
 _TOKEN = re.compile(r"//[^\n]*|/\*.*?(?:\*/|$)|\"[^\"\n]*\"?|'[^'\n]*'?|[A-Za-z_]\w*|"
                     r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|\S", re.DOTALL)
@@ -126,6 +126,8 @@ def room_completions(text_before: str, room: Room | None, catalogue: Catalogue |
         return _types(catalogue, ROLE_OF_KEYWORD.get(keyword or ""))
     if prev == "on":
         return _floors(room)
+    if prev == "behaviour":
+        return [Candidate(b, "keyword", "human behaviour") for b in BEHAVIOURS]
     if prev in SIDES:
         return _floors(room) + _walls(room)
     if prev == "at" or prev in ("tile", "heading", "total", "catalogue"):

@@ -18,7 +18,10 @@ from rei.lang.errors import Diagnostic, Span
 from rei.lang.numbers import read_number
 from rei.lang.parsing import span_at, span_of
 from rei.lang.room.model import (
+    BEHAVIOURS,
+    DEFAULT_BEHAVIOUR,
     DEFAULT_TILE_SIZE,
+    Behaviour,
     FloorDecl,
     GridCell,
     GridDecl,
@@ -218,6 +221,20 @@ def _trajectory(linker: _Linker, raw: Any, owner: str) -> Trajectory | None:
     return Trajectory(vertices, total, bool(loop), span)
 
 
+def _behaviour(linker: _Linker, raw: Any, owner: str) -> Behaviour:
+    """The human's behaviour; an unknown name is reported (with 'did you mean') and read as
+    the default, so the rest of the file is still checked."""
+    if raw is None:
+        return DEFAULT_BEHAVIOUR
+    for known in BEHAVIOURS:
+        if raw.name == known:
+            return known
+    linker.error(linker.span(raw), "HUMAN-BEHAVIOUR",
+                 f"human '{owner}': expected a behaviour ({', '.join(BEHAVIOURS)}), found "
+                 f"'{raw.name}'" + did_you_mean(raw.name, BEHAVIOURS))
+    return DEFAULT_BEHAVIOUR
+
+
 def link_room(textx_room: Any, source: SourceText) -> tuple[Room, list[Diagnostic]]:
     """The typed room and every linking problem of the file."""
     linker = _Linker(source)
@@ -278,8 +295,9 @@ def link_room(textx_room: Any, source: SourceText) -> tuple[Room, list[Diagnosti
                                         high=360.0)
             trajectory = _trajectory(linker, getattr(item, "trajectory", None), item.name)
             type_name = item.type or DEFAULT_TYPES.get(role, "")
+            behaviour = _behaviour(linker, getattr(item, "behaviour", None), item.name)
             objects.append(PlacedObject(item.name, role, type_name, span, linker.ref(item.floor),
-                                        heading, trajectory, span))
+                                        heading, trajectory, span, behaviour))
 
     neighbours = _resolve_links(linker, floors, walls)
     _resolve_placements(linker, floors, walls, objects)

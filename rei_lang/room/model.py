@@ -15,6 +15,16 @@ from rei.lang.errors import Span
 
 DEFAULT_TILE_SIZE = 1.0
 Role = Literal["static", "dynamic", "human", "robot"]
+Behaviour = Literal["scripted", "yielding", "social"]
+BEHAVIOURS: tuple[Behaviour, ...] = ("scripted", "yielding", "social")
+"""How a human reacts to the robot (runtime/animator/reactive.py): ``scripted`` walks its
+spline regardless, ``yielding`` waits while the robot is in its way, ``social`` is pushed
+around it by a social force. ``scripted`` is the default so hand-written rooms keep the
+thesis's behaviour."""
+DEFAULT_BEHAVIOUR: Behaviour = "scripted"
+WALKING_SPEEDS = (0.5, 1.4)
+"""m/s: the range of human walking speeds (generated rooms and seeded variations keep
+humans in it; a hand-written trajectory may leave it)."""
 
 
 class Side(Enum):
@@ -98,6 +108,8 @@ class PlacedObject:
     heading_deg: float | None
     trajectory: Trajectory | None
     span: Span
+    behaviour: Behaviour = DEFAULT_BEHAVIOUR
+    """Humans only; every other role is moved by its trajectory alone."""
 
 
 @dataclass(frozen=True)

@@ -1,23 +1,47 @@
 """The animator: moves humans and dynamic objects along splines by velocity (thesis 4.2.2, 6.2.2).
 
 Each physics step sets the body's planar velocity to the spline's displacement over the step,
-(r(t + dt) - r(t)) / dt, plus a bounded pull back towards r(t) (refreshed at the control rate)
-so a body that was pushed or held up by a contact (the robot, a wall) rejoins its path
-instead of walking a parallel one.
+(r(s + ds) - r(s)) / dt at the body's path time s, plus a bounded pull back towards r(s)
+(refreshed at the control rate) so a body that was pushed or held up by a contact (the
+robot, a wall) rejoins its path instead of walking a parallel one.
+
+How the path time runs is the body's behaviour (runtime/animator/reactive.py): a
+``scripted`` body's is the clock (delayed and scaled by its seeded variation); a
+``yielding`` human's only advances while the robot leaves its way free; a ``social``
+human's velocity comes from the social force model, towards a target point whose path time
+only advances while the human keeps up with it.
+
 The body is never teleported, so collisions with the robot are real contacts. Humans turn to
 face their direction of motion. Loops repeat; open trajectories stop at their last vertex.
-This module must never decide anything about the robot or the mission.
+This module only moves bodies: it is given the robot's ground-truth pose and velocity each
+control tick, and must never decide anything about the robot or the mission.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from rei.lang.room.model import DEFAULT_BEHAVIOUR, WALKING_SPEEDS, Behaviour
+from rei.runtime.animator.reactive import (
+    Agent,
+    SocialForce,
+    YieldRule,
+    gap_in_the_way,
+    limit_speed,
+    social_acceleration,
+    speed_share,
+)
 from rei.runtime.animator.spline import CatmullRom
-from rei.runtime.world.manifest import Trajectory
+from rei.runtime.animator.variation import (
+    NO_VARIATION,
+    HumanVariation,
+    draw_variations,
+    mean_speed,
+)
+from rei.runtime.world.manifest import BodySpec, Trajectory
 
 CATCH_UP_GAIN = 1.0
 """1/s: how fast a displaced body returns to its path."""
@@ -27,6 +51,13 @@ TURN_TIME = 0.5
 """s: time constant of a human turning towards where it walks."""
 BLOCK = 1000
 """Physics steps whose curve displacements are computed together."""
+LEASH = (0.3, 1.0)
+"""m: a social human's target point slows down once the human is this far behind it, and
+stands at the second distance, so a detour never leaves the human chasing a far target."""
+FACING_SPEED = 0.05
+"""m/s below which a reactive human keeps its heading instead of turning to its velocity."""
+
+Pose = tuple[float, float, float]
 
 
 @dataclass(frozen=True)
@@ -35,6 +66,18 @@ class Animated:
     """The body's id in the world."""
     spline: CatmullRom
     face_motion: bool
+    behaviour: Behaviour = DEFAULT_BEHAVIOUR
+    variation: HumanVariation = NO_VARIATION
+    radius: float = 0.25
+    """m, the footprint's radius others keep away from."""
+
+
+@dataclass(frozen=True)
+class Reactions:
+    """The parameters of the reactive behaviours (one object, so two runs can differ)."""
+
+    yielding: YieldRule = field(default_factory=YieldRule)
+    social: SocialForce = field(default_factory=SocialForce)
 
 
 def spline_of(trajectory: Trajectory) -> CatmullRom:
@@ -42,38 +85,168 @@ def spline_of(trajectory: Trajectory) -> CatmullRom:
     return CatmullRom(pts[:, 0], pts[:, 1:3], trajectory.loop)
 
 
+def animated_bodies(objects: tuple[BodySpec, ...], body_ids: list[int], seed: int,
+                    vary: bool) -> list[tuple[str, Animated]]:
+    """The world's bodies with a trajectory, by name, in declaration order; humans get
+    their behaviour and (with ``vary``) their seeded variation."""
+    named = [(b.name, body_ids[i], b) for i, b in enumerate(objects) if b.trajectory is not None]
+    splines = [spline_of(b.trajectory) for _, _, b in named if b.trajectory is not None]
+    humans = [k for k, (_, _, b) in enumerate(named) if b.role == "human"]
+    drawn = draw_variations(seed, [splines[k] for k in humans]) if vary else ()
+    variation = dict(zip(humans, drawn, strict=False))
+    return [(name, Animated(bid, splines[k], b.role == "human",
+                            b.behaviour if b.role == "human" else DEFAULT_BEHAVIOUR,
+                            variation.get(k, NO_VARIATION),
+                            max(b.footprint.half_extents())))
+            for k, (name, bid, b) in enumerate(named)]
+
+
+def variations_record(named: list[tuple[str, Animated]]) -> dict[str, dict[str, object]]:
+    """What a run's summary shows of its humans: behaviour and what was drawn."""
+    return {name: {"behaviour": a.behaviour, "phase_s": a.variation.phase_s,
+                   "speed_scale": a.variation.speed_scale}
+            for name, a in named if a.face_motion}
+
+
+def _pull(ex: float, ey: float) -> tuple[float, float]:
+    err = math.hypot(ex, ey)
+    if err <= 1e-9:
+        return 0.0, 0.0
+    pull = min(CATCH_UP_GAIN * err, MAX_CATCH_UP) / err
+    return ex * pull, ey * pull
+
+
+def _turn(face_motion: bool, vx: float, vy: float, yaw: float, threshold: float) -> float:
+    if not face_motion or math.hypot(vx, vy) <= threshold:
+        return 0.0
+    return math.remainder(math.atan2(vy, vx) - yaw, math.tau) / TURN_TIME
+
+
 class Animator:
     """Drives every animated body: the curve's displacement each physics step, plus a pull
     back to the curve and a turn towards the walking direction, refreshed at the control rate.
 
-    The curve's displacements are evaluated for a block of steps at once (vectorised), so a
-    physics step only looks its velocity up; the feedback, which only needs to be stable, runs
-    at the control rate.
+    Scripted curves' displacements are evaluated for a block of steps at once (vectorised),
+    so a physics step only looks its velocity up; the feedback, which only needs to be
+    stable, and the reactive humans' decisions run at the control rate. The per-run state
+    (path times, social velocities) lives in this object, never in the module.
     """
 
-    def __init__(self, items: list[Animated], physics_rate: float) -> None:
+    def __init__(self, items: list[Animated], physics_rate: float, robot_radius: float = 0.0,
+                 reactions: Reactions | None = None) -> None:
         self.items = items
         self.rate = physics_rate
+        self.robot_radius = robot_radius
+        self.reactions = reactions or Reactions()
         self._feedback = [(0.0, 0.0, 0.0)] * len(items)
         self._block: int | None = None
         self._steps: list[tuple[list[float], list[float]]] = []
+        self._path_time = [0.0] * len(items)
+        """Reactive bodies: where along their spline they are (seconds of spline time)."""
+        self._advance = [1.0] * len(items)
+        """Reactive bodies: share of full path speed their path time advances at."""
+        self._velocity = [(0.0, 0.0)] * len(items)
+        """Social humans: velocity from the social force model."""
+        self._stood = [0.0] * len(items)
+        """Yielding humans: seconds stood with the robot in the way."""
+        self._giving_way = [False] * len(items)
+        self._last_correct: int | None = None
+        self._path_speed = [item.variation.speed_scale * mean_speed(item.spline)
+                            for item in items]
 
-    def correct(self, step: int, poses: list[tuple[float, float, float]]) -> None:
-        """Refresh each body's pull back to its curve from its ground-truth pose."""
-        time = step / self.rate
+    def path_time(self, k: int, step: int) -> float:
+        """Where along its spline body ``k`` is at ``step`` (reactive: after the last step)."""
+        item = self.items[k]
+        if item.behaviour != "scripted":
+            return self._path_time[k]
+        v = item.variation
+        return max(0.0, v.speed_scale * (step / self.rate - v.phase_s))
+
+    def correct(self, step: int, poses: list[Pose], robot_pose: Pose | None = None,
+                robot_twist: Pose | None = None) -> None:
+        """Refresh each body's pull back to its curve from its ground-truth pose, and the
+        reactive humans' decisions from the robot's (``robot_twist``: world-frame vx, vy, wz,
+        which the social force uses to repel earlier from a robot coming closer)."""
+        dt = 0.0 if self._last_correct is None else (step - self._last_correct) / self.rate
+        self._last_correct = step
+        rvx, rvy = (robot_twist[0], robot_twist[1]) if robot_twist is not None else (0.0, 0.0)
+        robot = (None if robot_pose is None
+                 else Agent(robot_pose[0], robot_pose[1], self.robot_radius, rvx, rvy))
+        # Other humans' velocities: a social human's own, the others' path velocity is not
+        # worth a second look-up (they are repelled by distance alone).
+        humans = [(j, Agent(p[0], p[1], item.radius, *self._velocity[j]))
+                  for j, (item, p) in enumerate(zip(self.items, poses, strict=True))
+                  if item.face_motion]
         for k, (item, pose) in enumerate(zip(self.items, poses, strict=True)):
-            x0, y0 = item.spline.position(time)
-            ex, ey = x0 - pose[0], y0 - pose[1]
-            err = math.hypot(ex, ey)
-            cx = cy = 0.0
-            if err > 1e-9:
-                pull = min(CATCH_UP_GAIN * err, MAX_CATCH_UP) / err
-                cx, cy = ex * pull, ey * pull
-            wz = 0.0
-            vx, vy = item.spline.velocity(time)
-            if item.face_motion and math.hypot(vx, vy) > 1e-3:
-                wz = math.remainder(math.atan2(vy, vx) - pose[2], math.tau) / TURN_TIME
-            self._feedback[k] = (cx, cy, wz)
+            if item.behaviour == "social":
+                others = [a for j, a in humans if j != k] + ([robot] if robot else [])
+                self._social(k, item, pose, dt, others)
+                continue
+            s = self.path_time(k, step)
+            x0, y0 = item.spline.position(s)
+            cx, cy = _pull(x0 - pose[0], y0 - pose[1])
+            vx, vy = item.spline.velocity(s)
+            if item.behaviour == "yielding":
+                walking = step / self.rate >= item.variation.phase_s
+                gap = None if robot is None or not walking else gap_in_the_way(
+                    self.reactions.yielding, pose[0], pose[1], item.radius, (vx, vy), robot)
+                self._advance[k] = self._yield(k, gap, dt) if walking else 0.0
+                if self._giving_way[k] and robot is not None:
+                    cx, cy = self._step_away(pose, robot, gap)
+            self._feedback[k] = (cx, cy, _turn(item.face_motion, vx, vy, pose[2], 1e-3))
+
+    def _yield(self, k: int, gap: float | None, dt: float) -> float:
+        """The share of path speed a yielding human walks at; 0 while it gives way."""
+        rule = self.reactions.yielding
+        if self._giving_way[k]:
+            if gap is not None:
+                return 0.0
+            self._giving_way[k] = False  # the robot is out of the way: back to the path
+        share = speed_share(rule, gap)
+        # The share falls off with the gap, so a human closes in on stop_gap ever slower:
+        # one creeping at a tenth of its speed is waiting as much as one standing.
+        self._stood[k] = self._stood[k] + dt if share < 0.1 else 0.0
+        if self._stood[k] >= rule.patience:
+            self._giving_way[k], self._stood[k] = True, 0.0
+            return 0.0
+        return share
+
+    def _step_away(self, pose: Pose, robot: Agent, gap: float | None) -> tuple[float, float]:
+        """A human giving way steps straight away from the robot (not back along its path,
+        which at a turning point leads into the robot) until give_way_gap, then stands; its
+        pull brings it back to its path once the robot is out of the way."""
+        rule = self.reactions.yielding
+        dx, dy = pose[0] - robot.x, pose[1] - robot.y
+        dist = math.hypot(dx, dy)
+        if gap is None or gap >= rule.give_way_gap or dist < 1e-9:
+            return 0.0, 0.0
+        return rule.give_way_speed * dx / dist, rule.give_way_speed * dy / dist
+
+    def _social(self, k: int, item: Animated, pose: Pose, dt: float,
+                others: list[Agent]) -> None:
+        model = self.reactions.social
+        s = self._path_time[k]
+        tx, ty = item.spline.position(s)
+        ex, ey = tx - pose[0], ty - pose[1]
+        px, py = item.spline.velocity(s)
+        # Only a target ahead of the human waits for it; one the human has overtaken (after
+        # a detour cut a corner) walks on, and the pull slows the human until it catches up.
+        behind = ex * px + ey * py > 0.0
+        lag = math.hypot(ex, ey) if behind else 0.0
+        walking = self._last_correct is not None and \
+            self._last_correct / self.rate >= item.variation.phase_s
+        self._advance[k] = (min(1.0, max(0.0, (LEASH[1] - lag) / (LEASH[1] - LEASH[0])))
+                            if walking else 0.0)
+        scale = item.variation.speed_scale if walking else 0.0
+        cx, cy = _pull(ex, ey)
+        v_max = model.max_speed_factor * max(self._path_speed[k], WALKING_SPEEDS[0])
+        desired = limit_speed(scale * px + cx, scale * py + cy, v_max)
+        vx, vy = self._velocity[k]
+        ax, ay = social_acceleration(model, pose[0], pose[1], vx, vy, item.radius, desired,
+                                     others)
+        vx, vy = limit_speed(vx + ax * dt, vy + ay * dt, v_max)
+        self._velocity[k] = (vx, vy)
+        self._feedback[k] = (0.0, 0.0, _turn(item.face_motion, vx, vy, pose[2], FACING_SPEED))
 
     def commands(self, step: int) -> list[tuple[int, float, float, float]]:
         """(body, vx, vy, wz) moving each body along its curve from ``step`` to ``step + 1``."""
@@ -83,16 +256,31 @@ class Animator:
         out = []
         for k, item in enumerate(self.items):
             cx, cy, wz = self._feedback[k]
-            vx, vy = self._steps[k]
-            out.append((item.body, vx[j] + cx, vy[j] + cy, wz))
+            if item.behaviour == "scripted":
+                vx, vy = self._steps[k]
+                out.append((item.body, vx[j] + cx, vy[j] + cy, wz))
+                continue
+            s = self._path_time[k]
+            s_next = s + item.variation.speed_scale * self._advance[k] / self.rate
+            self._path_time[k] = s_next
+            if item.behaviour == "social":
+                vx_s, vy_s = self._velocity[k]
+                out.append((item.body, vx_s, vy_s, wz))
+                continue
+            (x0, y0), (x1, y1) = item.spline.position(s), item.spline.position(s_next)
+            out.append((item.body, (x1 - x0) * self.rate + cx, (y1 - y0) * self.rate + cy, wz))
         return out
 
     def _fill(self, block: int) -> None:
         """The curve's per-step displacements of a block of steps, for every body at once."""
         steps = block * BLOCK + np.arange(BLOCK + 1)
-        times = steps / self.rate
         self._steps = []
         for item in self.items:
+            if item.behaviour != "scripted":
+                self._steps.append(([], []))
+                continue
+            v = item.variation
+            times = np.maximum(0.0, v.speed_scale * (steps / self.rate - v.phase_s))
             moves = np.diff(item.spline.positions(times), axis=0) * self.rate
             self._steps.append((moves[:, 0].tolist(), moves[:, 1].tolist()))
         self._block = block

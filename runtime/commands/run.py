@@ -65,9 +65,10 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                         help="standard deviation (m) of the laser's range error (default: the "
                              "robot's catalogue type, 0.01 for the TurtleBot3 Waffle; 0: exact)")
     parser.add_argument("--no-variation", action="store_true",
-                        help="start exactly at the declared scene: no seeded variation (by "
-                             "default the seed also jitters the robot's start pose by up to "
-                             "5 cm and 5 degrees, so repeats explore)")
+                        help="run exactly the declared scene: no seeded variation (by default "
+                             "the seed jitters the robot's start pose by up to 5 cm and 5 "
+                             "degrees and draws each human's start delay and speed scale, so "
+                             "repeats explore)")
     parser.add_argument("--vepl", type=Path, default=None, metavar="FILE",
                         help="monitoring specification: queries, event patterns, signals with "
                              "utilities and requirements (default: REI's default.vepl)")
@@ -119,7 +120,7 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
     robot = make_controller(controller)
     config = RunConfig(seed=seed, physics_rate=physics_rate, duration=duration,
                        watchdog=watchdog, odom_drift=odom_drift, laser_noise=laser_noise,
-                       jitter=START_JITTER if variation else None)
+                       jitter=START_JITTER if variation else None, vary=variation)
     for stale in (out_dir / SUMMARY, out_dir / TRACE, out_dir / EVENTS):
         stale.unlink(missing_ok=True)
 

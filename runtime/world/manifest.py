@@ -11,10 +11,12 @@ from pathlib import Path
 from typing import Any
 
 from rei.catalogue import DriveSpec, Footprint, LaserSpec
+from rei.lang.room.model import BEHAVIOURS, DEFAULT_BEHAVIOUR, Behaviour
 from rei.runtime.artifacts import finite, footprint, read_artifact
 from rei.runtime.errors import RunError
 
-MANIFEST_VERSION = 2
+MANIFEST_VERSION = 3
+"""3: animated bodies carry a ``behaviour``; older worlds must be regenerated."""
 
 
 @dataclass(frozen=True)
@@ -39,6 +41,8 @@ class BodySpec:
     height: float
     footprint: Footprint
     trajectory: Trajectory | None
+    behaviour: Behaviour = DEFAULT_BEHAVIOUR
+    """How an animated human reacts to the robot (runtime/animator/reactive.py)."""
 
 
 @dataclass(frozen=True)
@@ -68,6 +72,14 @@ def _footprint(data: Any, where: str) -> Footprint:
     return footprint(data, f"world.json: {where}")
 
 
+def _behaviour(value: Any, where: str) -> Behaviour:
+    for known in BEHAVIOURS:
+        if value == known:
+            return known
+    raise RunError(f"world.json: {where}.behaviour: expected one of {', '.join(BEHAVIOURS)}, "
+                   f"found {value!r}")
+
+
 def _body(data: dict[str, Any], where: str) -> BodySpec:
     try:
         pose = data["pose"]
@@ -81,7 +93,8 @@ def _body(data: dict[str, Any], where: str) -> BodySpec:
                         bool(data["fixed"]), _num(pose[0], f"{where}.pose"),
                         _num(pose[1], f"{where}.pose"), _num(pose[2], f"{where}.pose"),
                         _num(data["z"], f"{where}.z"), _num(data["height"], f"{where}.height"),
-                        _footprint(data["footprint"], f"{where}.footprint"), trajectory)
+                        _footprint(data["footprint"], f"{where}.footprint"), trajectory,
+                        _behaviour(data.get("behaviour", DEFAULT_BEHAVIOUR), where))
     except (KeyError, IndexError, TypeError) as exc:
         raise RunError(f"world.json: {where}: missing or malformed field ({exc})") from None
 

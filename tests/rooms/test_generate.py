@@ -27,6 +27,7 @@ from rei.generators.rooms import (
     write_suite,
 )
 from rei.generators.rooms.geometry import CellMask, catmull_rom, disc_touches, polyline
+from rei.generators.rooms.space import ParameterError, parse_row
 from rei.lang.cli import main as rei_gen
 from rei.lang.room.checks import blocking_objects, passable_floors
 from rei.lang.workspace import Workspace, load_mission
@@ -283,3 +284,46 @@ def _plan_scene(plan):  # type: ignore[no-untyped-def]
                        for o in plan.objects),
                  plan.goals, plan.params.cycles,
                  tuple((h.vertices, h.loop) for h in plan.humans), len(plan.humans))
+
+
+def test_the_behaviour_factor_is_covered_pairwise_and_written_into_the_rooms(
+        tmp_path: Path) -> None:
+    space = preset_space("medium").replaced({"behaviour": ("scripted", "yielding", "social",
+                                                           "mix"), "humans": ("1", "2")})
+    suite = generate(SuiteRequest(space, "systematic", None, 3, max_grid=4), tmp_path)
+    assert suite.design.design == "pairwise"
+    report = coverage_report(suite)
+    match = re.search(r"Pairs of levels covered: (\d+) of (\d+)", report)
+    assert match and match[1] == match[2]
+    seen: set[str] = set()
+    for pair in suite.pairs:
+        written = re.findall(r"} behaviour (\w+)", pair.room_text)
+        level = pair.params.behaviour
+        expected = (["yielding", "social"][:pair.params.humans] if level == "mix"
+                    else [level] * pair.params.humans)
+        assert written == expected
+        seen |= set(written)
+    assert seen == {"scripted", "yielding", "social"}
+
+
+def test_generated_humans_walk_at_human_speeds_and_suites_are_reactive_by_default() -> None:
+    for preset in ("small", "medium", "large"):
+        space = preset_space(preset)
+        assert all(0.5 <= float(s) <= 1.4 for s in space.levels("speed"))
+        assert "scripted" not in space.levels("behaviour")
+    with pytest.raises(ParameterError, match="--speed"):
+        parse_row({**{f.name: f.levels[0] for f in preset_space("small").factors},
+                   "speed": "2"}, ("table", "chair", "shelf", "box", "pillar"))
+
+
+def test_the_small_preset_exercises_heading_speed_limit_doorway_and_crossing(
+        tmp_path: Path) -> None:
+    suite = generate(SuiteRequest(preset_space("small"), "random", 6, 0), tmp_path)
+    missions = [p.mission_text for p in suite.pairs]
+    assert any(" heading " in m for m in missions)
+    assert any("max_speed 0.18" in m for m in missions)
+    assert any("max_speed" not in m for m in missions)
+    assert all(p.plan.descriptors.crossings >= 1 for p in suite.pairs)
+    # The joined shape's doorway across 5 tiles is one tile wide: a narrow passage.
+    assert any(p.params.shape == "joined" and p.plan.descriptors.narrowest_m <= 1.1
+               for p in suite.pairs)

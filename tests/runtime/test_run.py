@@ -231,15 +231,18 @@ def test_bad_laser_noise_and_bad_vepl_are_located_input_errors(tmp_path: Path, c
 def test_laser_noise_makes_the_seed_matter(tmp_path: Path) -> None:
     runs = {}
     for name, seed, noise in (("a", "1", None), ("b", "1", None), ("c", "2", None),
-                              ("d", "1", "0"), ("e", "2", "0")):
+                              ("d", "1", "0"), ("e", "2", "0"), ("f", "1", "0"),
+                              ("g", "2", "0")):
         args = ["run", str(NAVIGATION), "-o", str(tmp_path / name), "--seed", seed,
                 "--duration", "6", "--quiet", "--no-monitor"]
-        # Exact laser runs also start exactly at the declared pose (no start-pose jitter).
-        main(args + (["--laser-noise", noise, "--no-variation"] if noise is not None else []))
+        # d, e: exact laser and no variation (no start jitter, humans as written)
+        main(args + (["--laser-noise", noise] if noise is not None else [])
+             + (["--no-variation"] if name in "de" else []))
         runs[name] = (tmp_path / name / "trace.jsonl").read_bytes()
     assert runs["a"] == runs["b"]  # same seed, same run
     assert runs["a"] != runs["c"]  # another seed draws other range errors
-    # Without noise and variation the seed only names the run (in the header): the samples are
-    # the same.
+    # Without noise and variation the seed only names the run (in the header).
     assert runs["d"] != runs["e"]
     assert runs["d"].splitlines()[1:] == runs["e"].splitlines()[1:]
+    # Without noise the seed still varies the humans and the start pose.
+    assert runs["f"].splitlines()[1:] != runs["g"].splitlines()[1:]

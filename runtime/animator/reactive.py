@@ -1,0 +1,175 @@
+"""How reactive humans respond to the robot: the yielding rule and the social force model.
+
+Scripted humans walk into a robot that stands in their way, so a correct navigator fails
+as often as a human-blind one; reactive humans make the test fair.
+
+* ``yielding``: a human slows down, then stands, while the robot's footprint is in a cone
+  ahead of it along its walking direction, and walks on when the way is clear. Its path
+  time only advances while it walks, so it resumes where it stopped. A human that has stood
+  for ``patience`` seconds with the robot still in its way gives way: it steps straight
+  away from the robot until the robot is ``give_way_gap`` away, stands there until the
+  robot is out of its way, and returns to its path. Without that, a
+  human standing in a one-tile passage and a robot waiting for it to move would wait for
+  each other until the goal times out.
+* ``social``: the social force model of Helbing and Molnár (Phys. Rev. E 51, 4282, 1995):
+  a driving force relaxes the human's velocity towards its desired velocity (towards a
+  target point moving along its spline) over the relaxation time; the robot and the other
+  humans repel it with a force decaying exponentially with the gap between footprints
+  (the form of Helbing, Farkas and Vicsek, Nature 407, 487, 2000), weighted by how far
+  ahead the other is (the anisotropy of Helbing and Molnár's angle of sight). The gap is
+  measured with Helbing and Molnár's elliptical distance b, which accounts for the other's
+  step v * step_time, so a robot driving towards a human repels it earlier than one
+  standing or driving away.
+  Walls are not part of the force: the spline keeps clear of them, and a pushed human
+  meets them as real contacts.
+
+Everything here is a pure function of poses and velocities; the parameters are plain
+frozen records. This module must never import the simulator or judge the robot.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+Vec = tuple[float, float]
+
+
+@dataclass(frozen=True)
+class YieldRule:
+    cone_half_angle: float = math.radians(40.0)
+    """Radians either side of the walking direction in which the robot is 'in the way'."""
+    slow_gap: float = 1.0
+    """m between footprints below which a human in whose way the robot is slows down."""
+    stop_gap: float = 0.45
+    """m between footprints at which it stands still."""
+    patience: float = 3.0
+    """s a human stands with the robot in its way before it gives way."""
+    give_way_speed: float = 0.4
+    """m/s at which a human giving way steps away from the robot."""
+    give_way_gap: float = 1.5
+    """m between footprints at which a human giving way stops stepping back."""
+
+
+@dataclass(frozen=True)
+class SocialForce:
+    relaxation_time: float = 0.5
+    """s: how fast the velocity relaxes to the desired one (Helbing and Molnár: 0.5 s)."""
+    strength: float = 6.0
+    """A, m/s^2: repulsion per unit mass at touching footprints (Helbing and Molnár's
+    V0/sigma is 7 m/s^2 between pedestrians' centres)."""
+    range: float = 0.5
+    """B, m: the repulsion's decay length. Helbing and Molnár's sigma is 0.3 m between
+    pedestrians; a robot is avoided from farther away, so a human at walking speed starts
+    its detour about 1.5 m before the robot."""
+    anisotropy: float = 0.35
+    """lambda: weight of an agent straight behind (1 straight ahead), Helbing et al. 2000."""
+    passing: float = 1.0
+    """Share of the repulsion turned to the human's right: a head-on approach to a standing
+    robot is otherwise an equilibrium where the human stands until its target gives up."""
+    max_speed_factor: float = 1.3
+    """v_max / v0: how much faster than its path a human hurries (Helbing and Molnár: 1.3)."""
+    step_time: float = 1.0
+    """s: the others' step v * step_time that shapes the elliptical distance (Helbing and
+    Molnár use 2 s between pedestrians; 1 s keeps a robot crossing far ahead harmless)."""
+    cutoff: float = 3.0
+    """m between footprints beyond which another agent exerts no force (cheap, and smooth
+    enough: A exp(-3/0.5) is 0.015 m/s^2)."""
+
+
+@dataclass(frozen=True)
+class Agent:
+    """Another body a human reacts to: where it is, its footprint's radius, its velocity."""
+
+    x: float
+    y: float
+    radius: float
+    vx: float = 0.0
+    vy: float = 0.0
+
+
+def gap_in_the_way(rule: YieldRule, x: float, y: float, radius: float, direction: Vec,
+                   robot: Agent) -> float | None:
+    """The gap (m) between the footprints when the robot is in the cone ahead of the human,
+    None when it is not. ``direction`` is the walking direction (need not be unit length;
+    zero means the human is not walking, and nothing is in its way)."""
+    norm = math.hypot(*direction)
+    if norm < 1e-9:
+        return None
+    ex, ey = direction[0] / norm, direction[1] / norm
+    dx, dy = robot.x - x, robot.y - y
+    ahead = dx * ex + dy * ey
+    side = abs(dx * ey - dy * ex)
+    # The footprint is in the cone when its nearest point is: widen the cone by both radii.
+    reach = radius + robot.radius
+    if ahead <= -reach or side > math.tan(rule.cone_half_angle) * max(ahead, 0.0) + reach:
+        return None
+    return math.hypot(dx, dy) - reach
+
+
+def speed_share(rule: YieldRule, gap: float | None) -> float:
+    """1 to walk at full path speed, 0 to stand, for the robot ``gap`` metres ahead."""
+    if gap is None or gap >= rule.slow_gap:
+        return 1.0
+    if gap <= rule.stop_gap:
+        return 0.0
+    return (gap - rule.stop_gap) / (rule.slow_gap - rule.stop_gap)
+
+
+def yield_factor(rule: YieldRule, x: float, y: float, radius: float, direction: Vec,
+                 robot: Agent) -> float:
+    """How much of its path speed a human walks at with the robot where it is."""
+    return speed_share(rule, gap_in_the_way(rule, x, y, radius, direction, robot))
+
+
+def social_acceleration(model: SocialForce, x: float, y: float, vx: float, vy: float,
+                        radius: float, desired: Vec, others: list[Agent]) -> Vec:
+    """dv/dt of a human at (x, y) with velocity (vx, vy) that wants to walk at ``desired``."""
+    ax = (desired[0] - vx) / model.relaxation_time
+    ay = (desired[1] - vy) / model.relaxation_time
+    speed = math.hypot(vx, vy)
+    hx, hy = (vx / speed, vy / speed) if speed > 1e-6 else _unit(desired)
+    for other in others:
+        dx, dy = x - other.x, y - other.y
+        dist = math.hypot(dx, dy)
+        if dist < 1e-9:
+            continue
+        gap = elliptical_distance(dx, dy, other.vx * model.step_time,
+                                  other.vy * model.step_time) - radius - other.radius
+        if gap > model.cutoff:
+            continue
+        nx, ny = dx / dist, dy / dist
+        # cos of the angle between where the human heads and where the other is.
+        cos_phi = -(nx * hx + ny * hy)
+        weight = model.anisotropy + (1.0 - model.anisotropy) * (1.0 + cos_phi) / 2.0
+        push = model.strength * math.exp(-gap / model.range) * weight
+        ax += push * nx
+        ay += push * ny
+        if cos_phi > 0.0:  # only what is ahead deflects the human sideways, to its right
+            turn = model.passing * push * cos_phi
+            ax += turn * hy
+            ay += turn * -hx
+    return ax, ay
+
+
+def elliptical_distance(dx: float, dy: float, sx: float, sy: float) -> float:
+    """Helbing and Molnár's b: the semi-minor axis of the ellipse through the human, with
+    foci at the other's position and one step (sx, sy) ahead of it; the plain distance for
+    a standing other, shorter for one coming closer, longer for one moving away."""
+    step = math.hypot(sx, sy)
+    if step < 1e-9:
+        return math.hypot(dx, dy)
+    major = math.hypot(dx, dy) + math.hypot(dx - sx, dy - sy)
+    return 0.5 * math.sqrt(max(major * major - step * step, 0.0))
+
+
+def limit_speed(vx: float, vy: float, limit: float) -> Vec:
+    speed = math.hypot(vx, vy)
+    if speed <= limit or speed < 1e-12:
+        return vx, vy
+    return vx * limit / speed, vy * limit / speed
+
+
+def _unit(v: Vec) -> Vec:
+    norm = math.hypot(*v)
+    return (v[0] / norm, v[1] / norm) if norm > 1e-9 else (0.0, 0.0)
