@@ -150,6 +150,8 @@ class Animator:
         self._stood = [0.0] * len(items)
         """Yielding humans: seconds stood with the robot in the way."""
         self._giving_way = [False] * len(items)
+        self._aside = [0.0] * len(items)
+        """Yielding humans giving way: seconds since they began to."""
         self._last_correct: int | None = None
         self._path_speed = [item.variation.speed_scale * mean_speed(item.spline)
                             for item in items]
@@ -188,39 +190,59 @@ class Animator:
             vx, vy = item.spline.velocity(s)
             if item.behaviour == "yielding":
                 walking = step / self.rate >= item.variation.phase_s
+                # "In its way" along where it actually goes: its path's direction plus the
+                # pull back to the path (returning from a step aside must not walk into it)
+                going = (vx * item.variation.speed_scale + cx,
+                         vy * item.variation.speed_scale + cy)
                 gap = None if robot is None or not walking else gap_in_the_way(
-                    self.reactions.yielding, pose[0], pose[1], item.radius, (vx, vy), robot)
+                    self.reactions.yielding, pose[0], pose[1], item.radius, going, robot)
                 self._advance[k] = self._yield(k, gap, dt) if walking else 0.0
                 if self._giving_way[k] and robot is not None:
-                    cx, cy = self._step_away(pose, robot, gap)
+                    cx, cy = self._step_away(pose, robot, gap, robot_pose)
+                else:
+                    cx, cy = cx * self._advance[k], cy * self._advance[k]
             self._feedback[k] = (cx, cy, _turn(item.face_motion, vx, vy, pose[2], 1e-3))
 
     def _yield(self, k: int, gap: float | None, dt: float) -> float:
         """The share of path speed a yielding human walks at; 0 while it gives way."""
         rule = self.reactions.yielding
         if self._giving_way[k]:
-            if gap is not None:
+            self._aside[k] += dt
+            if gap is not None and self._aside[k] < rule.give_way_time:
                 return 0.0
-            self._giving_way[k] = False  # the robot is out of the way: back to the path
+            # The robot is out of the way, or waited as long as the human stood aside (its
+            # goal may be where the human stands): back to the path, yielding afresh there.
+            self._giving_way[k] = False
         share = speed_share(rule, gap)
         # The share falls off with the gap, so a human closes in on stop_gap ever slower:
         # one creeping at a tenth of its speed is waiting as much as one standing.
         self._stood[k] = self._stood[k] + dt if share < 0.1 else 0.0
         if self._stood[k] >= rule.patience:
-            self._giving_way[k], self._stood[k] = True, 0.0
+            self._giving_way[k], self._stood[k], self._aside[k] = True, 0.0, 0.0
             return 0.0
         return share
 
-    def _step_away(self, pose: Pose, robot: Agent, gap: float | None) -> tuple[float, float]:
-        """A human giving way steps straight away from the robot (not back along its path,
-        which at a turning point leads into the robot) until give_way_gap, then stands; its
-        pull brings it back to its path once the robot is out of the way."""
+    def _step_away(self, pose: Pose, robot: Agent, gap: float | None,
+                   robot_pose: Pose | None) -> tuple[float, float]:
+        """A human giving way steps aside out of the robot's way: across the robot's heading,
+        on the side it already stands (straight away from a robot coming at it would keep it
+        in the robot's path, and at a turning point back along its own path leads into the
+        robot), until give_way_gap; then it stands; its pull brings it back to its path once
+        the robot is out of the way."""
         rule = self.reactions.yielding
         dx, dy = pose[0] - robot.x, pose[1] - robot.y
         dist = math.hypot(dx, dy)
         if gap is None or gap >= rule.give_way_gap or dist < 1e-9:
             return 0.0, 0.0
-        return rule.give_way_speed * dx / dist, rule.give_way_speed * dy / dist
+        ux, uy = dx / dist, dy / dist
+        if robot_pose is not None:
+            hx, hy = math.cos(robot_pose[2]), math.sin(robot_pose[2])
+            side = 1.0 if hx * dy - hy * dx >= 0.0 else -1.0
+            # across the heading, with a little of 'away' so a human beside it still leaves
+            ax, ay = -hy * side + 0.3 * ux, hx * side + 0.3 * uy
+            norm = math.hypot(ax, ay)
+            ux, uy = ax / norm, ay / norm
+        return rule.give_way_speed * ux, rule.give_way_speed * uy
 
     def _social(self, k: int, item: Animated, pose: Pose, dt: float,
                 others: list[Agent]) -> None:

@@ -8,9 +8,10 @@ as often as a human-blind one; reactive humans make the test fair.
   time only advances while it walks, so it resumes where it stopped. A human that has stood
   for ``patience`` seconds with the robot still in its way gives way: it steps straight
   away from the robot until the robot is ``give_way_gap`` away, stands there until the
-  robot is out of its way, and returns to its path. Without that, a
-  human standing in a one-tile passage and a robot waiting for it to move would wait for
-  each other until the goal times out.
+  robot is out of its way (at most ``give_way_time``: the robot's goal may be where the
+  human stands), and returns to its path. Without that, a human standing in a one-tile
+  passage and a robot waiting for it to move would wait for each other until the goal
+  times out.
 * ``social``: the social force model of Helbing and Molnár (Phys. Rev. E 51, 4282, 1995):
   a driving force relaxes the human's velocity towards its desired velocity (towards a
   target point moving along its spline) over the relaxation time; the robot and the other
@@ -49,6 +50,8 @@ class YieldRule:
     """m/s at which a human giving way steps away from the robot."""
     give_way_gap: float = 1.5
     """m between footprints at which a human giving way stops stepping back."""
+    give_way_time: float = 6.0
+    """s a human stands aside at most before it walks its path again (and yields afresh)."""
 
 
 @dataclass(frozen=True)
