@@ -103,7 +103,7 @@ def timeline(events: Sequence[MissionEvent], signals: Sequence[SignalRow], end: 
     ax_signals = fig.add_subplot(grid[1], sharex=ax_tasks)
     ax_utility = fig.add_subplot(grid[2], sharex=ax_tasks)
     colours = {"success": PASS, "fail": FAIL, "open": NEUTRAL}
-    for row, (label, start, stop, status, reason) in enumerate(tasks):
+    for row, (_, start, stop, status, reason) in enumerate(tasks):
         finish = stop if stop is not None else end
         ax_tasks.barh(row, max(finish - start, end * 0.004), left=start, height=0.6,
                       color=colours[status], alpha=0.8)
