@@ -10,6 +10,7 @@ when there is nothing to draw. This module must never write files or choose a gl
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -28,6 +29,7 @@ from rei.runtime.report.tables import SIGNAL_ORDER
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
     from rei.generators.concrete import ConcreteMission, ConcreteWorld
 
@@ -41,6 +43,23 @@ DISTANCE_AXIS_MIN = 1.5
 """m: the distance axis shows at least this much, at most six CLOSE thresholds beyond it."""
 MAX_TASK_LANES = 30
 """Tasks drawn one lane each; a mission of many cycles shows its first ones."""
+
+
+SVG_ID = re.compile(r'id="([a-z][0-9a-f]{10})"')
+
+
+def _svg(fig: Figure, name: str) -> str:
+    """The figure as inline SVG with its clip and hatch ids renamed ``NAME-1``, ``NAME-2``...
+
+    matplotlib names them by hashing float coordinates, whose last bits differ between a
+    process that ran the simulator and one that did not (floating-point flags set by the
+    physics library): renaming in order of appearance keeps the page's bytes equal, and
+    the name keeps the ids of several figures on one page apart."""
+    text = inline_svg(fig)
+    for n, old in enumerate(dict.fromkeys(SVG_ID.findall(text)), start=1):
+        text = text.replace(f'id="{old}"', f'id="{name}-{n}"').replace(
+            f"url(#{old})", f"url(#{name}-{n})")
+    return text
 
 
 @dataclass(frozen=True)
@@ -158,7 +177,7 @@ def timeline(events: Sequence[MissionEvent], signals: Sequence[SignalRow], end: 
         ax.set_xlim(0, max(end, 1e-9) * 1.01)
     for ax in (ax_tasks, ax_signals):
         ax.tick_params(labelbottom=False)
-    return inline_svg(fig)
+    return _svg(fig, "timeline")
 
 
 def _line(ax: Axes, series: Series, **style: object) -> None:
@@ -201,7 +220,7 @@ def distances(series: TraceSeries, thresholds: Thresholds, failures: Sequence[Fa
     ax.tick_params(labelsize=7)
     ax.grid(color="#f1f3f5", linewidth=0.6)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0), frameon=False)
-    return inline_svg(fig)
+    return _svg(fig, "distance")
 
 
 def speed(series: TraceSeries, failures: Sequence[FailureMark]) -> str | None:
@@ -226,7 +245,7 @@ def speed(series: TraceSeries, failures: Sequence[FailureMark]) -> str | None:
     ax.tick_params(labelsize=7)
     ax.grid(color="#f1f3f5", linewidth=0.6)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0), frameon=False)
-    return inline_svg(fig)
+    return _svg(fig, "speed")
 
 
 def run_map(world: ConcreteWorld, mission: ConcreteMission | None, series: TraceSeries,
