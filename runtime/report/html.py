@@ -16,6 +16,7 @@ from rei.runtime.campaign.stats import by_mission
 from rei.runtime.campaign.store import verdict_reason
 from rei.runtime.report import plots
 from rei.runtime.report.data import CampaignData
+from rei.runtime.report.run_page import run_page_link
 from rei.runtime.report.tables import (
     execution_summary,
     group_success_table,
@@ -77,6 +78,7 @@ def render_html(data: CampaignData, rerun: dict[str, str]) -> str:
         repeat=data.plan.repeat, seed=data.plan.seed,
         failures=failures[:MAX_FAILURES], more_failures=max(0, len(failures) - MAX_FAILURES),
         rerun=rerun, mission_of=by_mission, reason_of=verdict_reason,
+        page_of=lambda record: run_page_link(data.root, record),
         success_tables=[success_table(missions, "Mission"), group_success_table(records)],
         summary_tables=tables, signal_table=signal_counts(records),
         utility_plot=plots.utility_over_time(data),
