@@ -259,8 +259,8 @@ def run_map(world: ConcreteWorld, mission: ConcreteMission | None, series: Trace
     robot = series.robot
     handles: list[Line2D] = []
     if len(robot) >= 2:
-        points = robot[:, 1:3].reshape(-1, 1, 2)
-        segments = np.concatenate([points[:-1], points[1:]], axis=1)
+        xy = robot[:, 1:3]
+        segments = list(np.stack((xy[:-1], xy[1:]), axis=1))  # one (2, 2) line per step
         path = LineCollection(segments, cmap="viridis", linewidth=2.2, zorder=8)
         path.set_array(robot[:-1, 0])
         path.set_clim(float(robot[0, 0]), float(max(robot[-1, 0], robot[0, 0] + 1e-9)))
