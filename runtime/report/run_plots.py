@@ -202,16 +202,18 @@ def distances(series: TraceSeries, thresholds: Thresholds, failures: Sequence[Fa
                label=f"COLLISION threshold ({thresholds.collision:g} m)")
     _mark_failures(ax, failures, True, series.end)
     # Centimetres matter near the thresholds; metres of clearance across a room would
-    # flatten them to one line, so the axis stops at a few times the CLOSE threshold.
-    values = [s.value[np.isfinite(s.value)] for s in (series.obstacle, series.human)
-              if s is not None]
+    # flatten them to one line, so the axis stops at a few times the CLOSE threshold, or
+    # just above the closest approach of each line, so that every line shows its dips.
+    values = [v for v in (s.value[np.isfinite(s.value)] for s in (series.obstacle, series.human)
+                          if s is not None) if len(v)]
     finite = np.concatenate(values) if values else np.zeros(0)
     low = min(0.0, float(finite.min())) if len(finite) else 0.0
     high = float(finite.max()) if len(finite) else thresholds.close
-    cut = max(DISTANCE_AXIS_MIN, 6 * thresholds.close)
+    closest = max((float(v.min()) for v in values), default=0.0)
+    cut = max(DISTANCE_AXIS_MIN, 6 * thresholds.close, 1.3 * closest)
     top = min(high, cut) * 1.08 if high > 0 else thresholds.close * 2
     ax.set_ylim(low - 0.02 * (top - low), max(top, thresholds.close * 1.3))
-    ax.set_ylabel("footprint distance [m]" + (f"\n(axis cut at {cut:g} m)" if high > cut
+    ax.set_ylabel("footprint distance [m]" + (f"\n(axis cut at {cut:.2g} m)" if high > cut
                                               else ""), fontsize=8)
     ax.set_xlabel("simulation time [s]", fontsize=8)
     ax.set_xlim(0, max(series.end, 1e-9) * 1.01)
@@ -240,7 +242,11 @@ def speed(series: TraceSeries, failures: Sequence[FailureMark]) -> str | None:
     ax.set_ylabel("speed [m/s]", fontsize=8)
     ax.set_xlabel("simulation time [s]", fontsize=8)
     ax.set_xlim(0, max(series.end, 1e-9) * 1.01)
-    ax.set_ylim(bottom=0)
+    fastest = max([float(np.nanmax(series.speed.value))] + (
+        [float(np.nanmax(series.commanded.value))] if series.commanded is not None else []) + (
+        [series.speed_limit] if series.speed_limit is not None else []))
+    # headroom above the limit: a robot driving at the limit must not hide the limit's line
+    ax.set_ylim(0, max(fastest, 1e-3) * 1.15)
     ax.set_title("Speed over time", fontsize=10)
     ax.tick_params(labelsize=7)
     ax.grid(color="#f1f3f5", linewidth=0.6)
