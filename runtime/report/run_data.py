@@ -28,6 +28,9 @@ from rei.runtime.results import RunSummary
 from rei.runtime.world.manifest import WorldManifest, load_manifest
 
 MAX_POINTS = 2000
+EXACT_WITHIN = 3.0
+"""m: distances below this are computed exactly for every object; beyond it only the nearest
+of each group is (the same numbers, a fraction of the time on a room of many walls)."""
 EPS_CLOSE = 0.25
 EPS_COLLISION = 0.02
 """m: the default specification's thresholds, used when the run folder has no automata."""
@@ -114,7 +117,10 @@ def trace_path(out_dir: Path, trace: Path | None = None) -> Path | None:
 def read_series(path: Path, manifest: WorldManifest | None = None) -> TraceSeries:
     """The time series of a trace; TraceError when it cannot be read."""
     header, samples = read_trace(path)
-    model = RuntimeModel(header)
+    # Exact footprint distances are worked out only near the robot; the nearest of each
+    # group is then refined exactly (FootprintSet.nearest), as the monitor does for humans.
+    model = RuntimeModel(header, cutoff=EXACT_WITHIN)
+    footprints = model.footprints
     humans_mask = model.human_mask
     obstacles_mask = ~humans_mask
     human_rows = np.flatnonzero(humans_mask)
@@ -130,12 +136,14 @@ def read_series(path: Path, manifest: WorldManifest | None = None) -> TraceSerie
     try:
         for s in samples:
             distance = model.observe(s).distance
+            exact = distance <= EXACT_WITHIN
             times.append(s.time)
             xy.append((s.robot_pose[0], s.robot_pose[1]))
             human_xy.append(s.poses[human_rows, :2].copy())
-            obstacle.append(float(distance[obstacles_mask].min()) if obstacles_mask.any()
-                            else math.inf)
-            human.append(float(distance[humans_mask].min()) if humans_mask.any() else math.inf)
+            obstacle.append(footprints.nearest(distance, exact, obstacles_mask, s.robot_pose,
+                                               s.poses) if obstacles_mask.any() else math.inf)
+            human.append(footprints.nearest(distance, exact, humans_mask, s.robot_pose,
+                                            s.poses) if humans_mask.any() else math.inf)
             speed.append(math.hypot(s.robot_twist[0], s.robot_twist[1]))
             cmd = getattr(s.belief, "cmd", None)
             linear = abs(float(cmd[0])) if cmd is not None else 0.0
