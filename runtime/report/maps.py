@@ -24,6 +24,7 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
     from rei.generators.concrete import ConcreteMission, ConcreteWorld
+    from rei.runtime.messages import MissionFacts
     from rei.runtime.world.manifest import BodySpec, WorldManifest
 
 ROBOT_PATH = "#1c7ed6"
@@ -124,3 +125,14 @@ def world_from_manifest(manifest: WorldManifest) -> ConcreteWorld:
     return ConcreteWorld(manifest.world, str(manifest.folder), tile, floors, walls,
                          tuple(concrete(o) for o in manifest.objects), concrete(manifest.robot))
 
+
+
+def mission_from_facts(name: str, world: ConcreteWorld, facts: MissionFacts) -> ConcreteMission:
+    """The mission's goals as the picture code draws them, from the facts a trace's header
+    carries (a run folder keeps no .mission file)."""
+    from rei.generators.concrete.model import ConcreteGoal, ConcreteMission  # noqa: PLC0415
+
+    goals = tuple(ConcreteGoal(g.name, world.floor_at(g.x, g.y) or "", g.x, g.y, g.heading,
+                               g.tolerance, g.timeout) for g in facts.goals)
+    return ConcreteMission(name, "", world, goals, facts.cycles, facts.time_limit,
+                           facts.mission_max_speed)

@@ -20,7 +20,7 @@ import numpy as np
 from rei.runtime.collector.trace import read_trace, read_trace_end
 from rei.runtime.errors import RunError
 from rei.runtime.evaluator.signal_log import SignalRow, read_csv
-from rei.runtime.messages import MissionEvent
+from rei.runtime.messages import MissionEvent, MissionFacts
 from rei.runtime.monitor.automata import load_generated
 from rei.runtime.monitor.errors import MonitorError
 from rei.runtime.monitor.model import RuntimeModel
@@ -72,6 +72,8 @@ class TraceSeries:
     speed_limit: float | None
     speed_limit_source: str
     """'speed limit' (the mission's facts) or 'drive limit' (the robot's max_linear)."""
+    facts: MissionFacts | None
+    """The mission's goals and limits, when the trace's header carries them."""
     events: tuple[MissionEvent, ...]
     samples: int
     end: float
@@ -179,6 +181,7 @@ def read_series(path: Path, manifest: WorldManifest | None = None) -> TraceSerie
         thin_extremes(t, np.array(speed)),
         thin_extremes(t, np.array(commanded)) if has_command else None,
         float(limit) if limit is not None and math.isfinite(limit) else None, source,
+        facts if isinstance(facts, MissionFacts) else None,
         tuple(events), len(times), float(end))
 
 

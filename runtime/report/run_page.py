@@ -129,10 +129,13 @@ def _map(manifest: WorldManifest | None, series: TraceSeries | None, summary: Ru
         return None, "No map: the run folder has no generated world (world/world.json)."
     if series is None:
         return None, "No map: the run has no readable trace."
-    from rei.runtime.report.maps import world_from_manifest  # noqa: PLC0415
+    from rei.runtime.report.maps import mission_from_facts, world_from_manifest  # noqa: PLC0415
 
+    world = world_from_manifest(manifest)
+    mission = mission_from_facts(summary.mission, world, series.facts) \
+        if series.facts is not None else None
     title = f"{summary.mission} in {summary.room}"
-    return run_plots.run_map(world_from_manifest(manifest), None, series, failures, title), ""
+    return run_plots.run_map(world, mission, series, failures, title), ""
 
 
 def write_run_page(out_dir: Path, trace: Path | None = None) -> Path:

@@ -167,3 +167,29 @@ def test_run_page_renders_in_headless_chromium_at_1400_px(run_dir: Path, tmp_pat
     assert data[:8] == b"\x89PNG\r\n\x1a\n"
     assert int.from_bytes(data[16:20], "big") == 1400  # IHDR width: the page was laid out
     assert len(data) > 100_000  # a blank page compresses to a few kB; this one has plots
+
+
+@pytest.mark.slow
+def test_the_map_draws_the_goals_when_the_trace_carries_the_mission_facts(run_dir: Path
+                                                                          ) -> None:
+    from dataclasses import replace  # noqa: PLC0415
+
+    from rei.runtime.messages import GoalFacts, MissionFacts  # noqa: PLC0415
+    from rei.runtime.report import run_plots  # noqa: PLC0415
+    from rei.runtime.report.maps import mission_from_facts, world_from_manifest  # noqa: PLC0415
+    from rei.runtime.report.run_data import read_manifest, read_series  # noqa: PLC0415
+
+    manifest = read_manifest(run_dir, None)
+    assert manifest is not None
+    world = world_from_manifest(manifest)
+    assert [w.name for w in world.walls] == [w.name for w in manifest.walls]
+    facts = MissionFacts((GoalFacts("start_place", 0.0, 0.0, None, 0.25, 0.5, 60.0),
+                          GoalFacts("at_the_wall", 2.0, 0.0, 0.0, 0.25, 0.5, 60.0)),
+                         1, 120.0, 0.26, 1.82, None)
+    mission = mission_from_facts("to_the_wall", world, facts)
+    assert [(g.name, g.floor) for g in mission.goals] == [("start_place", "start"),
+                                                          ("at_the_wall", "front")]
+    series = replace(read_series(run_dir / "trace.jsonl", manifest), facts=facts)
+    with_goals = run_plots.run_map(world, mission, series, [], "with goals")
+    without = run_plots.run_map(world, None, series, [], "with goals")
+    assert with_goals.startswith("data:image/png;base64,") and with_goals != without
