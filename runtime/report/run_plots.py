@@ -233,7 +233,7 @@ def speed(series: TraceSeries, failures: Sequence[FailureMark]) -> str | None:
     ax = fig.add_subplot()
     _line(ax, series.speed, color="#1c7ed6", linewidth=1.3, label="driven (ground truth)")
     if series.commanded is not None:
-        _line(ax, series.commanded, color="#495057", linewidth=1.0, linestyle="--",
+        _line(ax, series.commanded, color="#7048e8", linewidth=1.1, linestyle="--",
               label="commanded |linear|")
     if series.speed_limit is not None:
         ax.axhline(series.speed_limit, color=FAIL, linestyle="--", linewidth=1.1,
