@@ -49,7 +49,7 @@ SVG_ID = re.compile(r'id="([a-z][0-9a-f]{10})"')
 
 
 def _svg(fig: Figure, name: str) -> str:
-    """The figure as inline SVG with its clip and hatch ids renamed ``NAME-1``, ``NAME-2``...
+    """The figure as inline SVG with its clip, marker and hatch ids renamed ``NAME-1``...
 
     matplotlib names them by hashing float coordinates, whose last bits differ between a
     process that ran the simulator and one that did not (floating-point flags set by the
@@ -57,8 +57,8 @@ def _svg(fig: Figure, name: str) -> str:
     the name keeps the ids of several figures on one page apart."""
     text = inline_svg(fig)
     for n, old in enumerate(dict.fromkeys(SVG_ID.findall(text)), start=1):
-        text = text.replace(f'id="{old}"', f'id="{name}-{n}"').replace(
-            f"url(#{old})", f"url(#{name}-{n})")
+        # the hash appears only as the id and in references to it (url(#..), href="#..")
+        text = text.replace(old, f"{name}-{n}")
     return text
 
 

@@ -6,6 +6,7 @@ bytes for the same folder; written by `rei replay` too; linked from the campaign
 from __future__ import annotations
 
 import json
+import re
 import shutil
 import subprocess
 from pathlib import Path
@@ -97,8 +98,13 @@ def test_the_page_has_the_timeline_distances_speed_and_map(run_dir: Path) -> Non
     failed = [r for r in page.xpath("//table[@id='verdicts']/tbody/tr")
               if "status-fail" in r.get("class")]
     assert f"{len(failed)} requirement(s) failed" in image.get("alt")
+    ids = set(page.xpath("//@id"))
     for div in ("timeline-plot", "distance-plot", "speed-plot"):
         assert page.xpath(f"//div[@id='{div}']/@aria-label")
+        # every marker and clip reference resolves (ids are renamed for stable bytes)
+        svg = etree.tostring(page.xpath(f"//div[@id='{div}']")[0], encoding="unicode")
+        references = set(re.findall(r'(?:href="#|url\(#)([^")]+)', svg))
+        assert references and references <= ids
 
 
 @pytest.mark.slow
