@@ -130,9 +130,13 @@ def timeline(events: Sequence[MissionEvent], signals: Sequence[SignalRow], end: 
         if reason:
             # the whole reason is in the events table below the plot
             text += f": {reason if len(reason) <= 40 else reason[:37] + '…'}"
-        note = ax_tasks.annotate(text, (finish, row), xytext=(4, 0), textcoords="offset points",
-                                 va="center", fontsize=7, color=colours[status])
-        note.set_in_layout(False)  # may run into the margin; must not shrink the lanes
+        # near the end of the run the words go left of the bar's end, inside the axes
+        inside = finish > 0.6 * end
+        ax_tasks.annotate(text, (finish, row), xytext=(-4 if inside else 4, 0),
+                          textcoords="offset points", va="center",
+                          ha="right" if inside else "left", fontsize=7, color=colours[status],
+                          bbox={"boxstyle": "square,pad=0.1", "fc": "white", "ec": "none",
+                                "alpha": 0.85}).set_in_layout(False)
     for e in events:
         if e.kind in ("begin", "end"):
             ax_tasks.axvline(e.time, color="#212529", linewidth=0.8, linestyle="--")
