@@ -2,9 +2,10 @@
 
 The trace's samples go through the same generated automata and evaluator as a live run, so
 the event log and verdicts equal the live run's (same trace, same specification). Writes
-DIR/events.csv, DIR/summary.json and DIR/automata/automata.py. Exit status: 0 every
-requirement passed, 1 one failed or was inconclusive, 2 invalid input (a bad .vepl or an
-unreadable trace), 3 a monitor error.
+DIR/events.csv, DIR/summary.json, DIR/automata/automata.py and DIR/report.html (the run's
+page, drawn from the trace; its map needs the run's world/ folder beside the trace). Exit
+status: 0 every requirement passed, 1 one failed or was inconclusive, 2 invalid input (a bad
+.vepl or an unreadable trace), 3 a monitor error.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from typing import cast
 
 from rei.lang.cli_support import EXIT_RUN_ERROR
 from rei.runtime.collector.trace import read_trace, read_trace_end
+from rei.runtime.commands.run import write_page
 from rei.runtime.evaluator.summary import merge_summary, write_summary
 from rei.runtime.monitor import MonitorSink, generate_automata
 from rei.runtime.monitor.automata import load_generated
@@ -28,8 +30,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "replay", help="monitor a recorded trace with the event automata of a .vepl file",
         description="Feed a trace recorded by `rei run` through the event automata generated "
                     "from a .vepl specification (the default one unless --vepl) and write "
-                    "events.csv and summary.json. Same trace and specification give the same "
-                    "events and verdicts as the live run.")
+                    "events.csv, summary.json and report.html (the run's page). Same trace "
+                    "and specification give the same events and verdicts as the live run.")
     parser.add_argument("trace", type=Path, metavar="TRACE", help="a trace.jsonl file")
     parser.add_argument("--vepl", type=Path, default=None, metavar="FILE",
                         help="the specification (default: REI's default.vepl)")
@@ -81,6 +83,7 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_RUN_ERROR
     for v in summary.verdicts:
         print(f"{v.requirement}: {v.status.replace('_', ' ')} ({v.reason})")
+    write_page(args.output, args.trace)
     verdict = judge(summary)
     print(f"verdict: {verdict.upper()}; total utility {summary.total_utility:g}; wrote "
           f"{args.output / 'events.csv'}")

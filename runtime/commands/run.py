@@ -2,12 +2,13 @@
 
 Writes into DIR: ``world/`` (the generated `pybullet` and `monitor` targets the run loads),
 ``automata/`` (the RxPY automata generated from the .vepl), ``trace.jsonl`` (the sample
-stream), ``events.csv`` (one row per signal), ``summary.json`` (a RunSummary with verdicts)
-and ``run.log`` (the mission events and the outcome). Every output is a function of the
-inputs, the seed and the REI version only: wall-clock time goes to the terminal, never into
-DIR. Exit status: 0 every requirement passed, 1 one failed or was inconclusive (without the
-monitor: a task failed or the time ran out), 2 invalid input, 3 a run error, 130 interrupted
-(the outputs are then marked incomplete).
+stream), ``events.csv`` (one row per signal), ``summary.json`` (a RunSummary with verdicts),
+``report.html`` (the run's page: verdicts, timeline, distances, speed, map; not with
+--no-monitor) and ``run.log`` (the mission events and the outcome). Every output is a
+function of the inputs, the seed and the REI version only: wall-clock time goes to the
+terminal, never into DIR. Exit status: 0 every requirement passed, 1 one failed or was
+inconclusive (without the monitor: a task failed or the time ran out), 2 invalid input, 3 a
+run error, 130 interrupted (the outputs are then marked incomplete).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from pathlib import Path
 from typing import IO
 
 from rei.lang.cli_support import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_RUN_ERROR
+from rei.lang.errors import ReiError
 from rei.runtime.collector import SampleSink, TraceWriter, load_monitor_config
 from rei.runtime.errors import RunError
 from rei.runtime.evaluator import merge_summary, write_summary
@@ -30,6 +32,7 @@ from rei.runtime.run import RunConfig, RunRecord, generate_world, run_mission, s
 from rei.runtime.world import load_manifest
 from rei.runtime.world.start_jitter import START_JITTER
 
+PAGE = "report.html"
 TRACE = "trace.jsonl"
 SUMMARY = "summary.json"
 LOG = "run.log"
@@ -42,7 +45,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         description="Check and generate what the mission needs, run it headless in pybullet "
                     "with the robot under test, monitor it with the event automata of a .vepl "
                     "specification, and write trace.jsonl, events.csv, summary.json (with the "
-                    "requirement verdicts) and run.log into the output folder. Same inputs and "
+                    "requirement verdicts), report.html (the run's page) and run.log into the "
+                    "output folder. Same inputs and "
                     "seed give byte-identical outputs. Exit status: 0 every requirement passed, "
                     "1 one failed or was inconclusive, 2 invalid input, 3 a run error, "
                     "130 interrupted.")
@@ -121,7 +125,7 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
     config = RunConfig(seed=seed, physics_rate=physics_rate, duration=duration,
                        watchdog=watchdog, odom_drift=odom_drift, laser_noise=laser_noise,
                        jitter=START_JITTER if variation else None, vary=variation)
-    for stale in (out_dir / SUMMARY, out_dir / TRACE, out_dir / EVENTS):
+    for stale in (out_dir / SUMMARY, out_dir / TRACE, out_dir / EVENTS, out_dir / PAGE):
         stale.unlink(missing_ok=True)
 
     def show(now: float, end: float) -> None:
@@ -168,7 +172,23 @@ def run(args: argparse.Namespace) -> int:
           f"{m['tasks_failed']} failed, {m['collisions']} collision(s); "
           f"{rtf:.0f}x real time ({cpu_rtf:.0f}x per CPU second); outputs in {args.output}",
           file=sys.stderr)
+    if not args.no_monitor:
+        write_page(args.output)
     return exit_status(summary, args.output, monitored=not args.no_monitor)
+
+
+def write_page(out_dir: Path, trace: Path | None = None) -> Path | None:
+    """Write the run's report.html; a page that cannot be written is reported, never allowed
+    to change the run's verdict or exit status."""
+    from rei.runtime.report.run_page import write_run_page  # noqa: PLC0415  (matplotlib)
+
+    try:
+        page = write_run_page(out_dir, trace)
+    except (ReiError, OSError) as exc:
+        print(f"  report.html not written: {exc}", file=sys.stderr)
+        return None
+    print(f"  run page: {page}", file=sys.stderr)
+    return page
 
 
 def exit_status(summary: RunSummary, out_dir: Path, monitored: bool = True) -> int:

@@ -29,6 +29,7 @@ from rei.runtime.campaign.store import RunRecord, required_pass_rate, verdict_re
 from rei.runtime.report import plots
 from rei.runtime.report.data import CampaignData, read_events
 from rei.runtime.report.overview import clusters, failures, requirement_matrix
+from rei.runtime.report.run_page import run_page_link
 from rei.runtime.report.tables import (
     execution_summary,
     group_success_table,
@@ -134,6 +135,7 @@ def render_html(data: CampaignData, rerun: dict[str, str]) -> str:
         matrix=requirement_matrix(records),
         clusters=clusters(failures(failed, data.run_dir)),
         missions=sections, rerun=rerun, mission_of=by_mission, reason_of=verdict_reason,
+        page_of=lambda record: run_page_link(data.root, record),
         success_tables=[success_table(missions, "Mission"), group_success_table(records)],
         summary_tables=tables, signal_table=signal_counts(records),
         utility_plot=plots.utility_over_time(data),

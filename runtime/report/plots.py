@@ -15,8 +15,9 @@ import numpy as np
 
 from rei.runtime.campaign.stats import by_mission, wilson_interval
 from rei.runtime.campaign.store import RunRecord
-from rei.runtime.report.data import CampaignData, Paths, SignalEvent, read_events, read_paths
+from rei.runtime.report.data import CampaignData, SignalEvent, read_events, read_paths
 from rei.runtime.report.figures import inline_svg, new_figure, png_data_uri
+from rei.runtime.report.maps import draw_paths, map_figure
 from rei.runtime.report.tables import SIGNAL_ORDER
 
 MAX_LEGEND = 12
@@ -141,7 +142,6 @@ def failure_map(data: CampaignData, record: RunRecord) -> str | None:
     """Top-down map of a failed run: room, robot path, humans' paths, where signals fired."""
     try:
         from rei.generators.concrete import load_concrete_mission  # noqa: PLC0415
-        from rei.generators.picture import draw_world  # noqa: PLC0415
         from rei.lang.errors import ReiError  # noqa: PLC0415
     except ImportError:
         return None
@@ -152,33 +152,10 @@ def failure_map(data: CampaignData, record: RunRecord) -> str | None:
     run_dir = data.run_dir(record)
     paths = read_paths(run_dir) if run_dir.is_dir() else None
     events = read_events(run_dir) if run_dir.is_dir() else []
-    min_x, min_y, max_x, max_y = mission.world.bounds()
-    scale = 6.5 / max(max_x - min_x, max_y - min_y, 1e-9)
-    fig = new_figure(max(3.5, (max_x - min_x) * scale + 2.6), max(3.0, (max_y - min_y) * scale
-                                                                    + 0.8))
-    ax = fig.add_subplot()
-    draw_world(ax, mission.world, mission, compact=True, title=record.spec.run_id)
+    fig, ax = map_figure(mission.world, mission, title=record.spec.run_id)
     if paths is not None:
-        _draw_paths(ax, paths, events)
+        draw_paths(ax, paths, events)
     else:
         ax.text(0.5, 0.01, "no trace: path not drawn", transform=ax.transAxes, ha="center",
                 fontsize=7, color="#c92a2a")
     return png_data_uri(fig)
-
-
-def _draw_paths(ax, paths: Paths, events: list[SignalEvent]) -> None:  # type: ignore[no-untyped-def]
-    for name, path in paths.humans.items():
-        ax.plot(path[:, 1], path[:, 2], color="#e8590c", linewidth=1.0, alpha=0.8,
-                linestyle="--", label=f"human {name}" if len(paths.humans) < 4 else None)
-    robot = paths.robot
-    ax.plot(robot[:, 1], robot[:, 2], color="#1c7ed6", linewidth=1.6, label="robot path")
-    geometric = [e for e in events if not e.signal.startswith("SIG_MISSION_")]
-    if geometric:
-        xs = np.interp([e.time for e in geometric], robot[:, 0], robot[:, 1])
-        ys = np.interp([e.time for e in geometric], robot[:, 0], robot[:, 2])
-        bad = np.array([e.utility < 0 for e in geometric])
-        ax.scatter(xs[bad], ys[bad], marker="x", color="#c92a2a", s=22, zorder=5,
-                   label="signal (negative utility)")
-        ax.scatter(xs[~bad], ys[~bad], marker="o", facecolors="none", edgecolors="#2b8a3e",
-                   s=18, zorder=5, label="signal (positive utility)")
-    ax.legend(fontsize=6, loc="upper right")

@@ -1,0 +1,179 @@
+"""The page of one run (report.html beside events.csv): what a test engineer reads first.
+
+``write_run_page(DIR)`` reads what `rei run` (or `rei replay`) wrote into DIR — summary.json,
+events.csv, the trace, world/world.json and the automata's thresholds — and writes one
+self-contained HTML page: the run's verdict, the requirement verdicts, the mission's events
+and signals over time, distances against the CLOSE and COLLISION thresholds, the speed
+against the limit, and the map with the path coloured by time. Same folder, same bytes.
+``run_page_link`` gives a campaign report the relative link to a run's page. This module
+must never run a mission or change any file but report.html.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from urllib.parse import quote
+
+import jinja2
+
+from rei.runtime.campaign.store import RUNS, RunRecord, write_atomic
+from rei.runtime.collector.trace import TraceError
+from rei.runtime.evaluator.signal_log import SignalRow
+from rei.runtime.messages import MissionEvent
+from rei.runtime.report import run_plots
+from rei.runtime.report.run_data import (
+    Thresholds,
+    TraceSeries,
+    read_manifest,
+    read_series,
+    read_signals,
+    read_summary,
+    read_thresholds,
+    trace_path,
+)
+from rei.runtime.report.run_plots import FailureMark
+from rei.runtime.results import RunSummary, judge
+from rei.runtime.world.manifest import WorldManifest
+
+PAGE = "report.html"
+STATUS_WORDS = {"pass": "pass", "fail": "fail", "inconclusive": "inconclusive",
+                "not_applicable": "not applicable"}
+EVENT_WORDS = {"begin": "mission began", "task_start": "task started",
+               "task_success": "task succeeded", "task_fail": "task failed",
+               "end": "mission ended"}
+
+
+@dataclass(frozen=True)
+class Plot:
+    """An embeddable figure with the words a reader without images gets instead."""
+
+    id: str
+    title: str
+    content: str
+    alt: str
+
+
+def _environment() -> jinja2.Environment:
+    env = jinja2.Environment(
+        loader=jinja2.PackageLoader("rei.runtime.report", "templates"),
+        autoescape=jinja2.select_autoescape(["html", "j2"], default=True),
+        undefined=jinja2.StrictUndefined, trim_blocks=True, lstrip_blocks=True)
+    env.filters["seconds"] = lambda v: "end of run" if v is None else f"{v:g} s"
+    return env
+
+
+def _failures(summary: RunSummary, end: float) -> list[FailureMark]:
+    # a failure decided at the end of the run (no deciding event) is drawn at the end
+    return [FailureMark(v.requirement, v.decided_at if v.decided_at is not None else end)
+            for v in summary.verdicts if v.status == "fail"]
+
+
+def _event_rows(events: tuple[MissionEvent, ...]) -> list[tuple[float, str, str, str]]:
+    rows = []
+    for e in events:
+        task = f"#{e.index} {e.task}" if e.index is not None and e.task else (e.task or "")
+        rows.append((e.time, EVENT_WORDS.get(e.kind, e.kind), task, e.reason))
+    return rows
+
+
+def _css() -> str:
+    folder = resources.files("rei.runtime.report").joinpath("templates")
+    return "\n".join(folder.joinpath(name).read_text(encoding="utf-8")
+                     for name in ("report.css", "run.css"))
+
+
+def render_run_page(summary: RunSummary, signals: list[SignalRow], series: TraceSeries | None,
+                    thresholds: Thresholds, map_image: str | None, map_note: str,
+                    trace_note: str, trace_name: str = "") -> str:
+    """The page's HTML from what was read (no file access here but the templates)."""
+    verdict = judge(summary)
+    end = series.end if series is not None else summary.duration
+    failures = _failures(summary, end)
+    plots: list[Plot] = []
+    timeline = run_plots.timeline(series.events if series is not None else (), signals, end,
+                                  failures)
+    if timeline is not None:
+        plots.append(Plot("timeline-plot", "Timeline", timeline,
+                          "timeline of the mission's tasks, the signals and the total utility "
+                          "over simulation time"))
+    if series is not None:
+        distance = run_plots.distances(series, thresholds, failures)
+        if distance is not None:
+            plots.append(Plot("distance-plot", "Distances", distance,
+                              f"distance to the nearest obstacle and human over time, with "
+                              f"the CLOSE ({thresholds.close:g} m) and COLLISION "
+                              f"({thresholds.collision:g} m) thresholds"))
+        speed = run_plots.speed(series, failures)
+        if speed is not None:
+            plots.append(Plot("speed-plot", "Speed", speed,
+                              "driven and commanded speed over time against the speed limit"))
+    return _environment().get_template("run.html.j2").render(
+        title=f"REI run — {summary.mission}", css=_css(), summary=summary,
+        verdict=verdict, verdicts=summary.verdicts, status_words=STATUS_WORDS,
+        events=_event_rows(series.events) if series is not None else [],
+        signals=signals, plots=plots, map_image=map_image, map_note=map_note,
+        trace_note=trace_note, thresholds=thresholds, failures=failures,
+        samples=series.samples if series is not None else 0,
+        speed_limit=series.speed_limit if series is not None else None,
+        speed_limit_source=series.speed_limit_source if series is not None else "",
+        trace_name=trace_name,
+        has_command=series is not None and series.commanded is not None)
+
+
+def _map(manifest: WorldManifest | None, series: TraceSeries | None, summary: RunSummary,
+         failures: list[FailureMark]) -> tuple[str | None, str]:
+    if manifest is None:
+        return None, "No map: the run folder has no generated world (world/world.json)."
+    if series is None:
+        return None, "No map: the run has no readable trace."
+    from rei.runtime.report.maps import mission_from_facts, world_from_manifest  # noqa: PLC0415
+
+    world = world_from_manifest(manifest)
+    mission = mission_from_facts(summary.mission, world, series.facts) \
+        if series.facts is not None else None
+    title = f"{summary.mission} in {summary.room}"
+    return run_plots.run_map(world, mission, series, failures, title), ""
+
+
+def write_run_page(out_dir: Path, trace: Path | None = None) -> Path:
+    """Write DIR/report.html from the run's outputs (the trace given, else DIR's own);
+    RunError when DIR has no readable summary.json."""
+    out_dir = Path(out_dir)
+    summary = read_summary(out_dir)
+    signals = read_signals(out_dir)
+    path = trace_path(out_dir, trace)
+    manifest = read_manifest(out_dir, path)
+    series: TraceSeries | None = None
+    trace_note = ""
+    if path is None:
+        trace_note = "No trace: the plots over time and the map are not drawn."
+    else:
+        try:
+            series = read_series(path, manifest)
+        except TraceError as exc:
+            trace_note = f"The trace could not be read ({exc}); plots are not drawn."
+    end = series.end if series is not None else summary.duration
+    map_image, map_note = _map(manifest, series, summary, _failures(summary, end))
+    # linked only when it sits in the folder (a replayed trace may live anywhere)
+    trace_name = path.name if path is not None and path.parent.resolve() == out_dir.resolve() \
+        else ""
+    page = render_run_page(summary, signals, series, read_thresholds(out_dir), map_image,
+                           map_note, trace_note, trace_name)
+    target = out_dir / PAGE
+    write_atomic(target, page.encode("utf-8"))
+    return target
+
+
+def run_page_link(root: Path, record: RunRecord) -> str | None:
+    """The href of a recorded run's page relative to the campaign folder's report.html, or
+    None when the run folder has none (the run crashed, or ran with --no-monitor)."""
+    page = Path(root) / RUNS / record.spec.run_id / PAGE
+    if not page.is_file():
+        return None
+    return quote(Path(os.path.relpath(page, root)).as_posix())
+
+
+__all__ = ["PAGE", "render_run_page", "run_page_link", "write_run_page"]
