@@ -87,10 +87,14 @@ def signal_counts(records: Sequence[RunRecord],
 
 def success_table(rates: Sequence[SuccessRate], label: str) -> Table:
     """Per mission: the rate over its repeats, labelled flaky when the repeats disagree."""
-    rows = tuple((r.key, r.runs, r.passed, r.rate, f"[{r.low:.2f}, {r.high:.2f}]",
-                  "flaky" if r.flaky else "") for r in rates)
+    rows = tuple((r.key, r.runs, r.passed, _pct(r.rate), f"[{_pct(r.low)}, {_pct(r.high)}]",
+                  "repeats disagree" if r.flaky else "") for r in rates)
     return Table(f"Success rate per {label.lower()} (Wilson 95 % interval)",
-                 (label, "Runs", "Passed", "Success rate", "95 % interval", "Label"), rows)
+                 (label, "Runs", "Passed", "Success rate", "95 % interval", "Repeats"), rows)
+
+
+def _pct(value: float) -> str:
+    return f"{100 * value:.0f} %"
 
 
 def group_success_table(records: Sequence[RunRecord]) -> Table:
@@ -102,7 +106,7 @@ def group_success_table(records: Sequence[RunRecord]) -> Table:
         if rate.flaky:
             group = mission_group[rate.key]
             flaky[group] = flaky.get(group, 0) + 1
-    rows = tuple((r.key, r.runs, r.passed, r.rate, f"[{r.low:.2f}, {r.high:.2f}]",
+    rows = tuple((r.key, r.runs, r.passed, _pct(r.rate), f"[{_pct(r.low)}, {_pct(r.high)}]",
                   flaky.get(r.key, 0)) for r in group_success(records))
     return Table("Success rate per group (Wilson 95 % interval)",
                  ("Group", "Runs", "Passed", "Success rate", "95 % interval",
