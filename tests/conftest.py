@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import subprocess
 from pathlib import Path
 
 import pytest
@@ -30,6 +31,20 @@ def require_tool(name: str) -> str:
             pytest.fail(message)
         pytest.skip(message)
     return path
+
+
+CHROMIUM_FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
+                  "--disable-background-networking", "--disable-component-update")
+
+
+def chromium(page: Path, tmp_path: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    """Headless Chromium (a real browser) on a local page: ``--dump-dom``, ``--screenshot``."""
+    program = require_tool("chromium")
+    profile = tmp_path / "chromium-profile"
+    shutil.rmtree(profile, ignore_errors=True)
+    return subprocess.run([program, *CHROMIUM_FLAGS, f"--user-data-dir={profile}", *args,
+                           page.as_uri()], capture_output=True, text=True, timeout=180,
+                          check=True)
 
 
 @pytest.fixture

@@ -3,7 +3,6 @@ real headless Chromium), and `rei report`."""
 
 from __future__ import annotations
 
-import shutil
 import subprocess
 from pathlib import Path
 
@@ -15,10 +14,7 @@ from rei.runtime.cli import main
 from rei.runtime.report import build_report, execution_summary, signal_counts
 from rei.runtime.report.tables import group_success, group_success_table, mission_success
 from tests.campaign.records import write_campaign
-from tests.conftest import require_tool
-
-CHROMIUM_FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
-                  "--disable-background-networking", "--disable-component-update")
+from tests.conftest import chromium
 
 
 @pytest.fixture
@@ -63,7 +59,7 @@ def test_success_rates_per_mission_and_group(campaign: Path) -> None:
     assert [(g.key, g.passed, g.runs) for g in group_success(records)] == [("examples", 7, 12)]
     table = group_success_table(records)
     assert table.columns[-1] == "Flaky missions"
-    assert table.rows == (("examples", 12, 7, 7 / 12, "[0.32, 0.81]", 2),)
+    assert table.rows == (("examples", 12, 7, "58 %", "[32 %, 81 %]", 2),)
 
 
 def test_junit_has_a_suite_per_mission_and_a_case_per_requirement(campaign: Path) -> None:
@@ -150,12 +146,7 @@ def test_html_is_self_contained_and_deterministic(campaign: Path, tmp_path: Path
 
 
 def _chromium(campaign: Path, tmp_path: Path, *args: str) -> subprocess.CompletedProcess[str]:
-    chromium = require_tool("chromium")
-    profile = tmp_path / "chromium-profile"
-    shutil.rmtree(profile, ignore_errors=True)
-    return subprocess.run([chromium, *CHROMIUM_FLAGS, f"--user-data-dir={profile}", *args,
-                           (campaign / "report.html").as_uri()],
-                          capture_output=True, text=True, timeout=180, check=True)
+    return chromium(campaign / "report.html", tmp_path, *args)
 
 
 @pytest.mark.slow

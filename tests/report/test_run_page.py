@@ -21,8 +21,7 @@ from rei.runtime.report import build_report
 from rei.runtime.report.run_data import thin_extremes
 from rei.runtime.report.run_page import run_page_link, write_run_page
 from tests.campaign.records import write_campaign
-from tests.conftest import require_tool
-from tests.report.test_report import CHROMIUM_FLAGS
+from tests.conftest import chromium
 
 MISSION = Path(__file__).resolve().parents[2] / "examples" / "simple_wall" / "simple_wall.mission"
 
@@ -157,12 +156,7 @@ def test_thinning_keeps_a_short_dip_into_collision() -> None:
 
 
 def _chromium(page: Path, tmp_path: Path, *args: str) -> subprocess.CompletedProcess[str]:
-    chromium = require_tool("chromium")
-    profile = tmp_path / "chromium-profile"
-    shutil.rmtree(profile, ignore_errors=True)
-    return subprocess.run([chromium, *CHROMIUM_FLAGS, f"--user-data-dir={profile}", *args,
-                           page.as_uri()], capture_output=True, text=True, timeout=180,
-                          check=True)
+    return chromium(page, tmp_path, *args)
 
 
 @pytest.mark.slow

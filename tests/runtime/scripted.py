@@ -6,11 +6,11 @@ and never end one (tasks time out or are abandoned): only the motion matters to 
 
 from __future__ import annotations
 
-from rei.runtime.robot import ControllerContext, GoalFeedback, NavGoal, Observation, VelocityCommand
-from rei.runtime.robot.protocol import GoalTracker
+from rei.runtime.robot import ControllerContext, Observation, VelocityCommand
+from tests.runtime.faulty import Idle
 
 
-class Ram:
+class Ram(Idle):
     """Drives straight ahead at ``speed`` (m/s); with ``bounce_at``, backs off at the same speed
     from the first step its odometry passes that x (a touch of a few physics steps when the
     control rate equals the physics rate and the odometry is exact)."""
@@ -18,23 +18,14 @@ class Ram:
     name = "ram"
 
     def __init__(self, speed: float = 0.2, bounce_at: float | None = None) -> None:
+        super().__init__()
         self.speed = speed
         self.bounce_at = bounce_at
-        self.tracker = GoalTracker()
         self.backing = False
 
     def reset(self, context: ControllerContext) -> None:
-        self.tracker = GoalTracker()
+        super().reset(context)
         self.backing = False
-
-    def send_goal(self, goal: NavGoal) -> None:
-        self.tracker.send(goal)
-
-    def cancel_goal(self) -> None:
-        self.tracker.cancel()
-
-    def feedback(self) -> GoalFeedback:
-        return self.tracker.feedback()
 
     def step(self, observation: Observation) -> VelocityCommand:
         if self.tracker.state.value == "pending":

@@ -25,10 +25,9 @@ from rei.runtime.animator.reactive import (
 )
 from rei.runtime.animator.variation import mean_speed
 from rei.runtime.collector import SampleList, load_monitor_config
-from rei.runtime.robot import ControllerContext, GoalFeedback, NavGoal, Observation, VelocityCommand
-from rei.runtime.robot.protocol import GoalTracker
 from rei.runtime.run import RunConfig, RunRecord, generate_world, run_mission
 from rei.runtime.world.manifest import load_manifest
+from tests.runtime.faulty import Idle
 
 ROOM = """room corridor {
     grid g {
@@ -49,32 +48,6 @@ MISSION = """mission stand in "corridor.room" {
 """
 
 
-class StandStill:
-    """Accepts every goal and never moves: whatever touches it walked into it."""
-
-    name = "stand-still"
-
-    def __init__(self) -> None:
-        self.tracker = GoalTracker()
-
-    def reset(self, context: ControllerContext) -> None:
-        self.tracker = GoalTracker()
-
-    def send_goal(self, goal: NavGoal) -> None:
-        self.tracker.send(goal)
-
-    def cancel_goal(self) -> None:
-        self.tracker.cancel()
-
-    def feedback(self) -> GoalFeedback:
-        return self.tracker.feedback()
-
-    def step(self, observation: Observation) -> VelocityCommand:
-        if self.tracker.state.value == "pending":
-            self.tracker.accept()
-        return VelocityCommand(0.0, 0.0)
-
-
 def _run(folder: Path, behaviour: str | None, seed: int = 0, vary: bool = False,
          duration: float = 14.0) -> tuple[RunRecord, np.ndarray]:
     """The run's record and the walker's (x, y) at every sample."""
@@ -85,7 +58,7 @@ def _run(folder: Path, behaviour: str | None, seed: int = 0, vary: bool = False,
     mission = generate_world(folder / "stand.mission", folder / "world")
     manifest = load_manifest(folder / "world")
     samples = SampleList()
-    record = run_mission(mission, manifest, load_monitor_config(folder / "world"), StandStill(),
+    record = run_mission(mission, manifest, load_monitor_config(folder / "world"), Idle(),
                          [samples], RunConfig(seed=seed, duration=duration, watchdog=None,
                                               vary=vary))
     walker = len(manifest.walls) + [b.name for b in manifest.objects].index("walker")

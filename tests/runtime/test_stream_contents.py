@@ -64,6 +64,8 @@ def _run(mission_path: Path, controller: Controller, config: RunConfig,
     if monitor_rate is not None:
         monitor = replace(monitor, rate=monitor_rate)
     sink = SampleList()
+    # the exact declared scene: these tests place the robot to the millimetre
+    config = replace(config, jitter=None, vary=False)
     record = run_mission(mission, load_manifest(world), monitor, controller, [sink], config)
     return sink, record
 
@@ -133,7 +135,7 @@ def test_a_wrong_heading_fails_the_task_with_cause_heading(tmp_path: Path) -> No
                     "    goal wide at start heading -40 heading_tolerance 45\n"
                     "    goal far at lane_1_2")
     summary, _ = run_into(mission, tmp_path / "out", "tests.runtime.faulty:ClaimsSuccess",
-                          duration=3.0, monitor=False)
+                          duration=3.0, monitor=False, variation=False)
     header, rows = read_trace(tmp_path / "out" / "trace.jsonl")
     ends = [e for s in rows for e in s.events if e.kind in ("task_success", "task_fail")]
     assert [(e.task, e.kind, e.cause) for e in ends][:4] == [
@@ -159,7 +161,7 @@ def test_a_wrong_heading_fails_the_task_with_cause_heading(tmp_path: Path) -> No
 
 def test_a_task_cut_short_by_the_duration_limit_is_cut(tmp_path: Path) -> None:
     summary, _ = run_into(_lane(tmp_path, "wall"), tmp_path / "out", "tests.runtime.faulty:Idle",
-                          duration=1.0, monitor=False)
+                          duration=1.0, monitor=False, variation=False)
     _, rows = read_trace(tmp_path / "out" / "trace.jsonl")
     [fail] = [e for s in rows for e in s.events if e.kind == "task_fail"]
     # the user's --duration stopped the run: the task's end was never seen
