@@ -26,34 +26,40 @@ MAX_LEGEND = 12
 def utility_over_time(data: CampaignData) -> str | None:
     """Running total utility against simulation time, one line per run, a colour per mission."""
     lines: list[tuple[str, list[SignalEvent]]] = []
+    line_passed: list[bool] = []
     for record in data.records:
         events = read_events(data.run_dir(record))
         if events:
             lines.append((by_mission(record), events))
+            line_passed.append(record.passed)
     if not lines:
         return None
     fig = new_figure(9, 4.2)
     ax = fig.add_subplot()
     missions = sorted({m for m, _ in lines})
+    # A colour per mission only while a legend of them fits and no colour repeats; beyond
+    # that a line's colour says whether its run passed.
+    by_verdict = len(missions) > MAX_LEGEND
     colours = {m: f"C{i % 10}" for i, m in enumerate(missions)}
     labelled: set[str] = set()
     # Hundreds of runs as vector paths make a page of megabytes: raster the lines then.
     raster = len(lines) > 100
-    for mission, events in lines:
+    for (mission, events), passed in zip(lines, line_passed, strict=True):
         t = [0.0] + [e.time for e in events]
         u = [0.0] + [e.total for e in events]
-        label = mission if mission not in labelled and len(labelled) < MAX_LEGEND else None
-        labelled.add(mission)
-        ax.step(t, u, where="post", color=colours[mission], alpha=0.75 if not raster else 0.3,
+        key = ("passed" if passed else "did not pass") if by_verdict else mission
+        label = key if key not in labelled else None
+        labelled.add(key)
+        colour = ("#2b8a3e" if passed else "#c92a2a") if by_verdict else colours[mission]
+        ax.step(t, u, where="post", color=colour, alpha=0.75 if not raster else 0.3,
                 linewidth=1.2, label=label, rasterized=raster)
     ax.axhline(0, color="#888", linewidth=0.6)
     ax.set_xlabel("simulation time [s]")
     ax.set_ylabel("total utility")
     ax.set_title("Utility over time (one line per run)")
     if missions:
-        ax.legend(fontsize=7, ncols=2, loc="best",
-                  title=None if len(missions) <= MAX_LEGEND else
-                  f"first {MAX_LEGEND} of {len(missions)} missions")
+        ax.legend(fontsize=7, ncols=2 if not by_verdict else 1, loc="best",
+                  title=f"{len(missions)} missions" if by_verdict else None)
     return inline_svg(fig)
 
 
@@ -91,12 +97,30 @@ def descriptors(records: Sequence[RunRecord]) -> list[str]:
                 names.setdefault(key, set()).add(float(value))
     # Bookkeeping columns of a suite index are numbers too, but no difficulty.
     skip = {"seed", "index", "design_row", "attempts", "rejected", "repeat"}
-    return sorted(k for k, v in names.items() if len(v) > 1 and k not in skip)
+    varying = sorted(k for k, v in names.items() if len(v) > 1 and k not in skip)
+    # Two names for the same numbers (objects and object_count) are one descriptor.
+    seen: dict[tuple[object, ...], str] = {}
+    for key in varying:
+        column = tuple(r.spec.parameters.get(key) for r in records)
+        seen.setdefault(column, key)
+    return sorted(seen.values())
+
+
+def _rate_varies(records: Sequence[RunRecord], name: str) -> bool:
+    rates: dict[float, list[bool]] = {}
+    for r in records:
+        value = r.spec.parameters.get(name)
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            rates.setdefault(float(value), []).append(r.passed)
+    return len({sum(v) / len(v) for v in rates.values()}) > 1
 
 
 def success_by_descriptor(records: Sequence[RunRecord], bins: int = 4) -> str | None:
     """Success rate with Wilson intervals against each numeric difficulty descriptor."""
-    names = descriptors(records)
+    # A descriptor along which the success rate does not change carries no information
+    names = [n for n in descriptors(records)
+             if len({r.passed for r in records if n in r.spec.parameters}) > 1
+             and _rate_varies(records, n)]
     if not names:
         return None
     columns = min(3, len(names))
