@@ -26,7 +26,8 @@ OUTPUT = "automata.py"
 FORMAT_VERSION = 3
 """Must equal rei.runtime.monitor.automata.FORMAT_VERSION (3: commands, approach, failure
 causes, scenario facts, requirement premises)."""
-INTERPOLATED = {"laser_min", "laser_clearance", "speed", "time", "odom_error", "turn_rate"}
+INTERPOLATED = {"laser_min", "laser_clearance", "speed", "time", "odom_error", "turn_rate",
+                "yaw_rate"}
 """Measures that change continuously between samples (crossings are replayed in order)."""
 
 

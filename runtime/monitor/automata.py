@@ -96,6 +96,8 @@ class QueryInputs:
     """|angular| of the last command as sent (rad/s)."""
     turn_rate: float = 0.0
     """|angular velocity| the robot actually turns at (rad/s, ground truth)."""
+    yaw_rate: float = 0.0
+    """Signed angular velocity (rad/s, ground truth; positive: turning left)."""
     yaw: float = 0.0
     """Ground-truth heading (rad, counter-clockwise from +x)."""
     speed_limit: float = math.inf

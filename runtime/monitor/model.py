@@ -191,7 +191,7 @@ class RuntimeModel:
             self.mission_state, NAV_CODE.get(s.belief.nav_state.value, 0),
             approach=approach, task_failure=self.task_failures.copy(),
             cmd_speed=abs(s.belief.cmd[0]), cmd_turn=abs(s.belief.cmd[1]),
-            turn_rate=abs(s.robot_twist[2]), yaw=s.robot_pose[2],
+            turn_rate=abs(s.robot_twist[2]), yaw_rate=s.robot_twist[2], yaw=s.robot_pose[2],
             # the scenario's facts, constant through the run
             speed_limit=self.speed_limit, turn_limit=self.turn_limit, humans=self.humans,
             dynamic_objects=self.dynamic_objects, cycles=self.cycles,
@@ -273,6 +273,7 @@ def interpolate(a: QueryInputs, b: QueryInputs, f: float) -> QueryInputs:
                                                             - a.laser_clearance),
                    speed=a.speed + f * (b.speed - a.speed),
                    turn_rate=a.turn_rate + f * (b.turn_rate - a.turn_rate),
+                   yaw_rate=a.yaw_rate + f * (b.yaw_rate - a.yaw_rate),
                    time=a.time + f * (b.time - a.time),
                    odom_error=a.odom_error + f * (b.odom_error - a.odom_error))
 

@@ -23,7 +23,9 @@ map (a person, a moving object, another robot). While such a point is within
 ``SLOW_ZONE_RADIUS`` + ``SLOW_ZONE_LEAD`` of the footprint, every command is scaled down along
 its arc so that the linear speed is at most ``SLOW_ZONE_SPEED``. The lead makes the robot slow
 already by the time the point is within ``SLOW_ZONE_RADIUS`` (a laser period and the drive's
-deceleration later).
+deceleration later). The zone is remembered for ``SLOW_ZONE_MEMORY`` seconds after the last
+such point: a person who steps next to a wall or a table merges with the map in the laser,
+but is still there.
 This module must never import pybullet.
 """
 
@@ -79,6 +81,8 @@ SLOW_ZONE_SPEED = 0.12
 """m/s: the largest linear speed commanded while in the slow zone."""
 SLOW_ZONE_LEAD = 0.25
 """Metres beyond ``SLOW_ZONE_RADIUS`` from which the navigator already keeps to the cap."""
+SLOW_ZONE_MEMORY = 3.0
+"""Seconds the slow zone holds after the last unmapped point in it was seen."""
 UNMAPPED_BEYOND = 0.15
 """Metres: a laser point farther than this from every static map obstacle is unmapped."""
 MAP_FIT_RES = 0.05
@@ -129,6 +133,7 @@ class ReferenceNavigator:
     def reset(self, context: ControllerContext) -> None:
         self._ctx = context
         self._tracker = GoalTracker()
+        self._slow_until = -math.inf
         self._path: np.ndarray | None = None
         self._pose = None
         self._trig_key: tuple[float, float, int] | None = None
@@ -349,8 +354,9 @@ class ReferenceNavigator:
 
     def step(self, observation: Observation) -> VelocityCommand:
         cmd = self._navigate(observation)
-        if abs(cmd.linear) > SLOW_ZONE_SPEED and self._in_slow_zone(
-                observation.odom_pose, self._laser_points(observation)):
+        if self._in_slow_zone(observation.odom_pose, self._laser_points(observation)):
+            self._slow_until = observation.time + SLOW_ZONE_MEMORY
+        if abs(cmd.linear) > SLOW_ZONE_SPEED and observation.time < self._slow_until:
             # Scaling both keeps the arc the local planner checked against the laser.
             k = SLOW_ZONE_SPEED / abs(cmd.linear)
             return VelocityCommand(cmd.linear * k, cmd.angular * k)

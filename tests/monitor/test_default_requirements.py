@@ -214,6 +214,24 @@ def test_a_physical_contact_between_samples_is_a_collision(tmp_path: Path) -> No
     assert verdicts["NO_ROBOT_COLLISION"].status == "fail"
 
 
+def test_weaving_fails_smooth_motion_and_a_steady_turn_does_not(tmp_path: Path) -> None:
+    def turning(rates: list[float]) -> list[Tick]:
+        return [Tick((0.02 * i, 0.0, 0.0), (0.15, 0.0, w), (0.15, w))
+                for i, w in enumerate(rates)]
+    # left, right, left within 4 s while driving: an oscillating heading controller
+    weave, _ = run(tmp_path / "weave", FAR_WALL, turning([0.0] * 3 + [0.5] * 5 + [-0.5] * 5
+                                                          + [0.5] * 5 + [0.0] * 3))
+    assert weave["SMOOTH_MOTION"].status == "fail"
+    # one correction each way, 5 s apart, and a long steady turn: smooth
+    smooth, _ = run(tmp_path / "smooth", FAR_WALL, turning(
+        [0.0] * 3 + [0.5] * 5 + [0.0] * 50 + [-0.5] * 5 + [0.0] * 3 + [1.0] * 30 + [0.0] * 3))
+    assert smooth["SMOOTH_MOTION"].status == "pass"
+    # turning on the spot back and forth (not driving) is no weaving
+    spot = [Tick((0.0, 0.0, 0.0), (0.0, 0.0, w), (0.0, w))
+            for w in [0.5] * 5 + [-0.5] * 5 + [0.5] * 5]
+    assert run(tmp_path / "spot", FAR_WALL, spot)[0]["SMOOTH_MOTION"].status == "pass"
+
+
 def test_the_back_and_forth_requirement_applies_only_to_cycles(tmp_path: Path) -> None:
     verdicts, _ = run(tmp_path, FAR_WALL, driving(0.0, 1.0, 12, 0.2), facts(cycles=2))
     assert verdicts["MISSION_SEQUENCE_CYCLE"].status == "pass"

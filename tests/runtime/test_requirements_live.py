@@ -41,11 +41,12 @@ def _slow_mission(folder: Path) -> Path:
     ("navigation", "mission:IgnoresGoalHeading", "GOAL_HEADING"),
     ("crossing", "control:NoSlowZone", "HUMAN_SLOW_ZONE"),
     ("simple_wall", "teleop", "NO_ROBOT_COLLISION"),
+    ("small_dense", "control:OscillatingHeading", "SMOOTH_MOTION"),
 ])
 def test_the_reference_passes_and_the_defect_fails(tmp_path: Path, mission: str, defect: str,
                                                    requirement: str) -> None:
-    path = {"simple_wall": SIMPLE_WALL, "crossing": CROSSING, "navigation": NAVIGATION}.get(
-        mission) or \
+    path = {"simple_wall": SIMPLE_WALL, "crossing": CROSSING, "navigation": NAVIGATION,
+            "small_dense": EXAMPLES / "small_dense" / "small_dense.mission"}.get(mission) or \
         _slow_mission(tmp_path / "mission")
     good, _ = run_into(path, tmp_path / "reference")
     assert good.verdict == "pass", [v for v in good.verdicts if v.status != "pass"]
