@@ -26,7 +26,7 @@ from rei.runtime.messages import (
 )
 from rei.runtime.results import RESULTS_VERSION, RunSummary, Verdict, judge
 from tests.monitor.helpers import monitor
-from tests.monitor.streams import ROBOT, human, wall
+from tests.monitor.streams import ROBOT, drive, human, wall
 
 RATE = 10.0
 
@@ -244,3 +244,22 @@ def test_personal_space_is_measured_while_moving(tmp_path: Path) -> None:
     moving = result.measurements["min_distance_to_human_moving"]
     assert moving == pytest.approx(1.6 - 0.25 - 0.1405 - 0.5, abs=1e-3)
     assert result.measurements["min_distance_to_human"] < moving
+
+
+def test_the_laser_requirements_allow_the_lasers_accuracy_and_no_more(tmp_path: Path) -> None:
+    """GEOM_CLOSE_LASER_CORRECT: the robot drives up to a wall (face at x = 1.5, its front at
+    x + 0.1405) and stops 0.24 m short, just inside ε_close; its forward beam reads the true
+    range, a range 4 cm long (within laser_tolerance, 0.05 m, though above ε_close), 8 cm long,
+    or nothing at all (a blind laser)."""
+    poses = [(1.12 * i / 19, 0.0, 0.0) for i in range(20)] + [(1.12, 0.0, 0.0)] * 15
+    true_range = [1.5 - x for x, _, _ in poses]  # from the footprint centre (the mount)
+
+    def verdict(ranges: list[float], name: str) -> str:
+        h, samples = drive([wall("w", 2.0, 0.0)], poses, laser=ranges)
+        _, result = monitor(h, samples, tmp_path / name)
+        return {v.requirement: v.status for v in result.verdicts}["GEOM_CLOSE_LASER_CORRECT"]
+
+    assert verdict(true_range, "exact") == "pass"
+    assert verdict([r + 0.04 for r in true_range], "within") == "pass"
+    assert verdict([r + 0.08 for r in true_range], "off") == "fail"
+    assert verdict([3.5] * len(poses), "blind") == "fail"
