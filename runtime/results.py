@@ -101,7 +101,9 @@ def judge(summary: RunSummary) -> RunVerdict:
 
 
 def failed_verdicts(summary: RunSummary) -> tuple[Verdict, ...]:
-    """The verdicts that keep the run from passing (fail first, then inconclusive)."""
+    """The verdicts that keep the run from passing: failures before inconclusive ones, each
+    the earliest decided first (decided at the end: last); the first is *the* reason."""
     order = {"fail": 0, "inconclusive": 1}
     return tuple(sorted((v for v in summary.verdicts if v.status in order),
-                        key=lambda v: order[v.status]))
+                        key=lambda v: (order[v.status], v.decided_at is None,
+                                       v.decided_at or 0.0)))

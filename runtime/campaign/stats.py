@@ -107,7 +107,7 @@ def check_pass_rate(required: float) -> float:
     return required
 
 
-def judge(rate: SuccessRate, required: float) -> MissionVerdict:
+def judge_mission(rate: SuccessRate, required: float) -> MissionVerdict:
     """The verdict of one mission; the rule of docs/campaign.md ("Mission verdicts").
 
     pass:  the interval lies at or above the required rate (low >= P), or it straddles P and
@@ -140,7 +140,7 @@ def mission_verdicts(records: Iterable[RunRecord], required: float = DEFAULT_PAS
     a diagnosis, not the mission under test: they never count towards its verdict."""
     check_pass_rate(required)
     tested = [r for r in records if not r.spec.static_pair]
-    return [judge(rate, required) for rate in success_rates(tested, by_mission, confidence)]
+    return [judge_mission(rate, required) for rate in success_rates(tested, by_mission, confidence)]
 
 
 def campaign_passed(verdicts: Iterable[MissionVerdict]) -> bool:

@@ -152,7 +152,6 @@ class RuntimeModel:
         out[near] = (distance[near] - later[near]) / dt
         return out
 
-
     def observe(self, s: Sample) -> QueryInputs:
         """The query inputs of an accepted sample (and the run's measurements updated)."""
         x, y, _ = s.robot_pose
@@ -163,15 +162,9 @@ class RuntimeModel:
             # between two samples, while the sampled footprints may stand a little apart.
             touched = np.asarray(s.contacts, dtype=np.intp)
             distance[touched] = np.minimum(distance[touched], 0.0)
+        speed = math.hypot(s.robot_twist[0], s.robot_twist[1])
         if self._any_human:
-            humans = distance[self.human_mask]
-            # refine only when a human might beat the run's minimum so far
-            if float(humans.min()) < self.min_distance_to_human:
-                exact = distance <= self.cutoff
-                self.min_distance_to_human = min(self.min_distance_to_human,
-                                                 self.footprints.nearest(
-                                                     distance, exact, self.human_mask,
-                                                     s.robot_pose, s.poses))
+            self._nearest_human(s, distance, speed > MOVING)
         if self._last_xy is not None:
             self.path_length += math.hypot(x - self._last_xy[0], y - self._last_xy[1])
         self._last_xy = (x, y)
@@ -179,11 +172,6 @@ class RuntimeModel:
         if scan is not None:
             self.laser_clearance = clearance(scan, self.beam_edges.of(scan))
         ox, oy, _ = s.belief.odom
-        speed = math.hypot(s.robot_twist[0], s.robot_twist[1])
-        if self._any_human and speed > MOVING and float(
-                distance[self.human_mask].min()) < self.min_distance_to_human_moving:
-            self.min_distance_to_human_moving = self.footprints.nearest(
-                distance, distance <= self.cutoff, self.human_mask, s.robot_pose, s.poses)
         return QueryInputs(
             distance, self.kind_masks, self._robot_floor(x, y), self.task_codes.copy(),
             float(s.belief.laser_min), self.laser_clearance, speed,
@@ -196,6 +184,19 @@ class RuntimeModel:
             speed_limit=self.speed_limit, turn_limit=self.turn_limit, humans=self.humans,
             dynamic_objects=self.dynamic_objects, cycles=self.cycles,
             headed_goals=self.headed_goals)
+
+    def _nearest_human(self, s: Sample, distance: np.ndarray, moving: bool) -> None:
+        """Update the closest approach to a person (and, while moving, personal space). The
+        exact distance is worked out once, and only when a person might beat a minimum."""
+        bound = float(distance[self.human_mask].min())
+        if bound >= self.min_distance_to_human and not (
+                moving and bound < self.min_distance_to_human_moving):
+            return
+        nearest = self.footprints.nearest(distance, distance <= self.cutoff, self.human_mask,
+                                          s.robot_pose, s.poses)
+        self.min_distance_to_human = min(self.min_distance_to_human, nearest)
+        if moving:
+            self.min_distance_to_human_moving = min(self.min_distance_to_human_moving, nearest)
 
     def _robot_floor(self, x: float, y: float) -> np.ndarray:
         mask = np.zeros(len(self.floor_names), dtype=bool)

@@ -19,7 +19,7 @@ from typing import Any
 
 from rei.runtime.campaign.stats import by_mission, wilson_interval
 from rei.runtime.campaign.store import RunRecord, verdict_reason
-from rei.runtime.results import Verdict
+from rei.runtime.results import failed_verdicts
 
 
 @dataclass(frozen=True)
@@ -160,12 +160,11 @@ def failure_of(record: RunRecord, kinds: dict[str, str]) -> Failure:
         status = record.verdict
         return Failure(record, "run " + status, status, None, (), (), "whole run",
                        verdict_reason(record))
-    blocking: list[Verdict] = [v for v in summary.verdicts if v.status == "fail"] or [
-        v for v in summary.verdicts if v.status == "inconclusive"]
+    blocking = failed_verdicts(summary)
     if not blocking:
         return Failure(record, "no requirement", record.verdict, None, (), (), "whole run",
                        verdict_reason(record))
-    first = min(blocking, key=lambda v: v.decided_at if v.decided_at is not None else 1e18)
+    first = blocking[0]  # the same one verdict_reason names
     kind_names = tuple(sorted({kinds.get(o, "task" if o.startswith("task") else "object")
                                for o in first.objects}))
     return Failure(record, first.requirement, first.status, first.decided_at, first.objects,

@@ -17,7 +17,7 @@ from rei.runtime.campaign import (
     success_rates,
     wilson_interval,
 )
-from rei.runtime.campaign.stats import by_group, by_mission, judge
+from rei.runtime.campaign.stats import by_group, by_mission, judge_mission
 from rei.runtime.campaign.store import required_pass_rate
 
 from .records import write_campaign
@@ -78,7 +78,7 @@ def _rate(passed: int, runs: int) -> SuccessRate:
     (0, 3, 0.0, "pass"),     # nothing required
 ])
 def test_mission_verdict_rule(passed: int, runs: int, required: float, verdict: str) -> None:
-    judged = judge(_rate(passed, runs), required)
+    judged = judge_mission(_rate(passed, runs), required)
     assert judged.verdict == verdict, judged.reason
     assert f"{passed}/{runs} passed" in judged.reason
 
@@ -88,7 +88,7 @@ def test_mission_verdict_rule(passed: int, runs: int, required: float, verdict: 
 def test_verdicts_follow_the_wilson_interval(kn: tuple[int, int], required: float) -> None:
     k, n = kn
     rate = _rate(k, n)
-    verdict = judge(rate, required).verdict
+    verdict = judge_mission(rate, required).verdict
     if rate.low >= required:
         assert verdict == "pass"
     elif rate.high < required:
@@ -97,12 +97,12 @@ def test_verdicts_follow_the_wilson_interval(kn: tuple[int, int], required: floa
         assert (verdict == "flaky") == rate.flaky
     # Requiring less never turns a passing mission into a failing or flaky one.
     if verdict == "pass":
-        assert judge(rate, required / 2).verdict == "pass"
+        assert judge_mission(rate, required / 2).verdict == "pass"
 
 
 def test_a_required_rate_outside_0_to_1_is_refused() -> None:
     with pytest.raises(ValueError, match="from 0 to 1, found 1.5"):
-        judge(_rate(1, 1), 1.5)
+        judge_mission(_rate(1, 1), 1.5)
 
 
 def test_mission_verdicts_of_a_campaign_and_the_rate_it_required(tmp_path: Path) -> None:
