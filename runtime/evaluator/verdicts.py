@@ -154,8 +154,8 @@ class RequirementChecker:
                  why_unfinished: str = "") -> tuple[Verdict, ...]:
         out: list[Verdict] = []
         for req in self.requirements:
-            if req.premise is not None and req.premise not in self.query_held \
-                    and req.premise not in self.holding:
+            # a query that ever held is in query_held (on_step records it the first time)
+            if req.premise is not None and req.premise not in self.query_held:
                 if problems.total:
                     out.append(Verdict(req.name, "inconclusive", None,
                                        f"its premise {req.premise} never held, but "

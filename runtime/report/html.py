@@ -134,7 +134,7 @@ def render_html(data: CampaignData, rerun: dict[str, str]) -> str:
         repeat=data.plan.repeat, seed=data.plan.seed,
         matrix=requirement_matrix(records),
         clusters=clusters(failures(failed, data.run_dir)),
-        missions=sections, rerun=rerun, mission_of=by_mission, reason_of=verdict_reason,
+        missions=sections, rerun=rerun, reason_of=verdict_reason,
         page_of=lambda record: run_page_link(data.root, record),
         success_tables=[success_table(missions, "Mission"), group_success_table(records)],
         summary_tables=tables, signal_table=signal_counts(records),
