@@ -19,8 +19,8 @@ from rei.runtime.campaign import (
 )
 from rei.runtime.campaign.stats import by_group, by_mission, judge_mission
 from rei.runtime.campaign.store import required_pass_rate
-
-from .records import write_campaign
+from rei.runtime.cli import main
+from tests.campaign.records import EXAMPLES, write_campaign
 
 
 @pytest.mark.parametrize(("k", "n", "low", "high"), [
@@ -133,3 +133,16 @@ def test_the_exit_status_follows_the_mission_verdicts(tmp_path: Path,
     assert finish(tmp_path, no_report=True, pass_rate=0.5) == EXIT_FAILED  # flaky ones
     assert "FLAKY  navigation: 2/3 passed" in capsys.readouterr().err
     assert finish(tmp_path, no_report=True, pass_rate=0.0) == EXIT_OK
+
+
+@pytest.mark.parametrize("value", ["1.5", "-0.1", "nan", "ninety"])
+def test_a_bad_pass_rate_on_the_command_line_is_a_located_input_error(
+        value: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as stop:
+        main(["campaign", str(EXAMPLES / "simple_wall"), "-o", str(tmp_path / "c"),
+              "--pass-rate", value])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert "argument --pass-rate: expected a rate from 0 to 1" in err
+    assert f"found '{value}'" in err
+    assert not (tmp_path / "c").exists()  # refused before anything is written

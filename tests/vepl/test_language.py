@@ -136,6 +136,20 @@ def test_unknown_names_get_did_you_mean() -> None:
     assert "did you mean 'eps_close'" in doc.diagnostics[0].message
 
 
+def test_a_premise_must_be_a_query_located_with_did_you_mean() -> None:
+    doc = analyse_vepl(SourceText("t.vepl", "query humansPresent() { humans > 0 }\n"
+                                            "queryEvent e() as humansPresent found\n"
+                                            'requirement R "r" when humansPresnt { never e }\n'))
+    (problem,) = doc.diagnostics
+    assert (problem.rule, problem.span.line) == ("VEPL-UNKNOWN", 3)
+    assert "'when' expected a query, found 'humansPresnt'" in problem.message
+    assert "did you mean 'humansPresent'" in problem.message
+    premised = spec_of("query humansPresent() { humans > 0 }\n"
+                       "queryEvent e() as humansPresent found\n"
+                       'requirement R "r" when humansPresent { never e }\n')
+    assert premised.requirements[0].premise == "humansPresent"
+
+
 def test_all_problems_are_reported_at_once() -> None:
     found = diagnostics_of("""query q() { laser_min < 1 }
 queryEvent a() as nothing found
