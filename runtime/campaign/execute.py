@@ -100,7 +100,9 @@ def execute_run(spec: RunSpec, work_dir: Path, *, timeout: float | None = None,
                 stop: threading.Event | None = None) -> RunResult:
     """Run ``spec`` with its output in ``work_dir`` (created); kill it after ``timeout`` s.
 
-    Setting ``stop`` kills the run at once and reports it interrupted (the campaign is ending).
+    Setting ``stop`` kills the run at once and reports it interrupted (the campaign is ending);
+    nothing else makes a run interrupted. On Linux the run dies with the calling thread, so
+    call this from a thread that lives until it returns (both engines do: the thread waits).
     """
     work_dir.mkdir(parents=True, exist_ok=True)
     limit = default_timeout(spec) if timeout is None else timeout
