@@ -21,6 +21,7 @@ from typing import IO, Any
 import numpy as np
 
 from rei.catalogue import Box, Cylinder, Footprint, Polygon, Tile
+from rei.generators.output import open_output
 from rei.runtime.errors import RunError
 from rei.runtime.messages import (
     FAILURE_CAUSES,
@@ -113,7 +114,7 @@ class TraceWriter:
 
     def start(self, header: StreamHeader) -> None:
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        self._file = open(self.partial, "w", encoding="utf-8", newline="\n")  # noqa: SIM115
+        self._file = open_output(self.partial)  # never written through a link
         self._file.write(_dumps(header_json(header)) + "\n")
 
     @staticmethod

@@ -20,6 +20,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import IO
 
+from rei.generators.output import open_output
 from rei.lang.cli_support import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_RUN_ERROR
 from rei.lang.errors import ReiError
 from rei.runtime.collector import SampleSink, TraceWriter, load_monitor_config
@@ -115,10 +116,10 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
         raise RunError(f"cannot create the output folder '{out_dir}': {exc.strerror}") from None
     # The specification is checked and generated first: a bad .vepl is reported (exit 2)
     # before any world is built.
-    automata = generate_automata(vepl, out_dir / "automata") if monitor else None
+    automata = generate_automata(vepl, out_dir / "automata", replace=True) if monitor else None
     monitor_sink = MonitorSink(vepl, out_dir, automata=automata) if monitor else None
     world_dir = out_dir / "world"
-    mission = generate_world(mission_path, world_dir)
+    mission = generate_world(mission_path, world_dir, replace=True)
     manifest = load_manifest(world_dir)
     monitor_config = load_monitor_config(world_dir)
     robot = make_controller(controller)
@@ -137,7 +138,7 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
                        f"[{'#' * done}{'.' * (width - done)}]")
         progress.flush()
 
-    with open(out_dir / LOG, "w", encoding="utf-8", newline="\n") as log_file:
+    with open_output(out_dir / LOG) as log_file:
         def log(line: str) -> None:
             log_file.write(line + "\n")
             log_file.flush()
