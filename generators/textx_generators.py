@@ -25,7 +25,8 @@ from rei.generators.output import write_tree
 from rei.generators.pipeline import plan
 from rei.lang.errors import ReiError
 
-LANGUAGES = {"room": ("rei-room", ".room"), "mission": ("rei-mission", ".mission")}
+LANGUAGES = {"room": ("rei-room", ".room"), "mission": ("rei-mission", ".mission"),
+             "vepl": ("rei-vepl", ".vepl")}
 
 
 def default_output(source: Path, target: str) -> Path:
@@ -59,7 +60,8 @@ def textx_generator(target: str) -> Callable[..., None]:
 
 
 def generator_desc(language: str, target: str, description: str = "") -> GeneratorDesc:
-    """A textX registration of REI target ``target`` for ``language`` ('room' or 'mission')."""
+    """A textX registration of REI target ``target`` for ``language`` ('room', 'mission' or
+    'vepl')."""
     textx_language, _ = LANGUAGES[language]
     return GeneratorDesc(language=textx_language, target=target,
                          description=description or f"REI '{target}' target (rei-gen generate)",
@@ -77,8 +79,9 @@ room_monitor = generator_desc("room", "monitor", "monitor configuration")
 mission_monitor = generator_desc("mission", "monitor", "monitor configuration")
 room_all = generator_desc("room", "all", "every REI target, each into its own folder")
 mission_all = generator_desc("mission", "all", "every REI target, each into its own folder")
+vepl_rx = generator_desc("vepl", "rx", "RxPY event automata (a readable Python module)")
 
 REGISTRATIONS: tuple[GeneratorDesc, ...] = (
     room_gazebo, mission_gazebo, room_launch, mission_launch, mission_mission, room_pybullet,
-    mission_pybullet, room_monitor, mission_monitor, room_all, mission_all)
+    mission_pybullet, room_monitor, mission_monitor, room_all, mission_all, vepl_rx)
 """Every registration above, in the order of the entry points."""
