@@ -68,10 +68,10 @@ def generator_desc(language: str, target: str, description: str = "") -> Generat
                          generator=textx_generator(target))
 
 
-room_gazebo = generator_desc("room", "gazebo", "SDF 1.9 world for Gazebo")
-mission_gazebo = generator_desc("mission", "gazebo", "SDF 1.9 world for Gazebo")
-room_launch = generator_desc("room", "launch", "ROS 2 launch file and REI run.json")
-mission_launch = generator_desc("mission", "launch", "ROS 2 launch file and REI run.json")
+room_gazebo = generator_desc("room", "gazebo", "SDF 1.9 world for Gazebo Sim")
+mission_gazebo = generator_desc("mission", "gazebo", "SDF 1.9 world for Gazebo Sim")
+room_launch = generator_desc("room", "launch", "ROS 2 launch file and the Gazebo world")
+mission_launch = generator_desc("mission", "launch", "REI run.json, its sources, ROS 2 launch")
 mission_mission = generator_desc("mission", "mission", "mission XML (valid against mission.xsd)")
 room_pybullet = generator_desc("room", "pybullet", "URDFs and manifest for pybullet")
 mission_pybullet = generator_desc("mission", "pybullet", "URDFs and manifest for pybullet")

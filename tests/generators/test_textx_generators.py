@@ -60,12 +60,13 @@ def test_textx_generate_command(navigation: Path) -> None:
             except TextXError:
                 pass  # already registered through pyproject's entry points
         result = CliRunner().invoke(textx_cli, [
-            "generate", str(navigation / "navigation.room"), "--target", "launch",
+            "generate", str(navigation / "navigation.mission"), "--target", "launch",
             "--seed", "5"], catch_exceptions=False)
     finally:
         clear_generator_registrations()  # the next look-up reloads the entry points only
     assert result.exit_code == 0, result.output
     run = navigation / "navigation-launch" / "run.json"
+    assert (navigation / "navigation-launch" / "sources" / "navigation.mission").is_file()
     assert '"seed": 5' in run.read_text()
 
 
