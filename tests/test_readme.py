@@ -133,3 +133,34 @@ def test_a_fresh_shell_runs_the_readme_end_to_end(tmp_path: Path) -> None:
                              "--untracked-files=all"], capture_output=True, text=True,
                             check=True).stdout
     assert status == ""
+
+
+def user_docs() -> dict[str, str]:
+    return {p.relative_to(REPO).as_posix(): p.read_text(encoding="utf-8")
+            for p in [README, *sorted((REPO / "docs").glob("*.md"))]}
+
+
+def test_the_thesis_is_cited_not_pointed_to_by_a_path_a_clone_lacks() -> None:
+    for name, text in user_docs().items():
+        assert "shared/seed" not in text and "../shared" not in text, name
+    assert "Tesztkörnyezetek generálása és monitorozása autonóm robotok" in README.read_text(
+        encoding="utf-8").replace("\n", " ")
+
+
+def test_links_between_the_docs_resolve() -> None:
+    for name, text in user_docs().items():
+        for target in re.findall(r"\]\(([^)#:]+\.md)\)", text):
+            assert (REPO / name).parent.joinpath(target).is_file(), f"{name} links {target}"
+        assert "see their sections" not in text, name
+
+
+def test_every_controller_and_mission_keyword_a_user_can_write_is_documented() -> None:
+    """Every built-in controller name and `max_speed` appear in the README and the docs."""
+    from rei.runtime.robot import BUILT_IN
+
+    readme = README.read_text(encoding="utf-8")
+    generators = (REPO / "docs" / "generators.md").read_text(encoding="utf-8")
+    for name in BUILT_IN:
+        assert f"`{name}`" in readme and f"`{name}`" in generators, name
+    mission_section = readme.split("### `.mission`", 1)[1].split("\n### ", 1)[0]
+    assert "max_speed" in mission_section and "`max_speed`" in generators
