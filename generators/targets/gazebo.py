@@ -185,7 +185,7 @@ def robot_model(world: ConcreteWorld) -> RobotModel:
         base = replace(base, inertia=solid_inertia(otype.footprint, base.height, base.mass))
     half_x = max(otype.footprint.half_extents()[0], r)
     wheel_i = solid_inertia(Cylinder(r), WHEEL_WIDTH, WHEEL_MASS)
-    caster_r = clearance / 2 + r / 4
+    caster_r = clearance  # touches the floor, like the wheels: the base stands level
     caster_i = (2 * WHEEL_MASS * caster_r ** 2 / 5,) * 3
     wheels = (
         Wheel("left_wheel", (0.0, drive.wheel_separation / 2, r, -math.pi / 2, 0.0, 0.0), r,
