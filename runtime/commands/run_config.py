@@ -160,10 +160,9 @@ def defer_defaults(parser: argparse.ArgumentParser) -> None:
                              "explicitly on the command line override the file; MISSION may "
                              f"then be left out, and -o defaults to '{DEFAULT_OUTPUT}/' beside "
                              "the file. Fields: docs/generators.md")
-    dests = {spec.dest for spec in FIELDS.values()}
-    for action in parser._actions:
-        if action.dest in dests and not isinstance(action.default, Unset):
-            action.default = Unset(action.default)
+    defaults = {spec.dest: parser.get_default(spec.dest) for spec in FIELDS.values()}
+    parser.set_defaults(**{dest: value if isinstance(value, Unset) else Unset(value)
+                           for dest, value in defaults.items()})
 
 
 def apply_run_config(args: argparse.Namespace) -> argparse.Namespace:
