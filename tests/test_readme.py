@@ -164,3 +164,13 @@ def test_every_controller_and_mission_keyword_a_user_can_write_is_documented() -
         assert f"`{name}`" in readme and f"`{name}`" in generators, name
     mission_section = readme.split("### `.mission`", 1)[1].split("\n### ", 1)[0]
     assert "max_speed" in mission_section and "`max_speed`" in generators
+
+
+def test_the_demo_ends_by_saying_how_to_reach_the_commands() -> None:
+    """scripts/demo's last words (after `rei demo`, whatever its status) name the README's
+    activation line, so the demo's own `rei report ...` hint works in the user's shell."""
+    script = (REPO / "scripts" / "demo").read_text(encoding="utf-8")
+    demo_call = script.index(".venv/bin/rei demo")
+    tail = script[demo_call:]
+    assert "exec" not in script[:demo_call].splitlines()[-1]
+    assert ACTIVATE in tail and "exit $status" in tail
