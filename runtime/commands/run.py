@@ -24,6 +24,7 @@ from rei.generators.output import open_output
 from rei.lang.cli_support import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_RUN_ERROR
 from rei.lang.errors import ReiError
 from rei.runtime.collector import SampleSink, TraceWriter, load_monitor_config
+from rei.runtime.commands.run_config import apply_run_config, defer_defaults
 from rei.runtime.errors import RunError
 from rei.runtime.evaluator import merge_summary, write_summary
 from rei.runtime.monitor import MonitorSink, generate_automata
@@ -51,9 +52,10 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                     "seed give byte-identical outputs. Exit status: 0 every requirement passed, "
                     "1 one failed or was inconclusive, 2 invalid input, 3 a run error, "
                     "130 interrupted.")
-    parser.add_argument("mission", type=Path, metavar="MISSION", help="the .mission file")
-    parser.add_argument("-o", "--output", type=Path, required=True, metavar="DIR",
-                        help="output folder (created if missing)")
+    parser.add_argument("mission", type=Path, nargs="?", default=None, metavar="MISSION",
+                        help="the .mission file (optional with --config)")
+    parser.add_argument("-o", "--output", type=Path, default=None, metavar="DIR",
+                        help="output folder (created if missing; required without --config)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the run (default 0)")
     parser.add_argument("--controller", default="reference", metavar="NAME",
                         help=f"robot under test: {', '.join(BUILT_IN)}, or module:Class "
@@ -80,6 +82,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.add_argument("--no-monitor", action="store_true",
                         help="record the trace only (monitor it later with `rei replay`)")
     parser.add_argument("--quiet", action="store_true", help="no progress display")
+    defer_defaults(parser)
     parser.set_defaults(func=run)
 
 
@@ -160,6 +163,7 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
 
 
 def run(args: argparse.Namespace) -> int:
+    args = apply_run_config(args)
     progress = None if args.quiet or not sys.stderr.isatty() else sys.stderr
     summary, record = run_into(args.mission, args.output, args.controller, args.seed,
                                args.duration, args.watchdog, args.physics_rate, args.odom_drift,
