@@ -473,6 +473,20 @@ def test_whatever_the_writer_writes_reads_back_bit_identical(
         if a.belief.scan is not None and b.belief.scan is not None:
             assert a.belief.scan.ranges.tobytes() == b.belief.scan.ranges.tobytes()
     assert read_trace_end(path) == (end, outcome, "why")
+    # and what the reader accepts, the writer writes back byte for byte
+    write(tmp_path / "again.jsonl", back_header, back, end, outcome, "why")
+    assert (tmp_path / "again.jsonl").read_bytes() == path.read_bytes()
+
+
+@pytest.mark.parametrize("run", ["failing", "passing"])
+def test_a_real_recording_read_and_written_again_is_the_same_bytes(
+        run: str, request: pytest.FixtureRequest, tmp_path: Path) -> None:
+    trace = request.getfixturevalue(run) / "trace.jsonl"
+    header, samples = read_trace(trace)
+    end = read_trace_end(trace)
+    assert end is not None
+    write(tmp_path / "trace.jsonl", header, list(samples), *end)
+    assert (tmp_path / "trace.jsonl").read_bytes() == trace.read_bytes()
 
 
 # ---- the mutation fuzzer ---------------------------------------------------------------------
