@@ -24,7 +24,7 @@ import json
 import math
 import os
 import sys
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterator
 from pathlib import Path
 from typing import IO, Any, BinaryIO, get_args
 
@@ -143,7 +143,6 @@ _BELIEF_KEYS = frozenset(("odom", "odom_twist", "laser_min", "scan", "nav_state"
 _SCAN_KEYS = frozenset(("angle_min", "angle_increment", "range_min", "range_max", "ranges"))
 _EVENT_KEYS = frozenset(("kind", "time", "task", "index", "reason", "cause"))
 _END_KEYS = frozenset(("end", "outcome", "reason"))
-_NUMBER_TYPES = frozenset((int, float))
 _FLOATS = frozenset((float,))
 _COUNTS = {2: "two", 3: "three"}
 
@@ -264,9 +263,8 @@ class _Fields:
         raise TraceError(f"{self.where}: {self.field(key)}: expected a string or null, found "
                          f"{_show(value)}")
 
-    def choice(self, key: str, allowed: Iterable[str], note: str = "") -> str:
+    def choice(self, key: str, allowed: tuple[str, ...], note: str = "") -> str:
         value = self.data[key]
-        allowed = tuple(allowed)
         if isinstance(value, str) and value in allowed:
             return value
         raise TraceError(f"{self.where}: {self.field(key)}: expected one of "
@@ -471,14 +469,17 @@ class _StreamRules:
         range_min = s.number("range_min", low=0.0)
         range_max = s.number("range_max", low=range_min, low_open=True, note="(range_min)")
         ranges = s.array("ranges", "ranges")
-        if ranges and _NUMBER_TYPES.issuperset(map(type, ranges)):
-            values = np.array(ranges, dtype=float)
-            if bool(np.isfinite(values).all()) and bool((values >= 0.0).all()):
-                return LaserScan(angle_min, increment, range_min, range_max, values)
-        for k, r in enumerate(ranges):
-            _number(r, s.where, f"{s.field('ranges')}[{k}]", low=0.0)
-        raise TraceError(f"{s.where}: {s.field('ranges')}: expected at least one range, found "
-                         f"none")
+        field = s.field("ranges")
+        if not ranges:
+            raise TraceError(f"{s.where}: {field}: expected at least one range, found none")
+        if not _FLOATS.issuperset(map(type, ranges)):  # 360 beams: one pass for the usual case
+            for k, r in enumerate(ranges):
+                _number(r, s.where, f"{field}[{k}]", low=0.0)
+        values = np.array(ranges, dtype=float)
+        if not (bool(np.isfinite(values).all()) and bool((values >= 0.0).all())):
+            k = int(np.flatnonzero(~(np.isfinite(values) & (values >= 0.0)))[0])
+            _number(ranges[k], s.where, f"{field}[{k}]", low=0.0)
+        return LaserScan(angle_min, increment, range_min, range_max, values)
 
     def _events(self, d: _Fields, time: float, previous: float) -> tuple[MissionEvent, ...]:
         raw = d.array("events", "mission events")
