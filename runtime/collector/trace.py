@@ -149,7 +149,10 @@ _COUNTS = {2: "two", 3: "three"}
 
 def _show(value: Any) -> str:
     """A found value for a message: its repr, cut short (a damaged line can be megabytes)."""
-    text = repr(value)
+    try:
+        text = repr(value)
+    except ValueError:  # an int of more digits than Python converts to text
+        return "a number too large to show"
     return text if len(text) <= 80 else text[:77] + "..."
 
 
