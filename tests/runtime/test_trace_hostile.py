@@ -624,3 +624,23 @@ def test_no_corruption_of_a_failing_recording_ever_passes(
         assert "damaged line" not in message, message
         return
     assert judge(summary) != "pass"
+
+
+@settings(max_examples=200, deadline=None, derandomize=True, phases=(Phase.generate,),
+          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow,
+                                 HealthCheck.data_too_large])
+@given(data=st.data())
+def test_the_reader_refuses_damage_only_with_located_errors(
+        passing: Path, tmp_path_factory: pytest.TempPathFactory, data: st.DataObject) -> None:
+    """The reader alone, many more corruptions: it reads or refuses with a located message,
+    never with another exception or the last line of defence."""
+    lines = (passing / "trace.jsonl").read_bytes().splitlines()
+    for _ in range(data.draw(st.integers(1, 3), label="corruptions")):
+        lines = _mutate(lines, data)
+    trace = tmp_path_factory.mktemp("reader") / "trace.jsonl"
+    trace.write_bytes(b"".join(line + b"\n" for line in lines))
+    try:
+        _read_all(trace)
+    except TraceError as exc:
+        assert re.match(f"^{re.escape(str(trace))}:[0-9]+: .*expected .*found", str(exc)), exc
+        assert "damaged line" not in str(exc)
