@@ -26,6 +26,8 @@ RULES: tuple[Rule, ...] = (
     Rule("INPUT-EMPTY", "all", "the file is not empty"),
     Rule("INPUT-SIZE", "all", "the file is at most 32 MiB (at most that much is ever read)"),
     Rule("INPUT-ENCODING", "all", "the file is UTF-8 text (no NUL bytes)"),
+    Rule("INTERNAL", "all", "the editor shows a failure of REI's own checks as a diagnostic "
+         "(please report it): a file is never shown clean because a check broke"),
     Rule("SYNTAX", "all", "the text follows the grammar (the parser stops at the first error)"),
     Rule("SYNTAX-DEPTH", "all", "the text does not nest deeper than the parser can follow "
          "(located at the deepest bracket)"),
