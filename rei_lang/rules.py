@@ -99,7 +99,7 @@ RULES: tuple[Rule, ...] = (
     Rule("VEPL-NOT-WINDOW", "vepl", "a pattern that ends in NOT has a time window"),
     Rule("VEPL-MULTIPLICITY", "vepl", "{n} is a whole number from 1 to 100"),
     Rule("VEPL-CYCLE", "vepl", "queries do not find each other in a circle"),
-    Rule("VEPL-LIMIT", "vepl", "a complex event's pattern has at most 1,000 parts with every "
+    Rule("VEPL-LIMIT", "vepl", "a complex event's pattern has at most 500 parts with every "
          "{n} and {+} written out, and operators nested at most 50 deep; a query's condition "
          "has at most 2,000 operators and operands",
          "the generated automata must load and run: nested {+} double a pattern's automaton"),

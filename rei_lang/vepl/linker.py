@@ -24,10 +24,11 @@ from rei.lang.suggest import did_you_mean
 from rei.lang.vepl import model as m
 
 MAX_WINDOW_MS = 1e9
-MAX_PATTERN_SIZE = 1000
+MAX_PATTERN_SIZE = 500
 """Parts of a complex event's pattern once every {n} is written out n times and every {+}
-as one copy followed by {*} (the automaton the runtime builds): beyond this, matching one
-event costs more than a run can afford, and nested {+} double the size at every level."""
+as one copy followed by {*} (the automaton the runtime builds): matching one event costs
+about 10 ms at this size, growing with its square, and nested {+} double the size at every
+level."""
 MAX_PATTERN_DEPTH = 50
 """Pattern operators nested in each other (each suffix counts): the generated automata and
 the runtime walk patterns recursively."""
