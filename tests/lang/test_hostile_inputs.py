@@ -156,6 +156,14 @@ def test_a_thousand_flat_suffixes_are_a_located_limit(write) -> None:  # type: i
         assert (rule, line) == ("VEPL-LIMIT", 5)
 
 
+def test_a_deeply_nested_catalogue_is_located(write) -> None:  # type: ignore[no-untyped-def]
+    # tomllib reads nested arrays by recursion: this was a RecursionError traceback.
+    path = write("deep.toml", "# nested\na = " + "[" * 5000 + "]" * 5000 + "\n")
+    [(rule, line, col, message)] = check(path)
+    assert (rule, line, col) == ("CATALOGUE-SYNTAX", 2, 5 + 4999)
+    assert "5000 levels" in message
+
+
 # ---- 8. no quadratic check ---------------------------------------------------------------
 
 def _chain_room(n: int) -> Room:
