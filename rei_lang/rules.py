@@ -69,8 +69,9 @@ RULES: tuple[Rule, ...] = (
     Rule("TRAJ-START", "room", "a trajectory starts on its object's floor"),
     Rule("TRAJ-BLOCKED", "room", "no trajectory vertex lies on a floor with a standing object",
          "thesis 4.1.2"),
-    Rule("TRAJ-CROSSES", "room", "the straight way between consecutive trajectory vertices "
-         "stays on floors free of walls and standing objects"),
+    Rule("TRAJ-CROSSES", "room", "the curve a moving body walks (the Catmull-Rom spline through "
+         "its timed vertices, swept with its footprint's radius) stays on the floors, clear of "
+         "walls and standing objects", "thesis 4.2.1"),
     Rule("TRAJ-UNREACHABLE", "room", "trajectory vertices lie where the robot can reach"),
     Rule("HUMAN-BEHAVIOUR", "room", "a human's behaviour is scripted, yielding or social"),
     Rule("MISSION-ROOM", "mission", "the imported room exists and is valid"),
