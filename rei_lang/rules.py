@@ -80,8 +80,9 @@ RULES: tuple[Rule, ...] = (
     Rule("GOAL-UNREACHABLE", "mission", "the robot's footprint can reach every goal from its "
          "start (path search on the floor graph without blocked floors)"),
     Rule("VEPL-UNKNOWN", "vepl", "every referenced name is declared (queries, events, signals, "
-         "parameters, functions, states), with 'did you mean'"),
-    Rule("VEPL-ARITY", "vepl", "a query has at most one parameter; finds, query events and "
+         "parameters, functions, states) and every kind in object[...] is a role or a "
+         "catalogue type, with 'did you mean'"),
+    Rule("VEPL-ARITY", "vepl", "a query has at most four parameters; finds, query events and "
          "function calls pass the declared number of arguments"),
     Rule("VEPL-ORDER", "vepl", "an event is defined before a complex event, signal or "
          "requirement uses it"),

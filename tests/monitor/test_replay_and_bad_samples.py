@@ -77,7 +77,7 @@ def test_bad_samples_never_turn_into_a_pass(damage: str, tmp_path: Path, automat
     h, samples = drive([wall("w", 10.0, 0.0)], straight(0.0, 1.0, 20),
                        events={0: (MissionEvent("begin", 0.0),), 19: (MissionEvent("end", 1.9),)})
     _, clean = monitor(h, samples, tmp_path / "clean", automata=automata)
-    assert _verdicts(clean)["MISSION_SIMPLE"] == "pass"
+    assert _verdicts(clean)["NO_ROBOT_COLLISION"] == "pass"
     s = list(samples)
     if damage == "non_finite":
         poses = s[5].poses.copy()
@@ -93,7 +93,7 @@ def test_bad_samples_never_turn_into_a_pass(damage: str, tmp_path: Path, automat
     counts = result.measurements["sample_problems"]
     assert counts[damage] >= 1
     verdicts = _verdicts(result)
-    assert verdicts["MISSION_SIMPLE"] == "inconclusive"
+    assert verdicts["NO_ROBOT_COLLISION"] == "inconclusive"
     assert "pass" not in {verdicts["MISSION_SEQUENCE_CYCLE"],
                           verdicts["MISSION_WITH_HUMAN_TRAJECTORY"]}
 
