@@ -152,6 +152,13 @@ class _Writer:
             return f"({left} {e.op} {right})"
         if isinstance(e, vm.BoolOp):
             joiner = " & " if e.op == "and" else " | "
+            facts = [x for x in e.operands if not _reads_parameter(x)]
+            if e.op == "and" and self.n > 1 and facts and len(facts) < len(e.operands):
+                # Scenario facts first, and the arrays over the domains' cross product (a
+                # large room's floors by floors) only when the facts hold.
+                rest = [x for x in e.operands if _reads_parameter(x)]
+                return (f"(np.bool_({' & '.join(c(x) for x in facts)}) and "
+                        f"({' & '.join(c(x) for x in rest)}))")
             return "(" + joiner.join(c(x) for x in e.operands) + ")"
         if isinstance(e, vm.Not):
             return f"~{self.code(e.operand, relaxed, not positive)}"

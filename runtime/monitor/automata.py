@@ -115,13 +115,21 @@ class QueryInputs:
     """The mission's cycles and how many of its goals carry a heading."""
     goals: float = 0.0
     """How many goals one cycle of the mission has."""
+    neighbouring_goals: float = 0.0
+    """How many consecutive goals of one cycle (g_i, g_i+1) lie on neighbouring floors."""
     object_floor: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     """Per object: the index of the floor it stands on, -1 for none (the inverse map of
     thesis 5.1: from a body's position back to the abstract environment)."""
     goal_floor: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
     """Per floor: a goal of the mission lies on it."""
-    floor_adjacent: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), dtype=bool))
-    """Floors by floors: the two tiles share an edge."""
+    adjacency: Callable[[], np.ndarray] = field(
+        default=lambda: np.zeros((0, 0), dtype=bool))
+    """Floors by floors, the two tiles share an edge: worked out on first use (a large room
+    has thousands of floors, and most specifications never ask)."""
+
+    @property
+    def floor_adjacent(self) -> np.ndarray:
+        return self.adjacency()
 
     @property
     def n_object(self) -> int:

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from typing import cast
 
 import numpy as np
 
@@ -124,10 +123,13 @@ class RuntimeModel:
             if facts is not None else 0.0
         self.goals = float(len(facts.goals)) if facts is not None else 0.0
         self.goal_floor = np.zeros(len(self.floor_names), dtype=bool)
+        self.neighbouring_goals = 0.0
         if facts is not None and facts.goals:
             at = self.floors.of(np.array([(g.x, g.y) for g in facts.goals], dtype=float))
             self.goal_floor[at[at >= 0]] = True
-        self.floor_adjacent = self.floors.adjacent()
+            self.neighbouring_goals = float(sum(self.floors.side_by_side(int(a), int(b))
+                                                for a, b in zip(at, at[1:], strict=False)))
+        self.floor_adjacent = self.floors.adjacent
 
     # ---- per sample -----------------------------------------------------------------------
 
@@ -142,8 +144,9 @@ class RuntimeModel:
                            speed_limit=self.speed_limit, turn_limit=self.turn_limit,
                            humans=self.humans, dynamic_objects=self.dynamic_objects,
                            cycles=self.cycles, headed_goals=self.headed_goals, goals=self.goals,
+                           neighbouring_goals=self.neighbouring_goals,
                            object_floor=self.no_floors, goal_floor=self.goal_floor,
-                           floor_adjacent=self.floor_adjacent)
+                           adjacency=self.floor_adjacent)
 
     def _approach(self, s: Sample, distance: np.ndarray) -> np.ndarray:
         """How fast the robot's own commanded motion (as the motor executes it: clipped to
@@ -195,9 +198,10 @@ class RuntimeModel:
             speed_limit=self.speed_limit, turn_limit=self.turn_limit, humans=self.humans,
             dynamic_objects=self.dynamic_objects, cycles=self.cycles,
             headed_goals=self.headed_goals, goals=self.goals,
+            neighbouring_goals=self.neighbouring_goals,
             object_floor=self.floors.of(np.asarray(s.poses)[:, :2]) if len(s.poses)
             else self.no_floors, goal_floor=self.goal_floor,
-            floor_adjacent=self.floor_adjacent)
+            adjacency=self.floor_adjacent)
 
     def _nearest_human(self, s: Sample, distance: np.ndarray, moving: bool) -> None:
         """Update the closest approach to a person (and, while moving, personal space). The
@@ -297,6 +301,7 @@ class FloorMap:
         for k in range(len(cells) - 1, -1, -1):
             self.grid[cells[k, 0], cells[k, 1]] = k
         self.cells = cells
+        self._adjacent: np.ndarray | None = None
 
     def of(self, xy: np.ndarray) -> np.ndarray:
         """The floor index of each (x, y) row, -1 off every floor."""
@@ -313,14 +318,34 @@ class FloorMap:
         out[ok] = self.grid[cell[ok, 0], cell[ok, 1]]
         return out
 
+    def side_by_side(self, a: int, b: int) -> bool:
+        """Floors ``a`` and ``b`` (indices, -1 for none) share an edge."""
+        if a < 0 or b < 0:
+            return False
+        step = np.abs(self.centres[a] - self.centres[b]) / self.tile
+        return bool(np.isclose(sorted(step), (0.0, 1.0), atol=1e-6).all())
+
     def adjacent(self) -> np.ndarray:
-        """Floors by floors: their tiles share an edge."""
-        if not len(self.centres):
-            return np.zeros((0, 0), dtype=bool)
-        step = np.abs(self.centres[:, None, :] - self.centres[None, :, :]) / self.tile
-        near = np.isclose(step, 1.0, atol=1e-6)
-        same = np.isclose(step, 0.0, atol=1e-6)
-        return cast(np.ndarray, (near[:, :, 0] & same[:, :, 1]) | (same[:, :, 0] & near[:, :, 1]))
+        """Floors by floors: their tiles share an edge (worked out once, on first use)."""
+        if self._adjacent is None:
+            n = len(self.centres)
+            found = np.zeros((n, n), dtype=bool)
+            if self.on_grid:
+                for di, dj in ((1, 0), (0, 1)):
+                    for k, (i, j) in enumerate(self.cells):
+                        ii, jj = i + di, j + dj
+                        if ii < self.grid.shape[0] and jj < self.grid.shape[1]:
+                            other = self.grid[ii, jj]
+                            if other >= 0:
+                                found[k, other] = found[other, k] = True
+            else:
+                for k in range(n):
+                    step = np.abs(self.centres - self.centres[k]) / self.tile
+                    near = np.isclose(step, 1.0, atol=1e-6)
+                    same = np.isclose(step, 0.0, atol=1e-6)
+                    found[k] = (near[:, 0] & same[:, 1]) | (same[:, 0] & near[:, 1])
+            self._adjacent = found
+        return self._adjacent
 
 
 def interpolate(a: QueryInputs, b: QueryInputs, f: float) -> QueryInputs:
