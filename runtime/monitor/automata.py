@@ -117,15 +117,21 @@ class QueryInputs:
     """How many goals one cycle of the mission has."""
     neighbouring_goals: float = 0.0
     """How many consecutive goals of one cycle (g_i, g_i+1) lie on neighbouring floors."""
-    object_floor: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    object_floors: Callable[[], np.ndarray] = field(
+        default=lambda: np.zeros(0, dtype=np.int64))
     """Per object: the index of the floor it stands on, -1 for none (the inverse map of
-    thesis 5.1: from a body's position back to the abstract environment)."""
+    thesis 5.1: from a body's position back to the abstract environment); worked out on first
+    use in a sample, so specifications that never ask pay nothing."""
     goal_floor: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
     """Per floor: a goal of the mission lies on it."""
     adjacency: Callable[[], np.ndarray] = field(
         default=lambda: np.zeros((0, 0), dtype=bool))
     """Floors by floors, the two tiles share an edge: worked out on first use (a large room
     has thousands of floors, and most specifications never ask)."""
+
+    @property
+    def object_floor(self) -> np.ndarray:
+        return self.object_floors()
 
     @property
     def floor_adjacent(self) -> np.ndarray:

@@ -12,8 +12,10 @@ samples are counted, never modelled. This module must never import the simulator
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field, replace
+from functools import partial
 
 import numpy as np
 
@@ -145,7 +147,7 @@ class RuntimeModel:
                            humans=self.humans, dynamic_objects=self.dynamic_objects,
                            cycles=self.cycles, headed_goals=self.headed_goals, goals=self.goals,
                            neighbouring_goals=self.neighbouring_goals,
-                           object_floor=self.no_floors, goal_floor=self.goal_floor,
+                           object_floors=lambda: self.no_floors, goal_floor=self.goal_floor,
                            adjacency=self.floor_adjacent)
 
     def _approach(self, s: Sample, distance: np.ndarray) -> np.ndarray:
@@ -199,8 +201,8 @@ class RuntimeModel:
             dynamic_objects=self.dynamic_objects, cycles=self.cycles,
             headed_goals=self.headed_goals, goals=self.goals,
             neighbouring_goals=self.neighbouring_goals,
-            object_floor=self.floors.of(np.asarray(s.poses)[:, :2]) if len(s.poses)
-            else self.no_floors, goal_floor=self.goal_floor,
+            object_floors=functools.cache(partial(self.floors.of, np.asarray(s.poses)[:, :2])),
+            goal_floor=self.goal_floor,
             adjacency=self.floor_adjacent)
 
     def _nearest_human(self, s: Sample, distance: np.ndarray, moving: bool) -> None:
