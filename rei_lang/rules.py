@@ -84,6 +84,8 @@ RULES: tuple[Rule, ...] = (
          "catalogue type, with 'did you mean'"),
     Rule("VEPL-ARITY", "vepl", "a query has at most four parameters; finds, query events and "
          "function calls pass the declared number of arguments"),
+    Rule("VEPL-FUNCTION", "vepl", "every declared user function is found in the module "
+         "given with --functions"),
     Rule("VEPL-ORDER", "vepl", "an event is defined before a complex event, signal or "
          "requirement uses it"),
     Rule("VEPL-WINDOW", "vepl", "a time window is more than 0 and at most 1e9 ms"),

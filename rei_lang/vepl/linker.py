@@ -83,9 +83,11 @@ class _Linker:
                         parameters[p.name] = value
         self._check_parameters(items, parameters)
         functions: dict[str, int] = {}
+        function_spans: dict[str, Span] = {}
         for item in items:
             if type(item).__name__ == "Function" and declare(item, "function"):
                 functions[item.name] = len(item.params)
+                function_spans[item.name] = self.span(item)
         tx_queries = {q.name: q for q in items if type(q).__name__ == "Query"
                       and declare(q, "query")}
         self.declared = {i.name: _WHAT.get(type(i).__name__, "name") for i in items
@@ -131,7 +133,7 @@ class _Linker:
             name=tx.name or "specification", path=self.source.path, parameters=parameters,
             functions=functions, queries=tuple(queries), query_events=tuple(query_events),
             complex_events=tuple(complex_events), signals=tuple(signals.values()),
-            requirements=tuple(requirements))
+            requirements=tuple(requirements), function_spans=function_spans)
 
     def _check_parameters(self, items: list[Any], params: dict[str, float]) -> None:
         spans = {p.name: p for i in items if type(i).__name__ == "Parameters" for p in i.params}

@@ -7,7 +7,7 @@ objects into its records or anything of the runtime.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Literal
 
 from rei.lang.errors import Span
@@ -259,6 +259,8 @@ class Specification:
     complex_events: tuple[ComplexEvent, ...]
     signals: tuple[Signal, ...]
     requirements: tuple[Requirement, ...]
+    function_spans: dict[str, Span] = field(default_factory=dict)
+    """Where each user function is declared (errors about its registration point there)."""
 
     @property
     def hysteresis(self) -> float:
