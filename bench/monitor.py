@@ -68,8 +68,10 @@ def scenario(n_objects: int, n_samples: int, seed: int = 0) -> tuple[StreamHeade
             Box(0.6, 0.4)
         objects.append(ObservedObject(f"o{i}", kind, kind, fp, 1.0))  # type: ignore[arg-type]
         poses[i] = (rng.uniform(0, side), rng.uniform(0, side), rng.uniform(-math.pi, math.pi))
+    # a floor tile under every metre of the area, as a generated room has
+    floors = tuple((f"f_{i}_{j}", float(i), float(j)) for i in range(side) for j in range(side))
     header = StreamHeader(SCHEMA_VERSION, "bench", "bench", seed, 10.0, ROBOT, tuple(objects),
-                          1.0, (), MOUNT)
+                          1.0, floors, MOUNT)
     samples = []
     laser_min = MAX_RANGE
     for k in range(n_samples):

@@ -78,8 +78,9 @@ RULES: tuple[Rule, ...] = (
     Rule("TRAJ-START", "room", "a trajectory starts on its object's floor"),
     Rule("TRAJ-BLOCKED", "room", "no trajectory vertex lies on a floor with a standing object",
          "thesis 4.1.2"),
-    Rule("TRAJ-CROSSES", "room", "the straight way between consecutive trajectory vertices "
-         "stays on floors free of walls and standing objects"),
+    Rule("TRAJ-CROSSES", "room", "the curve a moving body walks (the Catmull-Rom spline through "
+         "its timed vertices, swept with its footprint's radius) stays on the floors, clear of "
+         "walls and standing objects", "thesis 4.2.1"),
     Rule("TRAJ-UNREACHABLE", "room", "trajectory vertices lie where the robot can reach"),
     Rule("HUMAN-BEHAVIOUR", "room", "a human's behaviour is scripted, yielding or social"),
     Rule("MISSION-ROOM", "mission", "the imported room exists and is valid"),
@@ -88,9 +89,12 @@ RULES: tuple[Rule, ...] = (
     Rule("GOAL-UNREACHABLE", "mission", "the robot's footprint can reach every goal from its "
          "start (path search on the floor graph without blocked floors)"),
     Rule("VEPL-UNKNOWN", "vepl", "every referenced name is declared (queries, events, signals, "
-         "parameters, functions, states), with 'did you mean'"),
-    Rule("VEPL-ARITY", "vepl", "a query has at most one parameter; finds, query events and "
+         "parameters, functions, states) and every kind in object[...] is a role or a "
+         "catalogue type, with 'did you mean'"),
+    Rule("VEPL-ARITY", "vepl", "a query has at most four parameters; finds, query events and "
          "function calls pass the declared number of arguments"),
+    Rule("VEPL-FUNCTION", "vepl", "every declared user function is found in the module "
+         "given with --functions"),
     Rule("VEPL-ORDER", "vepl", "an event is defined before a complex event, signal or "
          "requirement uses it"),
     Rule("VEPL-WINDOW", "vepl", "a time window is more than 0 and at most 1e9 ms"),

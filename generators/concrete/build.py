@@ -20,7 +20,7 @@ from rei.lang.errors import LanguageError
 from rei.lang.mission.document import MissionDocument
 from rei.lang.room.document import RoomDocument
 from rei.lang.room.model import Room, Trajectory
-from rei.lang.room.motion import vertex_times
+from rei.lang.room.spline import vertex_times
 from rei.lang.workspace import Workspace, load_mission
 
 
@@ -30,7 +30,7 @@ def _xy(cell: tuple[int, int], tile: float) -> tuple[float, float]:
 
 def _timed(traj: Trajectory, room: Room, cells: dict[str, tuple[int, int]]) -> TimedTrajectory:
     pts = [_xy(cells[v.floor.name], room.tile_size) for v in traj.vertices]
-    times, pts = vertex_times(traj, pts)  # the very times the checker judged (TRAJ-SPEED)
+    times, pts = vertex_times(pts, [v.time for v in traj.vertices], traj.total_time, traj.loop)
     points = tuple(TimedPoint(t, x, y) for t, (x, y) in zip(times, pts, strict=True))
     return TimedTrajectory(points, traj.loop)
 

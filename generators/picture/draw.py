@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
+import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, FancyArrow, Patch, Rectangle
@@ -18,12 +19,15 @@ from matplotlib.patches import Polygon as PolygonPatch
 
 from rei.catalogue import Box, Cylinder, ObjectType, Polygon
 from rei.generators.concrete import ConcreteMission, ConcreteObject, ConcreteWorld
+from rei.lang.room.spline import CatmullRom, walked_path
 
 WALL_EDGE = "#3a3a40"
 FLOOR_EDGE = "#b8b4a8"
 TRAJECTORY = "#d9480f"
 ROBOT = "#1c7ed6"
 GOAL = "#2b8a3e"
+CURVE_STEP = 0.05
+"""Metres between the drawn points of a walked curve."""
 
 
 def _rotated(points: Sequence[tuple[float, float]], x: float, y: float, yaw: float
@@ -54,18 +58,23 @@ def _label(ax: Axes, text: str, x: float, y: float, size: float, **style: object
 
 
 def _draw_trajectory(ax: Axes, obj: ConcreteObject, compact: bool) -> None:
+    """The curve the body walks (the animator's Catmull-Rom spline, not the straight lines
+    between its vertices), its vertices, and an arrow head per segment."""
     assert obj.trajectory is not None
-    xs = [p.x for p in obj.trajectory.points]
-    ys = [p.y for p in obj.trajectory.points]
-    ax.plot(xs, ys, color=TRAJECTORY, linewidth=1.2, linestyle="--", zorder=5)
-    ax.plot(xs, ys, linestyle="none", marker="o", markersize=3, color=TRAJECTORY, zorder=5)
-    # One arrow head per segment, at its middle, shows the walking direction.
-    for a, b in zip(obj.trajectory.points, obj.trajectory.points[1:], strict=False):
-        dx, dy = b.x - a.x, b.y - a.y
-        if math.hypot(dx, dy) < 1e-9:
+    points = obj.trajectory.points
+    spline = CatmullRom(np.array([p.t for p in points]), np.array([(p.x, p.y) for p in points]),
+                        obj.trajectory.loop)
+    _, path = walked_path(spline, CURVE_STEP)
+    ax.plot(path[:, 0], path[:, 1], color=TRAJECTORY, linewidth=1.2, linestyle="--", zorder=5)
+    ax.plot([p.x for p in points], [p.y for p in points], linestyle="none", marker="o",
+            markersize=3, color=TRAJECTORY, zorder=5)
+    # One arrow head per segment, half way through its time, shows the walking direction.
+    for a, b in zip(points, points[1:], strict=False):
+        mid = (a.t + b.t) / 2
+        (mx, my), (nx, ny) = spline.position(mid), spline.position(mid + 1e-3 * (b.t - a.t))
+        if math.hypot(nx - mx, ny - my) < 1e-12:
             continue
-        mx, my = (a.x + b.x) / 2, (a.y + b.y) / 2
-        ax.annotate("", xy=(mx + dx * 0.01, my + dy * 0.01), xytext=(mx, my), zorder=5,
+        ax.annotate("", xy=(nx, ny), xytext=(mx, my), zorder=5,
                     arrowprops={"arrowstyle": "-|>", "color": TRAJECTORY, "lw": 1.2})
     if not compact:
         last = len(obj.trajectory.points) - (1 if obj.trajectory.loop else 0)

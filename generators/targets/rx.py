@@ -24,9 +24,10 @@ from rei.lang.vepl.document import load_vepl
 from rei.lang.vepl.linker import NAMED_STATES
 
 OUTPUT = "automata.py"
-FORMAT_VERSION = 3
+FORMAT_VERSION = 4
 """Must equal rei.runtime.monitor.automata.FORMAT_VERSION (3: commands, approach, failure
-causes, scenario facts, requirement premises)."""
+causes, scenario facts, requirement premises; 4: queries with several parameters, the floors
+of objects and goals)."""
 INTERPOLATED = {"laser_min", "laser_clearance", "speed", "time", "odom_error", "turn_rate",
                 "yaw_rate"}
 """Measures that change continuously between samples (crossings are replayed in order)."""
@@ -41,8 +42,8 @@ def _states(kind: str) -> tuple[str, ...]:
 @dataclass(frozen=True)
 class _QueryCode:
     name: str
-    domain: str
-    kinds: tuple[str, ...]
+    domains: tuple[str, ...]
+    kinds: tuple[tuple[str, ...], ...]
     signature: str
     strict: str
     relaxed: str | None
@@ -50,16 +51,42 @@ class _QueryCode:
     """The condition already has the domain's shape (it reads the parameter)."""
 
     def shape(self, expr: str) -> str:
-        """Object/floor/task queries return an array over their domain; others a boolean."""
-        if not self.domain:
+        """Queries with parameters return an array over the cross product of their domains
+        (one axis per parameter, in order); others a boolean."""
+        if not self.domains:
             return f"np.asarray({expr}, dtype=bool)"
-        mask = ""
-        if self.kinds:
-            mask = " | ".join(f"w.kind({k!r})" for k in self.kinds)
-            mask = f"({mask}) & " if len(self.kinds) > 1 else f"{mask} & "
-        if self.shaped:
+        n = len(self.domains)
+        masks = []
+        for axis, kinds in enumerate(self.kinds):
+            if kinds:
+                mask = " | ".join(f"w.kind({k!r})" for k in kinds)
+                mask = f"({mask})" if len(kinds) > 1 else mask
+                masks.append(mask if n == 1 else f"w.along({mask}, {axis}, {n})")
+        mask = "".join(f"{m} & " for m in masks)
+        if self.shaped and n == 1:
             return f"{mask}{expr}"
-        return f"{mask}np.broadcast_to({expr}, (w.n_{self.domain},))"
+        size = ", ".join(f"w.n_{d}" for d in self.domains) + ("," if n == 1 else "")
+        code = f"{mask}np.broadcast_to({expr}, ({size}))"
+        return code if n == 1 else _wrap(code)
+
+
+def _wrap(code: str, indent: int = 8, width: int = 88) -> str:
+    """Break a long expression after its ``&`` and ``|`` (and the commas of its outer call),
+    only inside parentheses so the break is legal Python, lines about ``width`` long."""
+    lines: list[str] = []
+    depth = 0
+    start = 0
+    last_break = -1
+    for i, ch in enumerate(code):
+        depth += ch in "([{"
+        depth -= ch in ")]}"
+        if ch == " " and depth > 0 and (code[i - 1] in "&|" or (code[i - 1] == "," and depth == 1)):
+            if i - start > width - indent and last_break > start:
+                lines.append(code[start:last_break].rstrip())
+                start = last_break + 1
+            last_break = i
+    lines.append(code[start:])
+    return f"\n{' ' * indent}".join(line.strip() if k else line for k, line in enumerate(lines))
 
 
 class _Writer:
@@ -69,6 +96,14 @@ class _Writer:
     def __init__(self, query: vm.Query, hysteresis: float) -> None:
         self.query = query
         self.h = hysteresis
+        self.axes = {p.name: i for i, p in enumerate(query.params)}
+        self.n = len(query.params)
+
+    def along(self, code: str, var: vm.Expr) -> str:
+        """``code``, an array over the domain of ``var``, on that parameter's axis."""
+        if self.n <= 1 or not isinstance(var, vm.Var):
+            return code
+        return f"w.along({code}, {self.axes[var.name]}, {self.n})"
 
     def code(self, e: vm.Expr, relaxed: bool, positive: bool = True) -> str:
         def c(x: vm.Expr) -> str:
@@ -79,19 +114,28 @@ class _Writer:
         if isinstance(e, vm.Measure):
             return f"w.{e.name}"
         if isinstance(e, vm.Var):
-            domain = self.query.param.domain if self.query.param else "object"
-            return f"w.indices({domain!r})"
+            domain = self.query.params[self.axes[e.name]].domain if self.n else "object"
+            return self.along(f"w.indices({domain!r})", e)
         if isinstance(e, vm.Call):
+            last = e.args[-1] if e.args else None
             if e.function == "distance":
-                return "w.distance"
+                return self.along("w.distance", e.args[1])
             if e.function == "on":
-                return "w.robot_floor"
-            if e.function == "state":
-                return "w.task_state"
-            if e.function == "failure":
-                return "w.task_failure"
-            if e.function == "approach":
-                return "w.approach"
+                floor = e.args[1]
+                if isinstance(e.args[0], vm.Var) and e.args[0].name in self.axes:
+                    assert isinstance(floor, vm.Var)
+                    return (f"w.on_floor({self.axes[e.args[0].name]}, "
+                            f"{self.axes[floor.name]}, {self.n})")
+                return self.along("w.robot_floor", floor)
+            if e.function in ("state", "failure", "approach", "goal") and last is not None:
+                array = {"state": "w.task_state", "failure": "w.task_failure",
+                         "approach": "w.approach", "goal": "w.goal_floor"}[e.function]
+                return self.along(array, last)
+            if e.function == "neighbours":
+                a, b = e.args
+                assert isinstance(a, vm.Var) and isinstance(b, vm.Var)
+                return (f"w.pair(w.floor_adjacent, {self.axes[a.name]}, {self.axes[b.name]}, "
+                        f"{self.n})")
             args = "".join(", " + c(a) for a in e.args)
             return f"w.call({e.function!r}{args})"
         if isinstance(e, vm.Arith):
@@ -117,12 +161,25 @@ class _Writer:
             return f"({left} {e.op} {right})"
         if isinstance(e, vm.BoolOp):
             joiner = " & " if e.op == "and" else " | "
+            facts = [x for x in e.operands if not _reads_parameter(x)]
+            if e.op == "and" and self.n > 1 and facts and len(facts) < len(e.operands):
+                # Scenario facts first, and the arrays over the domains' cross product (a
+                # large room's floors by floors) only when the facts hold.
+                rest = [x for x in e.operands if _reads_parameter(x)]
+                return (f"(np.bool_({' & '.join(c(x) for x in facts)}) and "
+                        f"({' & '.join(c(x) for x in rest)}))")
             return "(" + joiner.join(c(x) for x in e.operands) + ")"
         if isinstance(e, vm.Not):
             return f"~{self.code(e.operand, relaxed, not positive)}"
         if isinstance(e, vm.Find):
             ref = f"q[{e.query!r}]"
-            inner = ref if e.arg is not None else f"{ref}.any()"
+            axes = tuple(None if a is None else self.axes[a] for a in e.args)
+            if all(a is None for a in axes):
+                inner = f"{ref}.any()"
+            elif axes == (0,) and self.n == 1:
+                inner = ref
+            else:
+                inner = f"w.bind({ref}, {axes!r}, {self.n})"
             return f"~{inner}" if e.negated else inner
         raise GenerationError(f"cannot generate code for {e!r}")
 
@@ -182,7 +239,7 @@ def _children(e: vm.Expr) -> tuple[vm.Expr, ...]:
 
 def _reads_parameter(e: vm.Expr) -> bool:
     # distance(robot, o), on(robot, f), state(t): arrays over the domain
-    return any(isinstance(n, vm.Var) or (isinstance(n, vm.Find) and n.arg is not None)
+    return any(isinstance(n, vm.Var) or (isinstance(n, vm.Find) and any(n.args))
                or (isinstance(n, vm.Call) and not n.user) for n in _nodes(e))
 
 
@@ -268,11 +325,11 @@ def _flat(value: Any) -> str:
 
 
 def _signature(q: vm.Query, path: str) -> str:
-    param = ""
-    if q.param:
-        kinds = f"[{', '.join(q.param.kinds)}]" if q.param.kinds else ""
-        param = f"{q.param.name}: {q.param.domain}{kinds}"
-    return f"query {q.name}({param}), {path} line {q.span.line}."
+    params = []
+    for p in q.params:
+        kinds = f"[{', '.join(p.kinds)}]" if p.kinds else ""
+        params.append(f"{p.name}: {p.domain}{kinds}")
+    return f"query {q.name}({', '.join(params)}), {path} line {q.span.line}."
 
 
 def _event_refs(p: vm.Pattern) -> list[str]:
@@ -303,10 +360,10 @@ def render_module(spec: vm.Specification, source_name: str) -> str:
         if relaxed == strict:
             relaxed = None
         w.margins(q.condition, margins)
-        queries.append(_QueryCode(q.name, q.param.domain if q.param else "",
-                                  q.param.kinds if q.param else (),
+        queries.append(_QueryCode(q.name, tuple(p.domain for p in q.params),
+                                  tuple(p.kinds for p in q.params),
                                   _signature(q, source_name), strict, relaxed,
-                                  q.param is not None and _reads_parameter(q.condition)))
+                                  bool(q.params) and _reads_parameter(q.condition)))
     complex_events = [
         {"name": c.name, "text": c.text, "context": c.context,
          "context_text": "strict immediate" if c.context == "strict" else c.context,

@@ -1,16 +1,19 @@
-"""Room rules that need the catalogue or the layout: types, sizes, overlaps, reachability."""
+"""Room rules that need the catalogue or the layout: types, sizes, overlaps, reachability,
+and the curves moving bodies walk."""
 
 from __future__ import annotations
 
 import math
-from itertools import pairwise
+from typing import cast
 
 import networkx as nx
+import numpy as np
 
 from rei.catalogue import Catalogue, ObjectType, Tile
 from rei.lang.errors import Diagnostic
 from rei.lang.room.layout import Layout
 from rei.lang.room.model import PlacedObject, Room
+from rei.lang.room.spline import CatmullRom, vertex_times, walked_path
 from rei.lang.suggest import did_you_mean
 
 ROLE_KIND = {"static": "static", "dynamic": "dynamic", "human": "human", "robot": "robot"}
@@ -105,7 +108,6 @@ def check_placement(room: Room, layout: Layout) -> list[Diagnostic]:
                                   f"found '{other.name}' already on '{floor}'"))
         else:
             first_on[floor] = obj
-    out.extend(_check_trajectory_ways(room, layout))
     reachable = passable_floors(room, layout)
     blocked = {o.floor.name: o for o in blocking_objects(room)}
     if room.robot is None or not reachable:
@@ -128,53 +130,123 @@ def check_placement(room: Room, layout: Layout) -> list[Diagnostic]:
     return out
 
 
-_WAY_STEP = 0.1
-"""Sampling step along a trajectory's way between vertices, in tiles."""
+_PATH_STEP = 0.02
+"""Metres between the points of a walked curve that the clearance check looks at."""
+_CLEAR_SLACK = 1e-6
+"""Metres a disc may graze a wall or object before it counts as crossing it (rounding)."""
 
 
-def _check_trajectory_ways(room: Room, layout: Layout) -> list[Diagnostic]:
-    """The straight way between consecutive vertices stays on floors free of standing objects.
+def check_trajectories(room: Room, layout: Layout, catalogue: Catalogue) -> list[Diagnostic]:
+    """TRAJ-CROSSES: the curve a moving body walks keeps its footprint off walls, off
+    standing objects and on the floors.
 
-    The animator's spline bends a little around the vertices; the straight way is the check
-    a person would make on a floor plan, and it catches walking through walls and furniture.
+    The animator moves humans and dynamic objects along the Catmull-Rom spline through their
+    timed vertices (rei.lang.room.spline), which overshoots the straight control polygon at
+    sharp or unevenly timed turns; so the check samples that very spline and sweeps the
+    body's disc (the radius the animator gives it: its catalogue footprint's largest half
+    extent) along it. One located error per segment that touches something, at the
+    segment's first vertex, naming the obstacle and how far the body goes into it.
     """
     out: list[Diagnostic] = []
+    tile = room.tile_size
     at_cell = layout.block_at()
-    blocked = {o.floor.name: o.name for o in blocking_objects(room)}
+    obstacles = _standing_obstacles(room, layout, catalogue)
     for obj in room.objects:
         traj = obj.trajectory
-        if traj is None or len(traj.vertices) < 2:
+        otype = catalogue.get(obj.type)
+        if traj is None or len(traj.vertices) < 2 or otype is None:
             continue
         vertices = list(traj.vertices)
         if any(v.floor.name not in layout.cells or v.floor.name not in room.floors
                for v in vertices):
             continue  # unresolved vertices are reported by the linker
-        pairs = list(pairwise(vertices))
-        if traj.loop:
-            pairs.append((vertices[-1], vertices[0]))
-        for start, end in pairs:
-            problem = _first_obstacle(layout.cells[start.floor.name], layout.cells[end.floor.name],
-                                      at_cell, room, blocked)
-            if problem is not None:
-                out.append(Diagnostic(start.span, "TRAJ-CROSSES",
-                                      f"trajectory of '{obj.name}': expected the way from "
-                                      f"'{start.floor.name}' to '{end.floor.name}' to stay on "
-                                      f"free floors, found it crosses {problem}"))
+        cells = [layout.cells[v.floor.name] for v in vertices]
+        times, points = vertex_times([(i * tile, j * tile) for i, j in cells],
+                                     [v.time for v in vertices], traj.total_time, traj.loop)
+        try:
+            spline = CatmullRom(np.array(times), np.array(points), traj.loop)
+        except ValueError:
+            continue  # vertex times out of order are reported by the linker
+        radius = max(otype.footprint.half_extents())
+        t, path = walked_path(spline, _PATH_STEP)
+        rects, names = _obstacles_near(path, radius, tile, at_cell, obstacles)
+        if not len(rects):
+            continue
+        depth = _penetration(path, radius, rects)  # (N, M)
+        worst = depth.max(axis=1)
+        segment = np.clip(np.searchsorted(spline.t, t, side="right") - 1, 0, len(times) - 2)
+        for k in range(len(times) - 1):
+            here = np.flatnonzero((segment == k) & (worst > _CLEAR_SLACK))
+            if not len(here):
+                continue
+            at = int(here[np.argmax(worst[here])])
+            hit = int(np.argmax(depth[at]))
+            start = vertices[k]
+            end = vertices[(k + 1) % len(vertices)]
+            x, y = float(path[at, 0]), float(path[at, 1])
+            out.append(Diagnostic(start.span, "TRAJ-CROSSES",
+                                  f"trajectory of '{obj.name}': expected the curve it walks "
+                                  f"from '{start.floor.name}' to '{end.floor.name}' (a "
+                                  f"Catmull-Rom spline, its footprint {radius:.2f} m round) "
+                                  f"to stay clear, found it {worst[at]:.2f} m into "
+                                  f"{names[hit]} near ({x:.2f}, {y:.2f}) m"))
     return out
 
 
-def _first_obstacle(a: tuple[int, int], b: tuple[int, int], at_cell: dict[tuple[int, int], str],
-                    room: Room, blocked: dict[str, str]) -> str | None:
-    steps = max(1, int(math.hypot(b[0] - a[0], b[1] - a[1]) / _WAY_STEP))
-    for k in range(steps + 1):
-        t = k / steps
-        cell = (math.floor(a[0] + (b[0] - a[0]) * t + 0.5),
-                math.floor(a[1] + (b[1] - a[1]) * t + 0.5))
-        name = at_cell.get(cell)
-        if name is None:
-            return f"cell {cell}, where there is no floor"
-        if name in room.walls:
-            return f"the wall '{name}'"
-        if name in blocked:
-            return f"'{blocked[name]}' standing on '{name}'"
-    return None
+_Rect = tuple[float, float, float, float]
+"""Centre x, centre y, half extent x, half extent y (metres, the concrete model's frame)."""
+
+
+def _standing_obstacles(room: Room, layout: Layout, catalogue: Catalogue
+                        ) -> dict[tuple[int, int], tuple[_Rect, str]]:
+    """Walls (whole tiles) and objects that stay where they start (their rotated
+    footprints), by cell."""
+    tile = room.tile_size
+    found: dict[tuple[int, int], tuple[_Rect, str]] = {}
+    for name in room.walls:
+        cell = layout.cells.get(name)
+        if cell is not None:
+            found[cell] = ((cell[0] * tile, cell[1] * tile, tile / 2, tile / 2),
+                           f"the wall '{name}'")
+    for obj in blocking_objects(room):
+        cell = layout.cells.get(obj.floor.name)
+        otype = catalogue.get(obj.type)
+        if cell is None or otype is None or cell in found:
+            continue
+        hx, hy = (tile / 2, tile / 2) if isinstance(otype.footprint, Tile) else \
+            rotated_half_extents(otype, obj.heading_deg)
+        found[cell] = ((cell[0] * tile, cell[1] * tile, hx, hy),
+                       f"'{obj.name}' standing on '{obj.floor.name}'")
+    return found
+
+
+def _obstacles_near(path: np.ndarray, radius: float, tile: float,
+                    at_cell: dict[tuple[int, int], str],
+                    obstacles: dict[tuple[int, int], tuple[_Rect, str]]
+                    ) -> tuple[np.ndarray, list[str]]:
+    """The obstacles of every cell the swept disc can reach: standing ones, and whole tiles
+    where there is no floor."""
+    reach = radius + tile
+    lo = np.floor((path.min(axis=0) - reach) / tile).astype(int)
+    hi = np.ceil((path.max(axis=0) + reach) / tile).astype(int)
+    rects: list[_Rect] = []
+    names: list[str] = []
+    for i in range(int(lo[0]), int(hi[0]) + 1):
+        for j in range(int(lo[1]), int(hi[1]) + 1):
+            if (i, j) in obstacles:
+                rect, name = obstacles[(i, j)]
+            elif (i, j) not in at_cell:
+                rect, name = (i * tile, j * tile, tile / 2, tile / 2), \
+                    f"cell ({i}, {j}), where there is no floor"
+            else:
+                continue
+            rects.append(rect)
+            names.append(name)
+    return np.array(rects, dtype=float).reshape(-1, 4), names
+
+
+def _penetration(path: np.ndarray, radius: float, rects: np.ndarray) -> np.ndarray:
+    """How far (m) a disc at each point reaches into each rectangle (<= 0: clear)."""
+    dx = np.maximum(np.abs(path[:, None, 0] - rects[None, :, 0]) - rects[None, :, 2], 0.0)
+    dy = np.maximum(np.abs(path[:, None, 1] - rects[None, :, 1]) - rects[None, :, 3], 0.0)
+    return cast(np.ndarray, radius - np.hypot(dx, dy))

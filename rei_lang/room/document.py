@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from rei.catalogue import Catalogue, CatalogueError, load_catalogue
 from rei.lang.errors import Diagnostic, sorted_diagnostics
 from rei.lang.parsing import parse
-from rei.lang.room.checks import check_placement, check_types
+from rei.lang.room.checks import check_placement, check_trajectories, check_types
 from rei.lang.room.layout import Layout, compute_layout
 from rei.lang.room.linker import link_room
 from rei.lang.room.model import Room
@@ -53,5 +53,6 @@ def analyse_room(source: SourceText | Diagnostic) -> RoomDocument:
                                       f"'{room.catalogue_path}'"))
     if catalogue is not None:
         diagnostics.extend(check_types(room, catalogue))
+        diagnostics.extend(check_trajectories(room, layout, catalogue))
     diagnostics.extend(check_placement(room, layout))
     return RoomDocument(source, room, layout, catalogue, tuple(sorted_diagnostics(diagnostics)))

@@ -1,9 +1,9 @@
 """When a trajectory reaches each vertex, and whether the animator can walk it (TRAJ-SPEED).
 
-``vertex_times`` is the one place that turns a trajectory as written (vertex times, or a
-``total`` time shared out by length, and a loop's way back) into timed control points: the
-generators write exactly these, and the checker judges exactly these, so what
-`rei-gen check` accepts is what the animator is given. A body must not have to move faster
+``rei.lang.room.spline.vertex_times`` is the one place that turns a trajectory as written
+(vertex times, or a ``total`` time shared out by length, and a loop's way back) into timed
+control points: the generators write exactly these, and this check judges exactly these, so
+what `rei-gen check` accepts is what the animator is given. A body must not have to move faster
 than MAX_BODY_SPEED, nor reach a vertex sooner than MIN_SEGMENT_TIME after the one before
 (generated files keep times to the microsecond: closer vertices would share a time, which
 no spline can pass through). This module must never import the generators or the runtime.
@@ -12,11 +12,12 @@ no spline can pass through). This module must never import the generators or the
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from itertools import pairwise
 
 from rei.lang.errors import Diagnostic
-from rei.lang.room.model import Room, Trajectory
+from rei.lang.room.model import Room
+from rei.lang.room.spline import vertex_times
 
 MAX_BODY_SPEED = 10.0
 """m/s along the straight way between two vertices: a sprinter, seven times a walker
@@ -24,34 +25,6 @@ MAX_BODY_SPEED = 10.0
 MIN_SEGMENT_TIME = 0.01
 """s between two consecutive vertices: one physics step at the default 100 Hz."""
 
-Point = tuple[float, float]
-
-
-def vertex_times(trajectory: Trajectory, points: Sequence[Point]
-                 ) -> tuple[list[float], list[Point]]:
-    """Times and points of a trajectory's control vertices (``points`` in metres, one per
-    written vertex); a loop gains its way back to the first vertex, walked at the
-    trajectory's mean speed, unless it already ends there."""
-    pts = list(points)
-    if trajectory.total_time is None:
-        times = [float(v.time or 0.0) for v in trajectory.vertices]
-        if trajectory.loop:
-            length = sum(math.dist(a, b) for a, b in pairwise(pts))
-            speed = length / (times[-1] - times[0]) if times[-1] > times[0] else 0.0
-            back = math.dist(pts[-1], pts[0])
-            if back > 0.0 or len(pts) < 3:
-                times.append(times[-1] + (back / speed if speed > 0 else times[-1] - times[0]))
-                pts.append(pts[0])
-        return times, pts
-    if trajectory.loop and (math.dist(pts[-1], pts[0]) > 0.0 or len(pts) < 3):
-        pts.append(pts[0])
-    seg = [math.dist(a, b) for a, b in pairwise(pts)]
-    total_len = sum(seg)
-    times = [0.0]
-    for s in seg:
-        share = s / total_len if total_len > 0 else 1.0 / len(seg)
-        times.append(times[-1] + share * trajectory.total_time)
-    return times, pts
 
 
 def check_motion(room: Room, cells: Mapping[str, tuple[int, int]]) -> list[Diagnostic]:
@@ -75,7 +48,8 @@ def check_motion(room: Room, cells: Mapping[str, tuple[int, int]]) -> list[Diagn
             continue  # TRAJ-TIMES: times must increase
         points = [(cells[v.floor.name][0] * tile, cells[v.floor.name][1] * tile)
                   for v in written]
-        times, pts = vertex_times(traj, points)
+        times, pts = vertex_times(points, [v.time for v in written], traj.total_time,
+                                  traj.loop)
         for i, ((t0, t1), (p0, p1)) in enumerate(zip(pairwise(times), pairwise(pts),
                                                      strict=True)):
             span = written[i + 1].span if i + 1 < len(written) else traj.span

@@ -1,13 +1,14 @@
 """From a parsed .vepl to the typed Specification, with every semantic problem located.
 
-Rules (ids in the report / rei.lang.rules): VEPL-UNKNOWN (a name that is not declared, with
-'did you mean'), VEPL-ARITY (wrong number of arguments), VEPL-ORDER (an event used before it
-is defined), VEPL-WINDOW (a time window that is not positive), VEPL-TYPE (an expression that
-mixes kinds of values), VEPL-NOT-WINDOW (a pattern ending in NOT without a window),
-VEPL-MULTIPLICITY ({n} below 1 or not whole), VEPL-CYCLE (queries finding each other in a
-circle), VEPL-PARAM (ε_collision < ε_close, hysteresis >= 0), VEPL-LIMIT (a pattern or a
-condition too big for the generated automata to run), plus the shared NAME-UNIQUE,
-NUM-FINITE and NUM-RANGE. This module must never import the runtime.
+Rules (ids in the report / rei.lang.rules): VEPL-UNKNOWN (a name that is not declared, or a
+kind of object that is neither a role nor a catalogue type, with 'did you mean'), VEPL-ARITY
+(too many query parameters, or uses whose arguments do not match the declaration), VEPL-ORDER
+(an event used before it is defined), VEPL-WINDOW (a time window that is not positive),
+VEPL-TYPE (an expression that mixes kinds of values), VEPL-NOT-WINDOW (a pattern ending in NOT
+without a window), VEPL-MULTIPLICITY ({n} below 1 or not whole), VEPL-CYCLE (queries finding
+each other in a circle), VEPL-PARAM (ε_collision < ε_close, hysteresis >= 0), VEPL-LIMIT (a
+pattern or a condition too big for the generated automata to run), plus the shared
+NAME-UNIQUE, NUM-FINITE and NUM-RANGE. This module must never import the runtime.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from typing import Any, Literal
 
 import networkx as nx
 
+from rei.catalogue import default_catalogue
 from rei.lang.errors import Diagnostic, Span
 from rei.lang.numbers import read_number
 from rei.lang.parsing import span_of
@@ -36,10 +38,21 @@ MAX_CONDITION_SIZE = 2000
 """Operators and operands in one query's condition: the generated condition is one Python
 expression (a sum of 1,000 terms), and Python compiles a chain of a few thousand
 operators only with a deeper stack than a run has to spare."""
-BUILTINS = {"distance": 2, "on": 2, "state": 1, "failure": 1, "approach": 1}
+BUILTINS = {"distance": 2, "on": 2, "state": 1, "failure": 1, "approach": 1, "goal": 1,
+            "neighbours": 2}
+_WHAT = {"Function": "function", "Query": "query", "QueryEvent": "query event",
+         "ComplexEvent": "complex event", "Signal": "signal", "Requirement": "requirement"}
 NAMED_STATES = {"mission_state": m.MISSION_STATES,
                 "nav_state": ("idle", "pending", "active", "succeeded", "aborted", "preempted")}
 ROBOT = "robot"
+
+def object_kinds() -> tuple[str, ...]:
+    """What ``object[...]`` may name: a role, or a type of the catalogue that ships with REI
+    that an observed object can have (walls, furniture, people, moving objects)."""
+    types = default_catalogue()
+    return (*m.OBJECT_ROLES, *(n for n in types.names() if types.types[n].kind in m.OBJECT_ROLES
+                               and n not in m.OBJECT_ROLES))
+
 
 Kind = str
 """'num', 'bool', 'task_state', 'mission_state', 'nav_state', 'state_name', 'robot' or
@@ -83,11 +96,17 @@ class _Linker:
                         parameters[p.name] = value
         self._check_parameters(items, parameters)
         functions: dict[str, int] = {}
+        function_spans: dict[str, Span] = {}
         for item in items:
             if type(item).__name__ == "Function" and declare(item, "function"):
                 functions[item.name] = len(item.params)
+                function_spans[item.name] = self.span(item)
         tx_queries = {q.name: q for q in items if type(q).__name__ == "Query"
                       and declare(q, "query")}
+        self.declared = {i.name: _WHAT.get(type(i).__name__, "name") for i in items
+                         if getattr(i, "name", None) and type(i).__name__ != "Parameters"}
+        self.declared.update({p.name: "parameter" for i in items
+                              if type(i).__name__ == "Parameters" for p in i.params})
         self.parameters, self.functions, self.tx_queries = parameters, functions, tx_queries
         queries = self._queries(tx_queries)
         self.queries = {q.name: q for q in queries}
@@ -127,7 +146,7 @@ class _Linker:
             name=tx.name or "specification", path=self.source.path, parameters=parameters,
             functions=functions, queries=tuple(queries), query_events=tuple(query_events),
             complex_events=tuple(complex_events), signals=tuple(signals.values()),
-            requirements=tuple(requirements))
+            requirements=tuple(requirements), function_spans=function_spans)
 
     def _check_parameters(self, items: list[Any], params: dict[str, float]) -> None:
         spans = {p.name: p for i in items if type(i).__name__ == "Parameters" for p in i.params}
@@ -146,17 +165,12 @@ class _Linker:
         graph: nx.DiGraph[str] = nx.DiGraph()
         for name, tx in tx_queries.items():
             graph.add_node(name)
-            if len(tx.params) > 1:
-                self.error(tx.params[1], "VEPL-ARITY", f"query '{name}': expected at most one "
-                                                       f"parameter, found {len(tx.params)}")
-            param = None
-            if tx.params:
-                p = tx.params[0]
-                param = m.QueryParam(p.name, p.domain, tuple(p.kinds or ()))
-                if p.kinds and p.domain != "object":
-                    self.error(p, "VEPL-TYPE", f"expected kinds only on an object parameter, "
-                                               f"found them on a {p.domain}")
-            self.scope = {param.name: param} if param else {}
+            if len(tx.params) > m.MAX_QUERY_PARAMS:
+                self.error(tx.params[m.MAX_QUERY_PARAMS], "VEPL-ARITY",
+                           f"query '{name}': expected at most {m.MAX_QUERY_PARAMS} parameters, "
+                           f"found {len(tx.params)}")
+            params = self._params(name, tx.params[:m.MAX_QUERY_PARAMS])
+            self.scope = {p.name: p for p in params}
             self.current = name
             self.finds: list[str] = []
             parts = [self._constraint(c) for c in tx.constraints]
@@ -173,7 +187,7 @@ class _Linker:
                 self.error(tx, "VEPL-LIMIT", f"query '{name}': expected a condition of at most "
                                              f"{MAX_CONDITION_SIZE} operators and operands, "
                                              f"found {size}")
-            linked[name] = m.Query(name, param, condition, self.span(tx))
+            linked[name] = m.Query(name, params, condition, self.span(tx))
         order = {n: i for i, n in enumerate(tx_queries)}
         for found in sorted(nx.simple_cycles(graph),
                             key=lambda c: sorted(map(order.__getitem__, c))):
@@ -185,6 +199,38 @@ class _Linker:
             return list(linked.values())
         return [linked[n] for n in nx.lexicographical_topological_sort(
             graph, key=order.__getitem__)]
+
+    def _params(self, query: str, tx_params: list[Any]) -> tuple[m.QueryParam, ...]:
+        params: list[m.QueryParam] = []
+        for p in tx_params:
+            if p.name in (ROBOT, "_") or any(q.name == p.name for q in params):
+                shown = "a name of its own" if p.name in (ROBOT, "_") else "another name"
+                self.error(p, "NAME-UNIQUE", f"query '{query}': expected {shown} for the "
+                                             f"parameter, found '{p.name}'")
+                continue
+            kinds = tuple(p.kinds or ())
+            if kinds and p.domain != "object":
+                self.error(p, "VEPL-TYPE", f"expected kinds only on an object parameter, "
+                                           f"found them on a {p.domain}")
+                kinds = ()
+            for kind in kinds:
+                self._check_kind(p, kind)
+            params.append(m.QueryParam(p.name, p.domain, kinds))
+        return tuple(params)
+
+    def _check_kind(self, where: Any, kind: str) -> None:
+        known = object_kinds()
+        if kind in known:
+            return
+        declared = self.declared.get(kind)
+        if declared is not None:
+            found = f"'{kind}', which is a {declared} of this file, not a kind of object"
+        else:
+            found = f"'{kind}'" + did_you_mean(kind, known)
+        types = ", ".join(k for k in known if k not in m.OBJECT_ROLES)
+        self.error(where, "VEPL-UNKNOWN", f"expected a kind of object: a role "
+                                          f"({', '.join(m.OBJECT_ROLES)}) or a catalogue type "
+                                          f"({types}), found {found}")
 
     def _constraint(self, c: Any) -> m.Expr | None:
         if type(c).__name__ == "Find":
@@ -200,22 +246,28 @@ class _Linker:
         self.finds.append(c.query)
         if len(c.args) != len(target.params):
             self.error(c, "VEPL-ARITY", f"find '{c.query}': expected {len(target.params)} "
-                                        f"argument(s), found {len(c.args)}")
+                                        f"argument(s) as declared, found {len(c.args)}")
             return None
-        arg = c.args[0] if c.args else None
-        if arg == "_":
-            arg = None
-        if arg is not None:
+        args: list[str | None] = []
+        for arg, param in zip(c.args, target.params, strict=True):
+            if arg == "_":
+                args.append(None)
+                continue
             if arg not in self.scope:
                 self.error(c, "VEPL-UNKNOWN", f"expected this query's parameter or '_', found "
                                               f"'{arg}'" + did_you_mean(arg, self.scope))
                 return None
-            if self.scope[arg].domain != target.params[0].domain:
-                self.error(c, "VEPL-TYPE", f"find '{c.query}': expected a "
-                                           f"{target.params[0].domain}, found the "
+            if self.scope[arg].domain != param.domain:
+                self.error(c, "VEPL-TYPE", f"find '{c.query}': expected a {param.domain} for "
+                                           f"'{param.name}', found the "
                                            f"{self.scope[arg].domain} '{arg}'")
                 return None
-        return m.Find(c.query, arg, bool(c.negated))
+            if arg in args:
+                self.error(c, "VEPL-ARITY", f"find '{c.query}': expected each parameter "
+                                            f"passed once, found '{arg}' twice")
+                return None
+            args.append(arg)
+        return m.Find(c.query, tuple(args), bool(c.negated))
 
     def kind_of(self, e: m.Expr) -> Kind:
         if isinstance(e, m.Num | m.Arith):
@@ -228,7 +280,8 @@ class _Linker:
             return "var:" + self.scope[e.name].domain if e.name in self.scope else "robot"
         if isinstance(e, m.Call):
             return {"distance": "num", "on": "bool", "state": "task_state",
-                    "failure": "task_failure", "approach": "num"}.get(e.function, "num")
+                    "failure": "task_failure", "approach": "num", "goal": "bool",
+                    "neighbours": "bool"}.get(e.function, "num")
         return "bool"
 
     def _expr(self, e: Any) -> m.Expr | None:
@@ -338,11 +391,16 @@ class _Linker:
         kinds = [self.kind_of(a) for a in typed]
         expected = {"distance": ["robot", "var:object"], "on": ["robot", "var:floor"],
                     "state": ["var:task"], "failure": ["var:task"],
-                    "approach": ["var:object"]}.get(name)
+                    "approach": ["var:object"], "goal": ["var:floor"],
+                    "neighbours": ["var:floor", "var:floor"]}.get(name)
+        if name == "on" and kinds == ["var:object", "var:floor"]:
+            expected = kinds  # the inverse map: the floor an object stands on (thesis 5.1)
         if expected is not None and kinds != expected:
             shown = {"robot": "robot", "var:object": "an object parameter",
                      "var:floor": "a floor parameter", "var:task": "a task parameter"}
             wanted = ", ".join(shown[k] for k in expected)
+            if name == "on":
+                wanted = "robot or an object parameter, a floor parameter"
             got = ", ".join(shown.get(k, "a " + k) for k in kinds)
             self.error(e, "VEPL-TYPE", f"'{name}': expected ({wanted}), found ({got})")
             return None

@@ -7,12 +7,16 @@ objects into its records or anything of the runtime.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Literal
 
 from rei.lang.errors import Span
 
 Domain = Literal["object", "floor", "task"]
+MAX_QUERY_PARAMS = 4
+"""Parameters a query may have (the thesis's largest VIATRA pattern has four)."""
+OBJECT_ROLES = ("wall", "static", "dynamic", "human")
+"""Kinds an object parameter may name besides catalogue types (``object[human]``)."""
 ContextKind = Literal["chronicle", "immediate", "strict"]
 CompareOp = Literal["<", "<=", ">", ">=", "==", "!="]
 
@@ -28,7 +32,7 @@ limit ran out first, or the run broke), cut (the run was stopped early by the us
 SCALAR_MEASURES = ("laser_min", "laser_clearance", "speed", "time", "odom_error",
                    "robot_inradius", "robot_circumradius", "cmd_speed", "cmd_turn",
                    "turn_rate", "yaw_rate", "yaw", "speed_limit", "turn_limit", "humans",
-                   "dynamic_objects", "cycles", "headed_goals")
+                   "dynamic_objects", "cycles", "headed_goals", "goals", "neighbouring_goals")
 """Names an expression may read from the robot description (and the scenario's facts)
 without arguments; docs/vepl.md says what each means."""
 
@@ -97,11 +101,12 @@ class Not:
 
 @dataclass(frozen=True)
 class Find:
-    """``find q(x)`` / ``neg find q(_)``: another query's matches (``_`` = any match)."""
+    """``find q(x, _)`` / ``neg find q(_)``: another query's matches, joined with this
+    query's parameters on the variables they share (``_`` = any value there)."""
 
     query: str
-    arg: str | None
-    """The variable bound to the other query's parameter, None for '_' or no parameter."""
+    args: tuple[str | None, ...]
+    """Per parameter of the other query: this query's variable bound to it, None for '_'."""
     negated: bool
 
 
@@ -119,8 +124,9 @@ class QueryParam:
 @dataclass(frozen=True)
 class Query:
     name: str
-    param: QueryParam | None
-    """At most one parameter: a query matches per object, floor or task, or just holds."""
+    params: tuple[QueryParam, ...]
+    """Up to MAX_QUERY_PARAMS parameters: a query matches per combination of objects, floors
+    and tasks (the cross product of their domains, filtered by the condition), or just holds."""
     condition: Expr
     span: Span
 
@@ -253,6 +259,8 @@ class Specification:
     complex_events: tuple[ComplexEvent, ...]
     signals: tuple[Signal, ...]
     requirements: tuple[Requirement, ...]
+    function_spans: dict[str, Span] = field(default_factory=dict)
+    """Where each user function is declared (errors about its registration point there)."""
 
     @property
     def hysteresis(self) -> float:

@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rei.lang.room.model import DEFAULT_BEHAVIOUR, WALKING_SPEEDS, Behaviour
+from rei.lang.room.spline import CatmullRom
 from rei.runtime.animator.reactive import (
     Agent,
     SocialForce,
@@ -34,7 +35,6 @@ from rei.runtime.animator.reactive import (
     social_acceleration,
     speed_share,
 )
-from rei.runtime.animator.spline import CatmullRom
 from rei.runtime.animator.variation import (
     NO_VARIATION,
     HumanVariation,

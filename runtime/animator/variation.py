@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rei.lang.room.model import WALKING_SPEEDS
-from rei.runtime.animator.spline import CatmullRom
+from rei.lang.room.spline import CatmullRom
 
 VARIATION_STREAM = 1
 """Second word of the variations' seed sequence (the run's own stream is the seed alone)."""

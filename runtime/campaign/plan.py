@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from rei.runtime.campaign.errors import CampaignError
+from rei.runtime.monitor.functions import load_functions
 
 PLAN_VERSION = 1
 
@@ -49,6 +50,8 @@ class RunSpec:
     itself, or its static twin) belongs to; empty in an unpaired campaign."""
     variation: bool = True
     """False: `rei run --no-variation` (no seeded start-pose jitter: the exact declared scene)."""
+    functions: str | None = None
+    """`rei run --functions`: the module of the specification's user functions."""
 
     def to_json(self) -> dict[str, Any]:
         data = {"run_id": self.run_id, "mission_file": self.mission_file,
@@ -59,6 +62,8 @@ class RunSpec:
             data.update(static_pair=self.static_pair, pair=self.pair)
         if not self.variation:
             data["variation"] = False
+        if self.functions:
+            data["functions"] = self.functions
         return data
 
     @staticmethod
@@ -76,6 +81,8 @@ class RunSpec:
             argv += ["--duration", _number(self.duration)]
         if not self.variation:
             argv.append("--no-variation")
+        if self.functions:
+            argv += ["--functions", self.functions]
         return argv
 
 
@@ -201,7 +208,7 @@ STATIC = "static"
 def plan_campaign(inputs: list[Path], *, repeat: int = 1, seed: int = 0,
                   controller: str | None = None, vepl: Path | None = None,
                   duration: float | None = None, static_dir: Path | None = None,
-                  variation: bool = True) -> CampaignPlan:
+                  variation: bool = True, functions: str | None = None) -> CampaignPlan:
     """Every mission of the inputs, ``repeat`` times, each with its derived seed.
 
     With ``static_dir`` every run is paired with its static twin (same seed, the mission's
@@ -224,6 +231,10 @@ def plan_campaign(inputs: list[Path], *, repeat: int = 1, seed: int = 0,
     if not unique:
         raise CampaignError("no missions to run: name .mission files, folders or a suite index")
     vepl_path = str(vepl.resolve()) if vepl is not None else None
+    if functions is not None and Path(functions).is_file():
+        functions = str(Path(functions).resolve())  # the runs may start elsewhere
+    if functions is not None:
+        load_functions(functions, vepl)  # a bad module stops the plan, not each of its runs
     runs = []
     for entry, stem in zip(unique, _ids(unique), strict=True):
         for k in range(repeat):
@@ -232,7 +243,7 @@ def plan_campaign(inputs: list[Path], *, repeat: int = 1, seed: int = 0,
                 run_id=f"{stem}.{number}", mission_file=str(entry.path), mission_key=entry.key,
                 group=entry.group, repeat=k, seed=derive_seed(seed, entry.key, k),
                 controller=controller, vepl=vepl_path, duration=duration,
-                parameters=entry.parameters, variation=variation)
+                parameters=entry.parameters, variation=variation, functions=functions)
             if static_dir is None:
                 runs.append(run)
                 continue

@@ -87,6 +87,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                              "its module's source)")
     parser.add_argument("--vepl", type=Path, default=None, metavar="FILE",
                         help="monitor specification passed to `rei run`")
+    parser.add_argument("--functions", default=None, metavar="MODULE",
+                        help="module of the specification's user functions, passed to `rei run`")
     parser.add_argument("--duration", type=_seconds, default=None, metavar="S",
                         help="simulated seconds per run, passed to `rei run` (smoke tests)")
     parser.add_argument("--timeout", type=_seconds, default=None, metavar="S",
@@ -133,7 +135,7 @@ def run(args: argparse.Namespace) -> int:
     plan = plan_campaign(list(args.missions), repeat=args.repeat, seed=args.seed,
                          controller=args.controller, vepl=args.vepl, duration=args.duration,
                          static_dir=args.output / STATIC if args.pair_static else None,
-                         variation=not args.no_variation)
+                         variation=not args.no_variation, functions=args.functions)
     engine: CampaignEngine
     if args.engine == "dask":
         if not args.scheduler:

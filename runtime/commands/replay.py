@@ -20,8 +20,8 @@ from rei.runtime.collector.trace import read_trace, read_trace_end
 from rei.runtime.commands.run import write_page
 from rei.runtime.evaluator.summary import merge_summary, write_summary
 from rei.runtime.monitor import MonitorSink, generate_automata
-from rei.runtime.monitor.automata import load_generated
 from rei.runtime.monitor.errors import MonitorError
+from rei.runtime.monitor.functions import load_functions
 from rei.runtime.results import RESULTS_VERSION, Outcome, RunSummary, judge
 
 
@@ -35,23 +35,23 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.add_argument("trace", type=Path, metavar="TRACE", help="a trace.jsonl file")
     parser.add_argument("--vepl", type=Path, default=None, metavar="FILE",
                         help="the specification (default: REI's default.vepl)")
+    parser.add_argument("--functions", default=None, metavar="MODULE",
+                        help="Python module (dotted name or .py file) defining the user "
+                             "functions the specification declares with 'function'")
     parser.add_argument("-o", "--output", type=Path, required=True, metavar="DIR",
                         help="output folder (created if missing)")
     parser.set_defaults(func=run)
 
 
-def replay(trace: Path, vepl: Path | None, out_dir: Path) -> RunSummary:
+def replay(trace: Path, vepl: Path | None, out_dir: Path,
+           functions: str | None = None) -> RunSummary:
     """Monitor ``trace`` into ``out_dir``; the summary (also written as summary.json)."""
     # The specification is checked and generated before the trace is opened: a bad .vepl
     # is reported without touching the trace.
     automata = generate_automata(vepl, Path(out_dir) / "automata", replace=True)
-    needed = sorted(load_generated(automata).FUNCTIONS)
-    if needed:
-        raise MonitorError(f"the specification expected the user function(s) "
-                           f"{', '.join(needed)}, found none registered (`rei replay` has no "
-                           f"way to register them; use MonitorSink(..., functions=...))")
+    user = load_functions(functions, vepl)
     header, samples = read_trace(trace)
-    sink = MonitorSink(vepl, out_dir, automata=automata)
+    sink = MonitorSink(vepl, out_dir, functions=user, automata=automata)
     last = 0.0
     try:
         sink.start(header)
@@ -77,7 +77,7 @@ def replay(trace: Path, vepl: Path | None, out_dir: Path) -> RunSummary:
 
 def run(args: argparse.Namespace) -> int:
     try:
-        summary = replay(args.trace, args.vepl, args.output)
+        summary = replay(args.trace, args.vepl, args.output, args.functions)
     except MonitorError as exc:
         print(f"rei replay: error: {exc}", file=sys.stderr)
         return EXIT_RUN_ERROR

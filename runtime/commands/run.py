@@ -28,6 +28,7 @@ from rei.runtime.commands.run_config import apply_run_config, defer_defaults
 from rei.runtime.errors import RunError
 from rei.runtime.evaluator import merge_summary, write_summary
 from rei.runtime.monitor import MonitorSink, generate_automata
+from rei.runtime.monitor.functions import load_functions
 from rei.runtime.results import RunSummary, judge
 from rei.runtime.robot import BUILT_IN, make_controller
 from rei.runtime.run import RunConfig, RunRecord, generate_world, run_mission, summary_of
@@ -79,6 +80,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.add_argument("--vepl", type=Path, default=None, metavar="FILE",
                         help="monitoring specification: queries, event patterns, signals with "
                              "utilities and requirements (default: REI's default.vepl)")
+    parser.add_argument("--functions", default=None, metavar="MODULE",
+                        help="Python module (dotted name or .py file) defining the user "
+                             "functions the specification declares with 'function'")
     parser.add_argument("--no-monitor", action="store_true",
                         help="record the trace only (monitor it later with `rei replay`)")
     parser.add_argument("--quiet", action="store_true", help="no progress display")
@@ -96,7 +100,8 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
              physics_rate: float = 100.0, odom_drift: float = 0.0,
              sinks: Sequence[SampleSink] = (), progress: IO[str] | None = None,
              vepl: Path | None = None, monitor: bool = True, laser_noise: float | None = None,
-             variation: bool = True) -> tuple[RunSummary, RunRecord]:
+             variation: bool = True, functions: str | None = None
+             ) -> tuple[RunSummary, RunRecord]:
     """Everything `rei run` does: generate, run, monitor with the .vepl's automata (the
     default specification unless ``vepl``; none when ``monitor`` is False), write outputs.
     Extra ``sinks`` see the same stream as the trace and the monitor."""
@@ -120,7 +125,9 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
     # The specification is checked and generated first: a bad .vepl is reported (exit 2)
     # before any world is built.
     automata = generate_automata(vepl, out_dir / "automata", replace=True) if monitor else None
-    monitor_sink = MonitorSink(vepl, out_dir, automata=automata) if monitor else None
+    user = load_functions(functions, vepl) if monitor else {}
+    monitor_sink = MonitorSink(vepl, out_dir, functions=user, automata=automata) \
+        if monitor else None
     world_dir = out_dir / "world"
     mission = generate_world(mission_path, world_dir, replace=True)
     manifest = load_manifest(world_dir)
@@ -168,7 +175,8 @@ def run(args: argparse.Namespace) -> int:
     summary, record = run_into(args.mission, args.output, args.controller, args.seed,
                                args.duration, args.watchdog, args.physics_rate, args.odom_drift,
                                progress=progress, vepl=args.vepl, monitor=not args.no_monitor,
-                               laser_noise=args.laser_noise, variation=not args.no_variation)
+                               laser_noise=args.laser_noise, variation=not args.no_variation,
+                               functions=args.functions)
     rtf = record.duration / record.wall_seconds if record.wall_seconds > 0 else math.inf
     cpu_rtf = record.duration / record.cpu_seconds if record.cpu_seconds > 0 else math.inf
     m = summary.measurements

@@ -14,7 +14,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import ModuleType
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -22,18 +22,21 @@ from rei.lang.vepl import model as vm
 from rei.runtime.monitor.cep import Occurrence
 from rei.runtime.monitor.errors import MonitorError
 
-FORMAT_VERSION = 3
+FORMAT_VERSION = 4
 """Bumped when the generated module's contract changes; the host refuses other versions
 (2: QueryInputs gained ``laser_clearance``; 3: commanded velocity, yaw, approach speed,
-task failure causes, scenario facts and requirement premises)."""
+task failure causes, scenario facts and requirement premises; 4: queries with several
+parameters, the floor of every object, goal floors and floor neighbours)."""
 
 
 @dataclass(frozen=True)
 class QuerySpec:
     name: str
-    domain: str
-    """'object', 'floor', 'task' or '' (the query just holds or not)."""
-    kinds: tuple[str, ...] = ()
+    domains: tuple[str, ...]
+    """Per parameter: 'object', 'floor' or 'task'; none: the query just holds or not. Its
+    matches are a boolean array with one axis per parameter."""
+    kinds: tuple[tuple[str, ...], ...] = ()
+    """Per parameter: the roles or catalogue types an object parameter ranges over."""
 
 
 @dataclass(frozen=True)
@@ -110,6 +113,29 @@ class QueryInputs:
     cycles: float = 1.0
     headed_goals: float = 0.0
     """The mission's cycles and how many of its goals carry a heading."""
+    goals: float = 0.0
+    """How many goals one cycle of the mission has."""
+    neighbouring_goals: float = 0.0
+    """How many consecutive goals of one cycle (g_i, g_i+1) lie on neighbouring floors."""
+    object_floors: Callable[[], np.ndarray] = field(
+        default=lambda: np.zeros(0, dtype=np.int64))
+    """Per object: the index of the floor it stands on, -1 for none (the inverse map of
+    thesis 5.1: from a body's position back to the abstract environment); worked out on first
+    use in a sample, so specifications that never ask pay nothing."""
+    goal_floor: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    """Per floor: a goal of the mission lies on it."""
+    adjacency: Callable[[], np.ndarray] = field(
+        default=lambda: np.zeros((0, 0), dtype=bool))
+    """Floors by floors, the two tiles share an edge: worked out on first use (a large room
+    has thousands of floors, and most specifications never ask)."""
+
+    @property
+    def object_floor(self) -> np.ndarray:
+        return self.object_floors()
+
+    @property
+    def floor_adjacent(self) -> np.ndarray:
+        return self.adjacency()
 
     @property
     def n_object(self) -> int:
@@ -134,6 +160,44 @@ class QueryInputs:
 
     def call(self, name: str, *args: Any) -> Any:
         return self.functions[name](self, *args)
+
+    # ---- queries with several parameters: one array axis per parameter ----------------------
+
+    @staticmethod
+    def along(values: Any, axis: int, ndim: int) -> np.ndarray:
+        """A per-element array of one domain laid along ``axis`` of ``ndim`` axes."""
+        shape = [1] * ndim
+        shape[axis] = -1
+        return np.reshape(np.asarray(values), shape)
+
+    def on_floor(self, object_axis: int, floor_axis: int, ndim: int) -> np.ndarray:
+        """Object (on its axis) stands on floor (on its axis)."""
+        floors = np.arange(len(self.robot_floor))
+        return cast(np.ndarray, self.along(self.object_floor, object_axis, ndim)
+                    == self.along(floors, floor_axis, ndim))
+
+    def pair(self, matrix: np.ndarray, a: int, b: int, ndim: int) -> np.ndarray:
+        """A relation between two parameters (``matrix[i, j]``) laid on their axes."""
+        if a == b:
+            return self.along(np.diagonal(matrix), a, ndim)
+        ordered = matrix if a < b else matrix.T
+        shape = [1] * ndim
+        shape[min(a, b)], shape[max(a, b)] = ordered.shape
+        return np.reshape(ordered, shape)
+
+    def bind(self, matches: Any, axes: tuple[int | None, ...], ndim: int) -> np.ndarray:
+        """Another query's matches joined in: its axis ``k`` goes to this query's axis
+        ``axes[k]``, or is any-reduced where that is None ('_')."""
+        result = np.asarray(matches)
+        dropped = tuple(k for k, a in enumerate(axes) if a is None)
+        if dropped:
+            result = np.asarray(result.any(axis=dropped))
+        kept = [a for a in axes if a is not None]
+        result = np.transpose(result, np.argsort(kept))
+        shape = [1] * ndim
+        for axis, size in zip(sorted(kept), result.shape, strict=True):
+            shape[axis] = size
+        return np.reshape(result, shape)
 
 
 def named(name: str) -> Callable[[Occurrence], bool]:

@@ -69,7 +69,8 @@ class AutomataHost:
         self.header = header
         self.functions = dict(functions or {})
         self.model = RuntimeModel(header, module.DISTANCE_CUTOFF)
-        self.domains = {q.name: q.domain for q in module.QUERIES}
+        self.domains: dict[str, tuple[str, ...]] = {q.name: tuple(q.domains)
+                                                    for q in module.QUERIES}
         self.lost_first: tuple[QueryEventSpec, ...] = tuple(
             e for e in module.QUERY_EVENTS if not e.found) + tuple(
             e for e in module.QUERY_EVENTS if e.found)
@@ -176,32 +177,38 @@ class AutomataHost:
         for spec in self.lost_first:
             new = q[spec.query]
             old = self.prev_q[spec.query]
-            domain = self.domains[spec.query]
+            domains = self.domains[spec.query]
             if np.shape(old) != np.shape(new):  # tasks appeared since: they matched nothing
                 grown = np.zeros(np.shape(new), dtype=bool)
-                grown[: np.size(old)] = old
+                grown[tuple(slice(0, n) for n in np.shape(old))] = old
                 old = grown
             if spec.per_match:
                 changed = (new & ~old) if spec.found else (old & ~new)
                 if changed.any():
-                    names = self.model.names(domain)
-                    for i in np.flatnonzero(changed):
-                        self._emit(spec.name, time, (names[i],))
+                    for match in np.argwhere(changed):
+                        self._emit(spec.name, time, self._match_names(domains, match))
             else:
                 now_any, was_any = bool(new.any()), bool(old.any())
                 if spec.found and now_any and not was_any:
-                    self._emit(spec.name, time, self._objects(domain, new))
+                    self._emit(spec.name, time, self._objects(domains, new))
                 elif not spec.found and was_any and not now_any:
-                    self._emit(spec.name, time, self._objects(domain, old))
+                    self._emit(spec.name, time, self._objects(domains, old))
         self.prev_q = q
         if self.watched_queries:
             self._holding(q, time)
 
-    def _objects(self, domain: str, mask: Any) -> tuple[str, ...]:
-        if not domain:
+    def _match_names(self, domains: tuple[str, ...], match: np.ndarray) -> tuple[str, ...]:
+        """The names of one match: an object, floor or task per parameter."""
+        return tuple(self.model.names(d)[int(i)] for d, i in zip(domains, match, strict=True))
+
+    def _objects(self, domains: tuple[str, ...], mask: Any) -> tuple[str, ...]:
+        """Everything the matches name, each once, in the order of the matches."""
+        if not domains:
             return ()
-        names = self.model.names(domain)
-        return tuple(names[i] for i in np.flatnonzero(mask))
+        names: dict[str, None] = {}
+        for match in np.argwhere(mask):
+            names.update(dict.fromkeys(self._match_names(domains, match)))
+        return tuple(names)
 
     def _emit(self, name: str, time: float, objects: tuple[str, ...]) -> None:
         self.serial += 1

@@ -2,18 +2,20 @@
 
 Concrete environment: pose, twist and footprint of every observed object, and the footprint
 distance from the robot to each (vectorised, rei.runtime.monitor.geometry). Abstract
-environment: the floor the robot stands on, through the generators' inverse mapping (the
-floor centres in the stream header). Robot description: odometry, laser minimum, laser
-clearance (from the latest scan, rei.runtime.monitor.laser), navigation state, mission and
-task states. Also the sample hygiene: non-finite, out-of-order,
-duplicated and missing samples are counted, never modelled. This module must never import
-the simulator.
+environment: the floor the robot and every observed object stands on, through the generators'
+inverse mapping (the floor centres in the stream header, thesis 5.1), the floors of the
+mission's goals and which floors are neighbours. Robot description: odometry, laser minimum,
+laser clearance (from the latest scan, rei.runtime.monitor.laser), navigation state, mission
+and task states. Also the sample hygiene: non-finite, out-of-order, duplicated and missing
+samples are counted, never modelled. This module must never import the simulator.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field, replace
+from functools import partial
 
 import numpy as np
 
@@ -94,6 +96,8 @@ class RuntimeModel:
         self.floor_names = tuple(f[0] for f in header.floors)
         self._floor_xy = np.array([(f[1], f[2]) for f in header.floors], dtype=float).reshape(
             -1, 2)
+        self.floors = FloorMap(self._floor_xy, header.tile_size)
+        self.no_floors = np.full(len(header.objects), -1, dtype=np.int64)
         self.inradius = self.footprints.robot_inradius()
         self.beam_edges = BeamEdges(header.robot.footprint, header.laser_mount)
         self.laser_clearance = FAR_AWAY
@@ -119,6 +123,15 @@ class RuntimeModel:
         self.cycles = float(facts.cycles) if facts is not None else 1.0
         self.headed_goals = float(sum(g.heading is not None for g in facts.goals)) \
             if facts is not None else 0.0
+        self.goals = float(len(facts.goals)) if facts is not None else 0.0
+        self.goal_floor = np.zeros(len(self.floor_names), dtype=bool)
+        self.neighbouring_goals = 0.0
+        if facts is not None and facts.goals:
+            at = self.floors.of(np.array([(g.x, g.y) for g in facts.goals], dtype=float))
+            self.goal_floor[at[at >= 0]] = True
+            self.neighbouring_goals = float(sum(self.floors.side_by_side(int(a), int(b))
+                                                for a, b in zip(at, at[1:], strict=False)))
+        self.floor_adjacent = self.floors.adjacent
 
     # ---- per sample -----------------------------------------------------------------------
 
@@ -132,7 +145,10 @@ class RuntimeModel:
                            approach=np.zeros(n), task_failure=self.task_failures.copy(),
                            speed_limit=self.speed_limit, turn_limit=self.turn_limit,
                            humans=self.humans, dynamic_objects=self.dynamic_objects,
-                           cycles=self.cycles, headed_goals=self.headed_goals)
+                           cycles=self.cycles, headed_goals=self.headed_goals, goals=self.goals,
+                           neighbouring_goals=self.neighbouring_goals,
+                           object_floors=lambda: self.no_floors, goal_floor=self.goal_floor,
+                           adjacency=self.floor_adjacent)
 
     def _approach(self, s: Sample, distance: np.ndarray) -> np.ndarray:
         """How fast the robot's own commanded motion (as the motor executes it: clipped to
@@ -183,7 +199,11 @@ class RuntimeModel:
             # the scenario's facts, constant through the run
             speed_limit=self.speed_limit, turn_limit=self.turn_limit, humans=self.humans,
             dynamic_objects=self.dynamic_objects, cycles=self.cycles,
-            headed_goals=self.headed_goals)
+            headed_goals=self.headed_goals, goals=self.goals,
+            neighbouring_goals=self.neighbouring_goals,
+            object_floors=functools.cache(partial(self.floors.of, np.asarray(s.poses)[:, :2])),
+            goal_floor=self.goal_floor,
+            adjacency=self.floor_adjacent)
 
     def _nearest_human(self, s: Sample, distance: np.ndarray, moving: bool) -> None:
         """Update the closest approach to a person (and, while moving, personal space). The
@@ -263,6 +283,71 @@ class RuntimeModel:
         if domain == "floor":
             return self.floor_names
         return tuple(t.name for t in self.tasks)
+
+
+class FloorMap:
+    """From positions to floors: the floor tile (a square of the tile size around a floor
+    centre) each position lies in, -1 for none. Floors of a generated world sit on a grid of
+    tile-size steps, so the look-up is an index into that grid."""
+
+    def __init__(self, centres: np.ndarray, tile: float) -> None:
+        self.tile = tile
+        self.centres = centres
+        self.origin = centres.min(axis=0) if len(centres) else np.zeros(2)
+        cells = np.rint((centres - self.origin) / tile).astype(np.int64) if len(centres) \
+            else np.zeros((0, 2), dtype=np.int64)
+        self.on_grid = bool(np.allclose(cells * tile + self.origin, centres, atol=1e-6))
+        size = cells.max(axis=0) + 1 if len(cells) else np.zeros(2, dtype=np.int64)
+        self.grid = np.full((int(size[0]), int(size[1])), -1, dtype=np.int64)
+        # on a cell two floors claim, the first in header order wins (as for the robot)
+        for k in range(len(cells) - 1, -1, -1):
+            self.grid[cells[k, 0], cells[k, 1]] = k
+        self.cells = cells
+        self._adjacent: np.ndarray | None = None
+
+    def of(self, xy: np.ndarray) -> np.ndarray:
+        """The floor index of each (x, y) row, -1 off every floor."""
+        if not len(self.centres) or not len(xy):
+            return np.full(len(xy), -1, dtype=np.int64)
+        if not self.on_grid:
+            half = self.tile / 2
+            inside = np.all(np.abs(xy[:, None, :] - self.centres[None, :, :]) <= half, axis=2)
+            return np.where(inside.any(axis=1), inside.argmax(axis=1), -1)
+        cell = np.floor((xy - self.origin) / self.tile + 0.5).astype(np.int64)
+        ok = (cell >= 0).all(axis=1) & (cell[:, 0] < self.grid.shape[0]) & (
+            cell[:, 1] < self.grid.shape[1])
+        out = np.full(len(xy), -1, dtype=np.int64)
+        out[ok] = self.grid[cell[ok, 0], cell[ok, 1]]
+        return out
+
+    def side_by_side(self, a: int, b: int) -> bool:
+        """Floors ``a`` and ``b`` (indices, -1 for none) share an edge."""
+        if a < 0 or b < 0:
+            return False
+        step = np.abs(self.centres[a] - self.centres[b]) / self.tile
+        return bool(np.isclose(sorted(step), (0.0, 1.0), atol=1e-6).all())
+
+    def adjacent(self) -> np.ndarray:
+        """Floors by floors: their tiles share an edge (worked out once, on first use)."""
+        if self._adjacent is None:
+            n = len(self.centres)
+            found = np.zeros((n, n), dtype=bool)
+            if self.on_grid:
+                for di, dj in ((1, 0), (0, 1)):
+                    for k, (i, j) in enumerate(self.cells):
+                        ii, jj = i + di, j + dj
+                        if ii < self.grid.shape[0] and jj < self.grid.shape[1]:
+                            other = self.grid[ii, jj]
+                            if other >= 0:
+                                found[k, other] = found[other, k] = True
+            else:
+                for k in range(n):
+                    step = np.abs(self.centres - self.centres[k]) / self.tile
+                    near = np.isclose(step, 1.0, atol=1e-6)
+                    same = np.isclose(step, 0.0, atol=1e-6)
+                    found[k] = (near[:, 0] & same[:, 1]) | (same[:, 0] & near[:, 1])
+            self._adjacent = found
+        return self._adjacent
 
 
 def interpolate(a: QueryInputs, b: QueryInputs, f: float) -> QueryInputs:

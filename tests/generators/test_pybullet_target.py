@@ -76,4 +76,4 @@ def test_generation_is_deterministic() -> None:
     human = [o for o in manifest["objects"] if o["role"] == "human"][0]
     # A loop's trajectory ends where it starts; a total-only time is spread by arc length.
     points = human["trajectory"]["points"]
-    assert points[0][1:] == points[-1][1:] and points[-1][0] == pytest.approx(60.0)
+    assert points[0][1:] == points[-1][1:] and points[-1][0] == pytest.approx(80.0)

@@ -19,9 +19,10 @@ CORPUS_FILES = sorted(p for folder in (CORPUS, VEPL_CORPUS) for p in folder.iter
                       if p.name not in HELPERS and p.is_file())
 
 # Rules whose inputs cannot be written as a corpus file; tests/lang/test_input_edges.py covers
-# them (INTERNAL: tests/lsp/test_lsp_robustness.py).
+# them (INTERNAL: tests/lsp/test_lsp_robustness.py), and tests/monitor/test_user_functions.py
+# VEPL-FUNCTION (it needs a Python module).
 COVERED_ELSEWHERE = {"INPUT-READ", "INPUT-KIND", "INPUT-EMPTY", "INPUT-SIZE", "INPUT-ENCODING",
-                     "SYNTAX-DEPTH", "INTERNAL"}
+                     "SYNTAX-DEPTH", "INTERNAL", "VEPL-FUNCTION"}
 
 
 def expectation(path: Path) -> tuple[str, int]:

@@ -4,6 +4,7 @@ is absent. Synthetic streams: what the run loop records, written by hand."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -51,10 +52,11 @@ def facts(headings: Sequence[float | None] = (None,), cycles: int = 1,
 
 
 def stream(placed: Sequence[tuple[ObservedObject, tuple[float, float, float]]],
-           ticks: Sequence[Tick], mission: MissionFacts | None = None
+           ticks: Sequence[Tick], mission: MissionFacts | None = None,
+           floors: tuple[tuple[str, float, float], ...] = ()
            ) -> tuple[StreamHeader, list[Sample]]:
     h = StreamHeader(SCHEMA_VERSION, "synthetic", "synthetic", 0, RATE, ROBOT,
-                     tuple(o for o, _ in placed), 1.0, (),
+                     tuple(o for o, _ in placed), 1.0, floors,
                      mission_facts=mission if mission is not None else facts())
     still = np.array([p for _, p in placed], dtype=float).reshape(len(placed), 3)
     samples = []
@@ -81,9 +83,11 @@ def with_events(ticks: list[Tick], events: dict[int, tuple[MissionEvent, ...]]) 
 
 
 def run(tmp: Path, placed: Sequence[tuple[ObservedObject, tuple[float, float, float]]],
-        ticks: list[Tick], mission: MissionFacts | None = None, fail: tuple[str, str] | None = None
+        ticks: list[Tick], mission: MissionFacts | None = None, fail: tuple[str, str] | None = None,
+        floors: tuple[tuple[str, float, float], ...] = ()
         ) -> tuple[dict[str, Verdict], MonitorResult]:
-    h, samples = stream(placed, with_events(ticks, mission_events(len(ticks), fail)), mission)
+    h, samples = stream(placed, with_events(ticks, mission_events(len(ticks), fail)), mission,
+                        floors)
     _, result = monitor(h, samples, tmp)
     return {v.requirement: v for v in result.verdicts}, result
 
@@ -105,6 +109,8 @@ FAR_WALL = [wall("w", 5.0, 0.0)]
 def test_a_clean_run_passes_and_absent_premises_are_not_applicable(tmp_path: Path) -> None:
     verdicts, result = run(tmp_path, FAR_WALL, driving(0.0, 1.0, 12, 0.2))
     status = {k: v.status for k, v in verdicts.items()}
+    # one goal: neither the thesis's pair of neighbouring goals nor a back-and-forth cycle
+    assert status.pop("MISSION_SIMPLE") == "not_applicable"
     assert status.pop("MISSION_SEQUENCE_CYCLE") == "not_applicable"
     assert status.pop("MISSION_WITH_HUMAN_TRAJECTORY") == "not_applicable"
     assert status.pop("HUMAN_SLOW_ZONE") == "not_applicable"
@@ -232,9 +238,40 @@ def test_weaving_fails_smooth_motion_and_a_steady_turn_does_not(tmp_path: Path) 
     assert run(tmp_path / "spot", FAR_WALL, spot)[0]["SMOOTH_MOTION"].status == "pass"
 
 
-def test_the_back_and_forth_requirement_applies_only_to_cycles(tmp_path: Path) -> None:
-    verdicts, _ = run(tmp_path, FAR_WALL, driving(0.0, 1.0, 12, 0.2), facts(cycles=2))
+def test_the_back_and_forth_requirement_applies_only_to_cycles_of_two_goals(
+        tmp_path: Path) -> None:
+    # thesis 5.1.2: m = (g1, g2)*
+    ride = driving(0.0, 1.0, 12, 0.2)
+    verdicts, _ = run(tmp_path / "a", FAR_WALL, ride, facts((None, None), cycles=2))
     assert verdicts["MISSION_SEQUENCE_CYCLE"].status == "pass"
+    for name, mission in (("once", facts((None, None))), ("three", facts((None,) * 3, 2)),
+                          ("one", facts(cycles=2))):
+        verdicts, _ = run(tmp_path / name, FAR_WALL, ride, mission)
+        assert verdicts["MISSION_SEQUENCE_CYCLE"].status == "not_applicable", name
+
+
+CORRIDOR = tuple((f"c{i}", float(i), 0.0) for i in range(-1, 6))
+"""Floors c-1 .. c5 at x = -1 .. 5; facts() puts goal g<i> at x = 1 + i."""
+
+
+def test_the_simple_mission_is_a_pair_of_neighbouring_goals_driven_once(tmp_path: Path) -> None:
+    # thesis 5.1.2 MISSION_SIMPLE: a pair of goals (g1, g2), the robot moves to the
+    # neighbouring floor without collision
+    ride = driving(0.0, 1.0, 12, 0.2)
+    pair = facts((None, None))  # goals on c1 and c2, side by side
+    verdicts, _ = run(tmp_path / "pair", FAR_WALL, ride, pair, floors=CORRIDOR)
+    assert verdicts["MISSION_SIMPLE"].status == "pass"
+    apart = MissionFacts((pair.goals[0], dataclasses.replace(pair.goals[1], x=4.0)), 1, 100.0,
+                         0.26, 1.82, None)
+    cases = {"apart": apart, "cycles": facts((None, None), cycles=2), "one": facts(),
+             "three": facts((None,) * 3)}
+    for name, mission in cases.items():
+        verdicts, _ = run(tmp_path / name, FAR_WALL, ride, mission, floors=CORRIDOR)
+        assert verdicts["MISSION_SIMPLE"].status == "not_applicable", name
+    # where it applies it judges collisions as before: driving into the wall fails it
+    crash = driving(0.0, 4.5, 30, 0.2)
+    verdicts, _ = run(tmp_path / "crash", FAR_WALL, crash, pair, floors=CORRIDOR)
+    assert verdicts["MISSION_SIMPLE"].status == "fail"
 
 
 def test_personal_space_is_measured_while_moving(tmp_path: Path) -> None:

@@ -57,12 +57,12 @@ def test_run_writes_its_page_with_the_verdict_and_every_requirement(run_dir: Pat
     assert [r.get("data-requirement") for r in rows] == [v["requirement"]
                                                           for v in summary["verdicts"]]
     status = {r.get("data-requirement"): r.xpath("td[@class='status']/text()")[0] for r in rows}
-    assert status["MISSION_SIMPLE"] == "fail"
+    assert status["NO_ROBOT_COLLISION"] == "fail"
     assert status["GOAL_HEADING"] == "not applicable"
     failed = {r.get("data-requirement") for r in rows if "status-fail" in r.get("class")}
     assert failed == {v["requirement"] for v in summary["verdicts"] if v["status"] == "fail"}
-    decided = next(v for v in summary["verdicts"] if v["requirement"] == "MISSION_SIMPLE")
-    simple = next(r for r in rows if r.get("data-requirement") == "MISSION_SIMPLE")
+    decided = next(v for v in summary["verdicts"] if v["requirement"] == "NO_ROBOT_COLLISION")
+    simple = next(r for r in rows if r.get("data-requirement") == "NO_ROBOT_COLLISION")
     assert [td.text for td in simple.xpath("td")][2:4] == [f"{decided['decided_at']:g} s",
                                                           "wall_e"]
     # self-contained: no scripts, no external style sheet, images inline
@@ -88,7 +88,7 @@ def test_the_page_has_the_timeline_distances_speed_and_map(run_dir: Path) -> Non
     assert "CLOSE threshold (0.25 m)" in distance
     assert "COLLISION threshold (0.02 m)" in distance
     assert "nearest obstacle (walls, objects)" in distance and "nearest human" not in distance
-    assert "footprint distance [m]" in distance and "MISSION_SIMPLE" in distance
+    assert "footprint distance [m]" in distance and "NO_ROBOT_COLLISION" in distance
     speed = _svg_text(page, "speed-plot")
     assert "driven (ground truth)" in speed and "limit (0.26 m/s)" in speed
     assert "speed [m/s]" in speed

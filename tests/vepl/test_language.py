@@ -55,9 +55,15 @@ def test_default_specification_has_table_3_and_the_5_1_2_requirements() -> None:
     assert human.clauses == (m.CountBound("humanCollision", "<", 1.0),)
     # the 5.1.2 set is kept as written; premises only make absent scenarios not applicable
     assert human.premise == "humansPresent"
-    assert by_name["MISSION_SEQUENCE_CYCLE"].premise == "missionHasCycles"
     assert by_name["GOAL_HEADING"].premise == "missionHasHeadings"
-    assert by_name["MISSION_SIMPLE"].premise is None
+    # thesis 5.1.2's GIVEN: a pair of neighbouring goals; a back-and-forth cycle (g1, g2)*
+    assert by_name["MISSION_SIMPLE"].premise == "neighbouringGoalPair"
+    assert by_name["MISSION_SEQUENCE_CYCLE"].premise == "backAndForth"
+    queries = {q.name: q for q in spec.queries}
+    assert queries["neighbouringGoalPair"].params == queries["backAndForth"].params == ()
+    # the two no longer compile to the same clauses under the same premise
+    simple, cycle = by_name["MISSION_SIMPLE"], by_name["MISSION_SEQUENCE_CYCLE"]
+    assert (simple.clauses, simple.premise) != (cycle.clauses, cycle.premise)
 
 
 def test_thesis_pattern_parses_and_means_a_windowed_repeated_sequence() -> None:
@@ -109,7 +115,7 @@ def test_queries_are_ordered_after_what_they_find() -> None:
 query close(o: object[wall, human]) { distance(robot, o) < 0.5 }
 """)
     assert [q.name for q in spec.queries] == ["close", "far"]
-    assert spec.queries[0].param == m.QueryParam("o", "object", ("wall", "human"))
+    assert spec.queries[0].params == (m.QueryParam("o", "object", ("wall", "human")),)
 
 
 CORPUS_FILES = sorted(CORPUS.glob("*.vepl"))

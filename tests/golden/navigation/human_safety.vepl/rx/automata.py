@@ -43,7 +43,7 @@ from rei.runtime.monitor.automata import (
 from rei.runtime.monitor.cep import Occurrence, match_pattern
 
 SPEC_NAME = 'human_safety'
-FORMAT_VERSION = 3
+FORMAT_VERSION = 4
 PARAMETERS: dict[str, float] = {
     'eps_close': 0.25,
     'eps_collision': 0.02,
@@ -59,11 +59,11 @@ FUNCTIONS: dict[str, int] = {}
 # ---- queries (vectorised over their domain; evaluated in this order) ---------------------
 
 QUERIES: tuple[QuerySpec, ...] = (
-    QuerySpec('tooCloseToHuman', 'object', ('human',)),
-    QuerySpec('humanInCollision', 'object', ('human',)),
-    QuerySpec('missionEnded', '', ()),
-    QuerySpec('taskSucceeded', 'task', ()),
-    QuerySpec('taskFailed', 'task', ()),
+    QuerySpec('tooCloseToHuman', ('object',), (('human',),)),
+    QuerySpec('humanInCollision', ('object',), (('human',),)),
+    QuerySpec('missionEnded', (), ()),
+    QuerySpec('taskSucceeded', ('task',), ((),)),
+    QuerySpec('taskFailed', ('task',), ((),)),
 )
 
 

@@ -7,12 +7,16 @@ Per segment i, with h = t[i+1] - t[i]:
     r(t) = a_i (t - t_i)^3 + b_i (t - t_i)^2 + c_i (t - t_i) + d_i
 and the vertex velocity is the mean of the two neighbouring chord velocities (thesis 4.2.1).
 A loop wraps its neighbours around (its last vertex repeats the first); an open spline
-starts and ends at rest. This module must never import the simulator.
+starts and ends at rest. The room checks (TRAJ-CROSSES), the generators' picture and the
+runtime's animator all walk this one curve. This module must never import the simulator.
 """
 
 from __future__ import annotations
 
+import math
 from bisect import bisect_right
+from collections.abc import Sequence
+from itertools import pairwise
 from typing import cast
 
 import numpy as np
@@ -81,3 +85,58 @@ class CatmullRom:
             return 0.0, 0.0
         (ax, ay), (bx, by), (cx, cy), _ = self._coef[i]
         return ((3 * ax * s + 2 * bx) * s + cx, (3 * ay * s + 2 * by) * s + cy)
+
+
+def vertex_times(points: Sequence[tuple[float, float]], times: Sequence[float | None],
+                 total_time: float | None, loop: bool
+                 ) -> tuple[list[float], list[tuple[float, float]]]:
+    """The times and points a trajectory's spline passes through (the concrete model's).
+
+    With ``total_time`` the time is shared out along the control polygon by length; else each
+    vertex carries its own time, and a loop walks back to its first vertex at the
+    trajectory's mean speed, unless it already ends there (a zero-length closing segment
+    would take no time, which no spline can pass through). A loop's points end with its
+    first point again. The generators write exactly these times and the checker judges
+    exactly these (TRAJ-SPEED, TRAJ-CROSSES), so what `rei-gen check` accepts is what the
+    animator is given.
+    """
+    pts = list(points)
+    if total_time is None:
+        out = [float(t or 0.0) for t in times]
+        if loop:
+            length = sum(math.dist(a, b) for a, b in pairwise(pts))
+            speed = length / (out[-1] - out[0]) if out[-1] > out[0] else 0.0
+            back = math.dist(pts[-1], pts[0])
+            if back > 0.0 or len(pts) < 3:
+                out.append(out[-1] + (back / speed if speed > 0 else out[-1] - out[0]))
+                pts.append(pts[0])
+        return out, pts
+    if loop and (math.dist(pts[-1], pts[0]) > 0.0 or len(pts) < 3):
+        pts.append(pts[0])
+    seg = [math.dist(a, b) for a, b in pairwise(pts)]
+    total_len = sum(seg)
+    out = [0.0]
+    for s in seg:
+        share = s / total_len if total_len > 0 else 1.0 / len(seg)
+        out.append(out[-1] + share * total_time)
+    return out, pts
+
+
+def walked_path(spline: CatmullRom, step: float) -> tuple[np.ndarray, np.ndarray]:
+    """Times and (N, 2) points along the whole curve, at most ``step`` apart, for checks and
+    pictures: the very curve ``position`` walks."""
+    pieces: list[np.ndarray] = []
+    for i in range(len(spline.t) - 1):
+        t0, t1 = float(spline.t[i]), float(spline.t[i + 1])
+        # As a Bezier curve the segment has these control points; over s in [0, 1] its speed
+        # is at most three times the longest control leg, so evenly spaced s are close enough.
+        h = t1 - t0
+        p0, p1 = spline.p[i], spline.p[i + 1]
+        c0 = p0 + spline.vertex_velocity[i] * h / 3
+        c1 = p1 - spline.vertex_velocity[i + 1] * h / 3
+        leg = max(float(np.linalg.norm(c0 - p0)), float(np.linalg.norm(c1 - c0)),
+                  float(np.linalg.norm(p1 - c1)))
+        count = max(2, math.ceil(3 * leg / step) + 1)
+        pieces.append(np.linspace(t0, t1, count)[:-1])
+    times = np.concatenate([*pieces, spline.t[-1:]])
+    return times, spline.positions(times)
