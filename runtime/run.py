@@ -157,6 +157,9 @@ def stream_header(manifest: WorldManifest, monitor: MonitorConfig,
 class RunProbe(Protocol):
     """Hears how far a run got: the supervisor's heartbeat (``rei.runtime.supervisor``)."""
 
+    def begin(self, mission: str, room: str) -> None:
+        """The mission is checked and its world generated (called by ``run_into``)."""
+
     def tick(self, time: float) -> None:
         """The loop reached simulated ``time`` and is about to call the controller."""
 
