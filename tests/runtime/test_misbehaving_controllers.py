@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -153,3 +154,39 @@ def test_checked_answers_are_plain_floats_and_states() -> None:
         checked_feedback(GoalFeedback(NavState.ACTIVE, "g", -1.0))
     with pytest.raises(ContractViolation, match="feedback.message: expected a string"):
         checked_feedback(GoalFeedback(NavState.ACTIVE, "g", None, 3))  # type: ignore[arg-type]
+
+
+def _start(out: Path, controller: str) -> subprocess.Popen[bytes]:
+    """`rei run` with a slow controller, once its run is under way (a few samples traced)."""
+    process = subprocess.Popen(
+        [sys.executable, "-m", "rei.runtime.cli", "run", str(NAVIGATION), "-o", str(out),
+         "--controller", f"tests.runtime.faulty:{controller}", "--quiet"],
+        cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    partial = out / "trace.jsonl.partial"
+    started = time.monotonic()
+    while process.poll() is None and (not partial.exists() or partial.stat().st_size < 20000):
+        assert time.monotonic() - started < SAFETY_LIMIT
+        time.sleep(0.05)
+    return process
+
+
+def test_sigterm_is_passed_on_and_ends_the_run_interrupted(tmp_path: Path) -> None:
+    process = _start(tmp_path, "Slow")
+    process.terminate()
+    assert process.wait(timeout=SAFETY_LIMIT) == 130
+    summary = summary_of(tmp_path)
+    assert summary["outcome"] == "interrupted"
+    end = read_trace_end(tmp_path / "trace.jsonl")
+    assert end is not None and end[1] == "interrupted"
+
+
+def test_the_simulation_dies_with_its_supervisor(tmp_path: Path) -> None:
+    """kill -9 of `rei run` (a campaign's watchdog does it) leaves no simulation behind."""
+    psutil = pytest.importorskip("psutil")
+    process = _start(tmp_path, "Slow")
+    children = psutil.Process(process.pid).children()
+    assert len(children) == 1
+    process.kill()
+    process.wait()
+    gone, alive = psutil.wait_procs(children, timeout=SAFETY_LIMIT)
+    assert not alive
