@@ -115,3 +115,13 @@ def test_quiet_and_verbose_exclude_each_other(tmp_path: Path) -> None:
 
 def _utility(out: Path) -> str:
     return f"{json.loads((out / 'summary.json').read_text())['total_utility']:g}"
+
+
+def test_campaign_quiet_prints_only_its_verdict_line(tmp_path: Path) -> None:
+    out = tmp_path / "campaign"
+    done = rei("campaign", str(EXAMPLES / "simple_wall" / "simple_wall.mission"), "-o",
+               str(out), "--duration", "1", "--workers", "1", "--quiet")
+    assert done.returncode == 1, done.stderr  # cut short: not a pass
+    assert done.stdout.splitlines() == [
+        f"verdict: FAIL; 0 of 1 missions passed; report: {out / 'report.html'}"]
+    assert done.stderr == ""
