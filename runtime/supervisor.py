@@ -174,8 +174,10 @@ def supervise(request: RunRequest) -> SupervisedRun:
     argv = [sys.executable, "-m", "rei.runtime.supervisor", str(write_end), str(os.getpid()),
             request.to_json()]
     try:
+        # The child's stdout is this process's stderr: stdout carries the results `rei run`
+        # prints, never what a controller or a library prints while running.
         process = subprocess.Popen(argv, pass_fds=(write_end,), stdin=subprocess.DEVNULL,
-                                   process_group=0)
+                                   stdout=2, process_group=0)
     finally:
         os.close(write_end)
     watch = _Watch()
@@ -194,6 +196,8 @@ def supervise(request: RunRequest) -> SupervisedRun:
         while True:
             try:
                 limit = stall if watch.phase == "running" else SETUP_LIMIT
+                if watch.end is not None:
+                    limit = MIN_MARGIN  # reported; only a thread left running can hold it
                 if not eof:
                     ready, _, _ = select.select([read_end], [], [], 0.2)
                     if ready:
@@ -214,6 +218,8 @@ def supervise(request: RunRequest) -> SupervisedRun:
                     break  # ended; a descriptor kept open by a grandchild gives no EOF
                 if time.monotonic() - heard > limit:
                     _kill_group(process)
+                    if watch.end is not None:
+                        break  # its result stands; what kept it from exiting is not the run
                     failure = (f"the simulation stopped responding {watch.at()}: no "
                                f"progress for {limit:g} s (a controller holding the "
                                f"interpreter, or a hang in native code); killed")

@@ -249,3 +249,19 @@ class FalsifiesScanCopy(StopsAtTwenty):
                 owner.flags.writeable = True
                 owner[:] = 0.0
         return super().step(observation)
+
+
+class Chatty(StopsAtTwenty):
+    """Prints its debugging on stdout, as navigators do."""
+
+    def step(self, observation: Observation) -> VelocityCommand:
+        print(f"chatty: step at t={observation.time:.1f}", flush=True)
+        return super().step(observation)
+
+
+class LeavesAThread(StopsAtTwenty):
+    """Starts a thread that never ends (not a daemon): the run's result must still count."""
+
+    def reset(self, context: ControllerContext) -> None:
+        super().reset(context)
+        threading.Thread(target=threading.Event().wait, name="forever").start()

@@ -125,3 +125,11 @@ def test_campaign_quiet_prints_only_its_verdict_line(tmp_path: Path) -> None:
     assert done.stdout.splitlines() == [
         f"verdict: FAIL; 0 of 1 missions passed; report: {out / 'report.html'}"]
     assert done.stderr == ""
+
+
+def test_what_a_controller_prints_goes_to_stderr(tmp_path: Path) -> None:
+    done = rei("run", str(NAVIGATION), "-o", str(tmp_path), "--duration", "1", "--quiet",
+               "--controller", "tests.runtime.faulty:Chatty")
+    assert done.returncode == 1
+    assert done.stdout.startswith("verdict: ") and len(done.stdout.splitlines()) == 1
+    assert "chatty: step at t=0.0" in done.stderr

@@ -190,3 +190,9 @@ def test_the_simulation_dies_with_its_supervisor(tmp_path: Path) -> None:
     process.wait()
     gone, alive = psutil.wait_procs(children, timeout=SAFETY_LIMIT)
     assert not alive
+
+
+def test_a_thread_left_running_does_not_cost_the_run_its_result(tmp_path: Path) -> None:
+    done = rei_run(tmp_path, "LeavesAThread", "--quiet")
+    assert done.returncode == 1, done.stderr  # timeout: inconclusive, as its honest twin
+    assert summary_of(tmp_path)["outcome"] == "timeout"
