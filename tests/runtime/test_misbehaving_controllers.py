@@ -196,3 +196,15 @@ def test_a_thread_left_running_does_not_cost_the_run_its_result(tmp_path: Path) 
     done = rei_run(tmp_path, "LeavesAThread", "--quiet")
     assert done.returncode == 1, done.stderr  # timeout: inconclusive, as its honest twin
     assert summary_of(tmp_path)["outcome"] == "timeout"
+
+
+def test_the_conformance_checker_reports_what_would_end_a_run_in_error() -> None:
+    from rei.runtime.robot import check_controller
+    from tests.runtime import faulty
+
+    assert "step() broke the contract: command.linear: expected a finite real number, " \
+           "found str 'abc'" in check_controller(faulty.SendsStr())
+    assert "feedback() broke the contract: feedback.state: expected a NavState, found str " \
+           "'active'" in check_controller(faulty.BadFeedback())
+    assert "raised ValueError: assignment destination is read-only" in \
+           check_controller(faulty.MutatesScan())
