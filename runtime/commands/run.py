@@ -6,9 +6,14 @@ stream), ``events.csv`` (one row per signal), ``summary.json`` (a RunSummary wit
 ``report.html`` (the run's page: verdicts, timeline, distances, speed, map; not with
 --no-monitor) and ``run.log`` (the mission events and the outcome). Every output is a
 function of the inputs, the seed and the REI version only: wall-clock time goes to the
-terminal, never into DIR. Exit status: 0 every requirement passed, 1 one failed or was
-inconclusive (without the monitor: a task failed or the time ran out), 2 invalid input, 3 a
-run error, 130 interrupted (the outputs are then marked incomplete).
+terminal, never into DIR. The simulation runs in a child process under
+``rei.runtime.supervisor`` (``run`` here validates the options, starts it and prints);
+``run_into`` is the same work in the caller's process, for the library and tests. Results
+(the outcome line, the requirements, the page, the final verdict line) go to stdout,
+progress and diagnostics to stderr; --quiet leaves the final verdict line alone. Exit status:
+0 every requirement passed (without the monitor: the run did not break), 1 one failed or was
+inconclusive, 2 invalid input, 3 a run error (the controller broke the contract or the
+simulation's process died or hung), 130 interrupted (the outputs are then marked incomplete).
 """
 
 from __future__ import annotations
