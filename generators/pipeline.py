@@ -72,7 +72,7 @@ def plan(source: Path, target: str, options: Mapping[str, str] | None = None,
     """Every file the generation would write, relative to the output folder.
 
     One target writes into the output folder itself; ``all`` writes each target into a
-    sub-folder named after it (so the launch target's ``../mission/mission.xml`` resolves).
+    sub-folder named after it.
     """
     targets = choose_targets(Path(source), target)
     check_options(targets, options or {})

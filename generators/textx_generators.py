@@ -25,7 +25,8 @@ from rei.generators.output import write_tree
 from rei.generators.pipeline import plan
 from rei.lang.errors import ReiError
 
-LANGUAGES = {"room": ("rei-room", ".room"), "mission": ("rei-mission", ".mission")}
+LANGUAGES = {"room": ("rei-room", ".room"), "mission": ("rei-mission", ".mission"),
+             "vepl": ("rei-vepl", ".vepl")}
 
 
 def default_output(source: Path, target: str) -> Path:
@@ -59,17 +60,18 @@ def textx_generator(target: str) -> Callable[..., None]:
 
 
 def generator_desc(language: str, target: str, description: str = "") -> GeneratorDesc:
-    """A textX registration of REI target ``target`` for ``language`` ('room' or 'mission')."""
+    """A textX registration of REI target ``target`` for ``language`` ('room', 'mission' or
+    'vepl')."""
     textx_language, _ = LANGUAGES[language]
     return GeneratorDesc(language=textx_language, target=target,
                          description=description or f"REI '{target}' target (rei-gen generate)",
                          generator=textx_generator(target))
 
 
-room_gazebo = generator_desc("room", "gazebo", "SDF 1.9 world for Gazebo")
-mission_gazebo = generator_desc("mission", "gazebo", "SDF 1.9 world for Gazebo")
-room_launch = generator_desc("room", "launch", "ROS 2 launch file and REI run.json")
-mission_launch = generator_desc("mission", "launch", "ROS 2 launch file and REI run.json")
+room_gazebo = generator_desc("room", "gazebo", "SDF 1.9 world for Gazebo Sim")
+mission_gazebo = generator_desc("mission", "gazebo", "SDF 1.9 world for Gazebo Sim")
+room_launch = generator_desc("room", "launch", "ROS 2 launch file and the Gazebo world")
+mission_launch = generator_desc("mission", "launch", "REI run.json, its sources, ROS 2 launch")
 mission_mission = generator_desc("mission", "mission", "mission XML (valid against mission.xsd)")
 room_pybullet = generator_desc("room", "pybullet", "URDFs and manifest for pybullet")
 mission_pybullet = generator_desc("mission", "pybullet", "URDFs and manifest for pybullet")
@@ -77,8 +79,9 @@ room_monitor = generator_desc("room", "monitor", "monitor configuration")
 mission_monitor = generator_desc("mission", "monitor", "monitor configuration")
 room_all = generator_desc("room", "all", "every REI target, each into its own folder")
 mission_all = generator_desc("mission", "all", "every REI target, each into its own folder")
+vepl_rx = generator_desc("vepl", "rx", "RxPY event automata (a readable Python module)")
 
 REGISTRATIONS: tuple[GeneratorDesc, ...] = (
     room_gazebo, mission_gazebo, room_launch, mission_launch, mission_mission, room_pybullet,
-    mission_pybullet, room_monitor, mission_monitor, room_all, mission_all)
+    mission_pybullet, room_monitor, mission_monitor, room_all, mission_all, vepl_rx)
 """Every registration above, in the order of the entry points."""

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from enum import StrEnum
-from typing import Literal
+from typing import Literal, get_args
 
 import numpy as np
 
@@ -36,6 +36,10 @@ class NavState(StrEnum):
 
 
 MissionEventKind = Literal["begin", "task_start", "task_success", "task_fail", "end"]
+MISSION_EVENT_KINDS: tuple[str, ...] = get_args(MissionEventKind)
+TASK_EVENT_KINDS = ("task_start", "task_success", "task_fail")
+"""The kinds that belong to one task: they name it (``task``) and its position (``index``);
+``begin`` and ``end`` name neither."""
 
 FAILURE_CAUSES = ("aborted", "preempted", "timeout", "position", "heading", "abandoned", "cut")
 """The machine-readable causes of a ``task_fail`` event: the controller aborted or preempted
@@ -62,12 +66,16 @@ class MissionEvent:
     """Why a task failed, for requirements: one of FAILURE_CAUSES on ``task_fail``, else ''."""
 
 
+ObjectRole = Literal["wall", "static", "dynamic", "human", "robot"]
+OBJECT_ROLES: tuple[str, ...] = get_args(ObjectRole)
+
+
 @dataclass(frozen=True)
 class ObservedObject:
     """A body the monitor watches, with what the geometry queries need about it."""
 
     name: str
-    role: Literal["wall", "static", "dynamic", "human", "robot"]
+    role: ObjectRole
     type: str
     footprint: Footprint
     """In the object's own frame; walls carry a Box of the tile size."""

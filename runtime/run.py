@@ -408,8 +408,9 @@ def summary_of(record: RunRecord, mission: ConcreteMission, controller: str,
                       dict(record.measurements))
 
 
-def generate_world(mission_path: Path, out_dir: Path) -> ConcreteMission:
-    """Check the mission and generate the `pybullet` and `monitor` targets into ``out_dir``."""
+def generate_world(mission_path: Path, out_dir: Path, replace: bool = False) -> ConcreteMission:
+    """Check the mission and generate the `pybullet` and `monitor` targets into ``out_dir``
+    (with ``replace``, whatever else was in it goes: no stale URDF can be loaded)."""
     from rei.generators.concrete.build import load_concrete_mission  # noqa: PLC0415
     from rei.generators.output import OutputTree, write_tree  # noqa: PLC0415
     from rei.generators.targets import GenerationRequest, get_target  # noqa: PLC0415
@@ -419,7 +420,7 @@ def generate_world(mission_path: Path, out_dir: Path) -> ConcreteMission:
     tree = OutputTree()
     for name in ("pybullet", "monitor"):
         tree.merge(get_target(name).generate(request))
-    write_tree(tree, out_dir)
+    write_tree(tree, out_dir, replace=replace)
     return mission
 
 

@@ -17,7 +17,8 @@ does not advance):
 - while REI's own work runs (imports, generation, building the world, writing outputs):
   ``SETUP_LIMIT`` seconds between two reports.
 
-Past a limit the child's process group is killed (SIGKILL). A child that ends without
+Past a limit the child's process group is killed (SIGKILL; the child is started and stopped
+with ``rei.runtime.processes``, as the campaign starts its runs). A child that ends without
 having reported its exit status (killed by a signal, ``os._exit``, an internal error) or
 that is killed for a hang gets summary.json written by this process: outcome ``error`` and
 a reason naming what happened and when ("the simulation process was killed by signal 9
@@ -25,7 +26,7 @@ a reason naming what happened and when ("the simulation process was killed by si
 exists is complete, see ``rei.runtime.collector.trace``). Ctrl-C and SIGTERM are passed on
 to the child, which ends the run ``interrupted`` with consistent outputs; a second Ctrl-C
 kills it. The child dies with this process (Linux: PR_SET_PDEATHSIG; elsewhere at its next
-report, when the pipe is broken).
+report, when the pipe is broken, it ends its run as interrupted).
 
 This module must never import the simulator or the monitor in the supervising process: its
 cost there is an interpreter start-up, not a second copy of REI's heavy imports.
@@ -38,14 +39,16 @@ import math
 import os
 import select
 import signal
-import subprocess
 import sys
 import threading
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from subprocess import Popen
 from types import FrameType
 from typing import Any
+
+from rei.runtime.processes import child_status, start_child, stop_child
 
 SETUP_LIMIT = 120.0
 """Wall-clock seconds REI's own set-up or output writing may go without a report."""
@@ -152,15 +155,7 @@ def _signal_name(number: int) -> str:
         return f"signal {number}"
 
 
-def _kill_group(process: subprocess.Popen[bytes]) -> None:
-    try:
-        os.killpg(process.pid, signal.SIGKILL)
-    except (ProcessLookupError, PermissionError):
-        pass
-    process.wait()
-
-
-def _signal_group(process: subprocess.Popen[bytes], number: int) -> None:
+def _signal_group(process: Popen[bytes], number: int) -> None:
     try:
         os.killpg(process.pid, number)
     except (ProcessLookupError, PermissionError):
@@ -171,13 +166,11 @@ def supervise(request: RunRequest) -> SupervisedRun:
     """Run ``request`` in a child process and wait for it under the liveness limits; a child
     that dies or hangs gets summary.json written here (outcome error)."""
     read_end, write_end = os.pipe()
-    argv = [sys.executable, "-m", "rei.runtime.supervisor", str(write_end), str(os.getpid()),
-            request.to_json()]
+    argv = [sys.executable, "-m", "rei.runtime.supervisor", str(write_end), request.to_json()]
     try:
         # The child's stdout is this process's stderr: stdout carries the results `rei run`
         # prints, never what a controller or a library prints while running.
-        process = subprocess.Popen(argv, pass_fds=(write_end,), stdin=subprocess.DEVNULL,
-                                   stdout=2, process_group=0)
+        process = start_child(argv, stdout=2, pass_fds=(write_end,))
     finally:
         os.close(write_end)
     watch = _Watch()
@@ -212,12 +205,13 @@ def supervise(request: RunRequest) -> SupervisedRun:
                             eof = True
                 else:
                     time.sleep(0.05)
-                if process.poll() is not None and (eof or watch.end is not None):
+                ended = child_status(process) is not None  # its group is swept then
+                if ended and (eof or watch.end is not None):
                     break
-                if process.poll() is not None and not select.select([read_end], [], [], 0)[0]:
+                if ended and not select.select([read_end], [], [], 0)[0]:
                     break  # ended; a descriptor kept open by a grandchild gives no EOF
                 if time.monotonic() - heard > limit:
-                    _kill_group(process)
+                    stop_child(process)
                     if watch.end is not None:
                         break  # its result stands; what kept it from exiting is not the run
                     failure = (f"the simulation stopped responding {watch.at()}: no "
@@ -226,7 +220,7 @@ def supervise(request: RunRequest) -> SupervisedRun:
                     break
             except KeyboardInterrupt:
                 if interrupted:  # the second Ctrl-C: stop waiting for a clean end
-                    _kill_group(process)
+                    stop_child(process)
                     failure = "interrupted"
                     break
                 interrupted = True
@@ -235,9 +229,7 @@ def supervise(request: RunRequest) -> SupervisedRun:
         if previous_term is not None:
             signal.signal(signal.SIGTERM, previous_term)
         os.close(read_end)
-        if process.poll() is None:
-            _kill_group(process)
-    code = process.wait()
+        code = stop_child(process)  # ended already, or stopping it is all that is left
     if not failure and watch.end is not None:
         end = watch.end
         status = end.get("exit")
@@ -309,25 +301,9 @@ class _Channel:
         self.send({"end": time})
 
 
-def _die_with_parent(parent: int) -> None:
-    """Linux: the kernel kills this process when its parent dies, even mid-hang."""
-    if not sys.platform.startswith("linux"):
-        return
-    import ctypes  # noqa: PLC0415
-
-    try:
-        libc = ctypes.CDLL(None, use_errno=True)
-        libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
-    except (OSError, AttributeError):
-        return
-    if os.getppid() != parent:  # the parent died before the request took effect
-        os._exit(EXIT_INTERRUPTED)
-
-
 def child_main(argv: list[str]) -> int:
     """The child: run the request, report to the supervisor, return the exit status."""
-    fd, parent, text = int(argv[0]), int(argv[1]), argv[2]
-    _die_with_parent(parent)
+    fd, text = int(argv[0]), argv[1]
     channel = _Channel(fd)
     from rei.lang.errors import LanguageError, ReiError  # noqa: PLC0415
     from rei.runtime.commands.run import execute_request  # noqa: PLC0415

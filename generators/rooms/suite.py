@@ -20,6 +20,7 @@ from pathlib import Path
 
 from rei.catalogue import default_catalogue
 from rei.generators.errors import GenerationError
+from rei.generators.output import write_atomic
 from rei.generators.rooms.construct import AttemptFailed, CatalogueFacts, RoomPlan, construct
 from rei.generators.rooms.descriptors import DESCRIPTOR_NAMES
 from rei.generators.rooms.design import Strategy, SuiteDesign, derived_seed, design_suite
@@ -203,10 +204,10 @@ def write_suite(suite: Suite, out_dir: Path, coverage: str, times: StageTimes | 
             for file_name, text in ((pair.room_file, pair.room_text),
                                     (pair.mission_file, pair.mission_text)):
                 path = out_dir / file_name
-                path.write_text(text, encoding="utf-8", newline="\n")
+                write_atomic(path, text.encode("utf-8"))
                 written.append(path)
-        (out_dir / INDEX_FILE).write_text(index_csv(suite), encoding="utf-8", newline="\n")
-        (out_dir / COVERAGE_FILE).write_text(coverage, encoding="utf-8", newline="\n")
+        write_atomic(out_dir / INDEX_FILE, index_csv(suite).encode("utf-8"))
+        write_atomic(out_dir / COVERAGE_FILE, coverage.encode("utf-8"))
     except OSError as exc:
         raise GenerationError(f"-o {out_dir}: expected a writable folder, found {exc}") from None
     if times is not None:

@@ -1,76 +1,84 @@
-"""The `launch` target: how to run a test — a ROS 2 launch file and REI's own run configuration.
+"""The `launch` target: how to run a test — REI's ``run.json`` and a ROS 2 launch file.
 
 Written files (thesis 6.2.1, "robot component launch"):
 
-``rei_test.launch.xml``
-    ROS 2 launch XML: Gazebo (``ros_gz_sim``) with ``world.sdf``, the TurtleBot3 Waffle spawned
-    at the robot's start pose, the ``ros_gz_bridge``, Nav2 with SLAM, and REI's animator, data
-    collector and (for a .mission) mission executor with their configuration files.
+``run.json`` (a .mission only)
+    REI's run configuration (format ``rei-run/1``): ``rei run --config run.json [-o DIR]``
+    runs, monitors and judges the mission exactly like the equivalent command line. Its
+    paths are relative to itself and point into ``sources/``.
+``sources/``  (a .mission only)
+    Copies of the mission, its room, the room's own catalogue file and the ``.vepl`` of
+    option ``monitor``, in their relative layout, so the folder runs wherever it is moved.
 ``world.sdf``
-    The `gazebo` target's world without the robot placeholder (the launch file spawns the robot).
-``animator.json``
-    The trajectories of the animated objects (control vertices with times, world frame).
-``run.json``
-    REI's run configuration: sources, artifacts, monitor specification, seed, controller, duration.
+    The `gazebo` target's world: the robot built from its catalogue entry (drive, laser)
+    and the humans walking their trajectories as actors.
+``rei_test.launch.xml``
+    ROS 2 launch XML for your navigation stack in Gazebo Sim: the world (``ros_gz_sim``),
+    the ``ros_gz_bridge`` topics the robot's software reads and writes (clock, scan, odom,
+    cmd_vel, tf), the laser's static transform (``tf2_ros``), and the launch file of your
+    navigation stack, given as the ``navigation_launch`` argument. It names no program
+    that ROS 2 and Gazebo do not ship; REI's own judged run is `rei run --config run.json`.
 
 ROS 2 rather than ROS 1: SDF 1.9 worlds are read by Gazebo Sim, which ROS 2 drives through
 ``ros_gz``; ROS 1's Gazebo Classic reads older SDF, and ROS 1 reached its end of life in 2025.
-Options: ``seed`` (whole number, default 0), ``monitor`` (a .vepl path relative to the input
-file, default ``default``: REI's bundled specification), ``controller`` (default
-``navigator``), ``duration`` (seconds; default the mission's time limit, 60 for a room).
-This module must never write files itself or read the textX model.
+Options (a .mission only): ``seed`` (whole number, default 0), ``monitor`` (a .vepl path
+relative to the input file, default ``default``: REI's bundled specification),
+``controller`` (default ``reference``), ``duration`` (seconds; default the mission's time
+limit). This module must never write files itself or read the textX model.
 """
 
 from __future__ import annotations
 
 import math
+import os.path
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import jinja2
 
-from rei.generators.concrete import ConcreteMission, ConcreteWorld
+from rei.generators.concrete import ConcreteWorld
 from rei.generators.errors import GenerationError
 from rei.generators.output import OutputTree
 from rei.generators.targets import GenerationRequest
-from rei.generators.targets.gazebo import GazeboTarget
+from rei.generators.targets.gazebo import GazeboTarget, robot_model
 from rei.generators.templating import (
     check_xml,
     dump_json,
     make_environment,
-    normalise_angle,
-    relative_to,
     render,
     template_loader,
 )
+from rei.lang.suggest import did_you_mean
 
 LAUNCH = "rei_test.launch.xml"
 WORLD = "world.sdf"
-ANIMATOR = "animator.json"
 RUN = "run.json"
-MISSION_XML = "../mission/mission.xml"
-"""Where `rei-gen generate --target all` puts the mission target's file, seen from here."""
+SOURCES = "sources"
 RUN_FORMAT = "rei-run/1"
-DEFAULT_ROOM_DURATION = 60.0
+RUN_OPTIONS = ("controller", "duration", "monitor", "seed")
+BUILT_IN_CONTROLLERS = ("reference", "teleop", "teleop:circle", "teleop:forward_backward")
+"""`rei run`'s built-in controllers (rei.runtime.robot.BUILT_IN; a test keeps them equal)."""
 
 
 @dataclass(frozen=True)
 class RunOptions:
     seed: int
-    monitor: str
+    monitor: str | None
+    """The .vepl path relative to the input file; None: REI's default specification."""
     controller: str
-    duration: float
+    duration: float | None
+    """None: the mission's time limit."""
 
 
-def run_options(options: Mapping[str, str], mission: ConcreteMission | None) -> RunOptions:
+def run_options(options: Mapping[str, str]) -> RunOptions:
     """The launch target's options, checked; GenerationError names the option and the value."""
     seed_text = options.get("seed", "0")
     if not seed_text.isdigit():
         raise GenerationError(f"option seed: expected a whole number >= 0, found '{seed_text}'")
-    default_duration = mission.time_limit if mission is not None else DEFAULT_ROOM_DURATION
     duration_text = options.get("duration")
-    duration = default_duration
+    duration = None
     if duration_text is not None:
         try:
             duration = float(duration_text)
@@ -79,58 +87,87 @@ def run_options(options: Mapping[str, str], mission: ConcreteMission | None) -> 
         if not math.isfinite(duration) or duration <= 0:
             raise GenerationError(f"option duration: expected a finite number of seconds > 0, "
                                   f"found '{duration_text}'")
-    controller = options.get("controller", "navigator")
-    if not controller:
-        raise GenerationError("option controller: expected a controller name, found ''")
-    return RunOptions(int(seed_text), options.get("monitor", "default"), controller, duration)
+    controller = options.get("controller", "reference")
+    if controller not in BUILT_IN_CONTROLLERS and ":" not in controller:
+        raise GenerationError(f"option controller: expected one of "
+                              f"{', '.join(BUILT_IN_CONTROLLERS)} or module:Class, found "
+                              f"'{controller}'" + did_you_mean(controller,
+                                                               list(BUILT_IN_CONTROLLERS)))
+    monitor = options.get("monitor", "default")
+    return RunOptions(int(seed_text), None if monitor == "default" else monitor, controller,
+                      duration)
 
 
-def animator_config(world: ConcreteWorld) -> dict[str, Any]:
-    return {
-        "format": "rei-animator/1",
-        "world": world.name,
-        "objects": [
-            {"name": o.name, "role": o.role, "type": o.type.name, "loop": o.trajectory.loop,
-             "points": [{"t": p.t, "x": p.x, "y": p.y} for p in o.trajectory.points]}
-            for o in world.animated if o.trajectory is not None
-        ],
-    }
+def source_files(request: GenerationRequest, opts: RunOptions) -> list[Path]:
+    """Every file the run reads: the mission, its room, the room's catalogue, the .vepl."""
+    from rei.lang.workspace import load_room  # noqa: PLC0415  (the room's catalogue path)
 
-
-def run_config(request: GenerationRequest, opts: RunOptions) -> dict[str, Any]:
-    world, mission = request.world, request.mission
+    world = request.world
     assert world is not None
-    robot = world.robot
+    files = [request.source, Path(world.source)]
+    catalogue = load_room(world.source).room
+    if catalogue is not None and catalogue.catalogue_path is not None:
+        files.append(Path(catalogue.catalogue_path))
+    if opts.monitor is not None:
+        vepl = request.source.parent / opts.monitor
+        if vepl.suffix != ".vepl" or not vepl.is_file():
+            raise GenerationError(f"option monitor: expected a .vepl file (relative to "
+                                  f"'{request.source.name}') or 'default', found "
+                                  f"'{opts.monitor}'")
+        files.append(vepl)
+    return files
+
+
+def copy_sources(files: list[Path]) -> dict[str, bytes]:
+    """The files under ``sources/``, keeping their layout below their common folder (so the
+    mission still finds its room and the room its catalogue)."""
+    absolute = [os.path.abspath(f) for f in files]
+    common = os.path.commonpath([os.path.dirname(a) for a in absolute])
+    copies: dict[str, bytes] = {}
+    for path, original in zip(absolute, files, strict=True):
+        rel = os.path.relpath(path, common).replace(os.sep, "/")
+        try:
+            copies[f"{SOURCES}/{rel}"] = Path(path).read_bytes()
+        except OSError as exc:
+            raise GenerationError(f"cannot read '{original}': {exc.strerror}") from None
+    return copies
+
+
+def run_config(sources: list[str], has_vepl: bool, opts: RunOptions) -> dict[str, Any]:
+    """run.json: the same run as `rei run MISSION -o DIR` with these options."""
     return {
         "format": RUN_FORMAT,
-        "name": mission.name if mission is not None else world.name,
-        "sources": {
-            "comment": "paths relative to the folder of the generated file's input",
-            "room": relative_to(world.source, str(request.source)),
-            "mission": request.source.name if mission is not None else None,
-            "monitor": opts.monitor,
-        },
-        "artifacts": {
-            "comment": "paths relative to this file",
-            "launch": LAUNCH,
-            "gazebo_world": WORLD,
-            "animator": ANIMATOR,
-            "mission_xml": MISSION_XML if mission is not None else None,
-        },
-        "seed": opts.seed,
+        "mission": sources[0],
+        "vepl": sources[-1] if has_vepl else None,
         "controller": opts.controller,
+        "seed": opts.seed,
         "duration": opts.duration,
-        "robot": {"name": robot.name, "type": robot.type.name, "floor": robot.floor,
-                  "x": robot.pose.x, "y": robot.pose.y, "yaw": normalise_angle(robot.pose.yaw)},
+        "physics_rate": 100.0,
+        "odom_drift": 0.0,
+        "laser_noise": None,
+        "variation": True,
+        "monitor": True,
     }
+
+
+def bridge_topics() -> str:
+    """ros_gz_bridge arguments: ROS topic@ROS type[ (from Gazebo) or ] (to Gazebo) Gazebo type."""
+    return " ".join((
+        "/clock@rosgraph_msgs/msg/Clock[gz.msgs.Clock",
+        "/scan@sensor_msgs/msg/LaserScan[gz.msgs.LaserScan",
+        "/odom@nav_msgs/msg/Odometry[gz.msgs.Odometry",
+        "/tf@tf2_msgs/msg/TFMessage[gz.msgs.Pose_V",
+        "/cmd_vel@geometry_msgs/msg/Twist]gz.msgs.Twist",
+    ))
 
 
 @dataclass(frozen=True)
 class LaunchTarget:
     name: str = "launch"
-    description: str = "a ROS 2 launch file for the robot's components and REI's run.json"
+    description: str = ("REI's run.json (rei run --config) and a ROS 2 launch file for your "
+                        "navigation stack in Gazebo Sim")
     accepts: tuple[str, ...] = (".room", ".mission")
-    options: tuple[str, ...] = ("controller", "duration", "monitor", "seed")
+    options: tuple[str, ...] = RUN_OPTIONS
     """The --option keys this target reads."""
     loader: jinja2.BaseLoader | None = field(default=None, compare=False)
 
@@ -139,20 +176,31 @@ class LaunchTarget:
         if world is None:
             raise GenerationError(f"target 'launch' expected a .room or .mission file, found "
                                   f"'{request.source.name}'")
-        opts = run_options(request.options, mission)
-        robot = world.robot
-        env = make_environment(self.loader or template_loader("launch"), xml=True)
-        launch = render(env, "rei_test.launch.xml.j2", robot=robot, mission=mission,
-                        source_file=request.source.name, mission_xml=MISSION_XML,
-                        robot_yaw=normalise_angle(robot.pose.yaw),
-                        spawn_z=world.floor(robot.floor).type.height)
-        check_xml(launch, LAUNCH)
         tree = OutputTree()
-        tree.add_text(LAUNCH, launch)
-        tree.add_text(WORLD, GazeboTarget().render_world(request, "none"))
-        tree.add_text(ANIMATOR, dump_json(animator_config(world)))
-        tree.add_text(RUN, dump_json(run_config(request, opts)))
+        if mission is not None:
+            opts = run_options(request.options)
+            copies = copy_sources(source_files(request, opts))
+            for rel, data in copies.items():
+                tree.add_bytes(rel, data)
+            tree.add_text(RUN, dump_json(run_config(list(copies), opts.monitor is not None,
+                                                    opts)))
+        else:
+            given = sorted(set(request.options) & set(RUN_OPTIONS))
+            if given:
+                raise GenerationError(f"option {given[0]}: expected a .mission file (a room "
+                                      f"alone has nothing to run), found "
+                                      f"'{request.source.name}'")
+        tree.add_text(LAUNCH, self.render_launch(request, world))
+        tree.add_text(WORLD, GazeboTarget().render_world(request))
         return tree
+
+    def render_launch(self, request: GenerationRequest, world: ConcreteWorld) -> str:
+        robot = robot_model(world)
+        env = make_environment(self.loader or template_loader("launch"), xml=True)
+        launch = render(env, "rei_test.launch.xml.j2", robot=robot, mission=request.mission,
+                        source_file=request.source.name, bridge=bridge_topics())
+        check_xml(launch, LAUNCH)
+        return launch
 
 
 TARGET = LaunchTarget()

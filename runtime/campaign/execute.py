@@ -11,7 +11,6 @@ from __future__ import annotations
 import json
 import os
 import signal
-import subprocess
 import sys
 import threading
 import time
@@ -20,18 +19,24 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
+from rei.generators.output import open_output
 from rei.runtime.campaign.plan import RunSpec
+from rei.runtime.processes import child_status, start_child, stop_child
 from rei.runtime.results import RunSummary
 
 RunStatus = Literal["ran", "crashed", "hung", "interrupted"]
-"""ran: `rei run` wrote a summary; crashed: it ended without one (or with a broken one);
-hung: the watchdog killed it; interrupted: stopped by the user — Ctrl-C, or kill -9 of the run
-from outside the campaign — so it is not recorded and runs again when the campaign resumes."""
+"""ran: `rei run` ended by itself and wrote a summary; crashed: it died by a signal from
+anyone but the campaign (SIGKILL from a user or the out-of-memory killer, SIGSEGV, ...) or
+ended without a valid summary; hung: the watchdog killed it; interrupted: the campaign itself
+stopped it (Ctrl-C of the campaign, or it is ending), so it is not recorded and runs again when
+the campaign resumes. Only the campaign's own decision makes a run interrupted: anything else
+is a finished run, recorded once, so a run that always dies never keeps a campaign open."""
 
 DEFAULT_RUNNER: tuple[str, ...] = (sys.executable, "-m", "rei.runtime.cli")
 """The program that runs one mission; `run MISSION -o DIR ...` is appended."""
 
-EXIT_INTERRUPTED = 130
+POLL_SECONDS = 0.1
+"""How often the watchdog looks at a running run (and at the campaign's stop request)."""
 
 
 @dataclass(frozen=True)
@@ -65,6 +70,18 @@ def _tail(path: Path, lines: int = 8) -> str:
     return "\n".join(text.strip().splitlines()[-lines:])
 
 
+def death_reason(code: int) -> str:
+    """Words for a negative exit status: ``killed by signal 9 (SIGKILL; out of memory?)``."""
+    number = -code
+    try:
+        name = signal.Signals(number).name
+    except ValueError:
+        name = "an unknown signal"
+    # Nothing in a run sends itself SIGKILL: a user did, or the kernel's out-of-memory killer.
+    hint = "; out of memory?" if number == signal.SIGKILL else ""
+    return f"killed by signal {number} ({name}{hint})"
+
+
 def _read_summary(path: Path) -> tuple[dict[str, Any] | None, str]:
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
@@ -83,52 +100,51 @@ def execute_run(spec: RunSpec, work_dir: Path, *, timeout: float | None = None,
                 stop: threading.Event | None = None) -> RunResult:
     """Run ``spec`` with its output in ``work_dir`` (created); kill it after ``timeout`` s.
 
-    Setting ``stop`` kills the run at once and reports it interrupted (the campaign is ending).
+    Setting ``stop`` kills the run at once and reports it interrupted (the campaign is ending);
+    nothing else makes a run interrupted. On Linux the run dies with the calling thread, so
+    call this from a thread that lives until it returns (both engines do: the thread waits).
     """
     work_dir.mkdir(parents=True, exist_ok=True)
     limit = default_timeout(spec) if timeout is None else timeout
     argv = [*runner, *spec.run_argv(str(work_dir))]
     started = time.monotonic()
-    with open(work_dir / "campaign-stdout.txt", "wb") as out, \
-            open(work_dir / "campaign-stderr.txt", "wb") as err:
-        # The run stays in the campaign's process group on purpose: Ctrl-C, or kill -9 of the
-        # whole command's group, stops the runs too instead of leaving orphans computing.
-        process = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=out, stderr=err,
-                                   env=run_environment())
+    with open_output(work_dir / "campaign-stdout.txt", binary=True) as out, \
+            open_output(work_dir / "campaign-stderr.txt", binary=True) as err:
+        # Its own process group and death with this thread (rei.runtime.processes): Ctrl-C
+        # reaches the campaign, which stops the runs; kill -9 of the campaign kills them too.
+        process = start_child(argv, stdout=out, stderr=err, env=run_environment())
         try:
-            code: int | None = None
+            code = child_status(process)
             while code is None:
                 if stop is not None and stop.is_set():
-                    _kill(process)
+                    stop_child(process)
                     return RunResult(spec.run_id, "interrupted", None,
-                                     time.monotonic() - started, None, "interrupted")
+                                     time.monotonic() - started, None,
+                                     "stopped by the campaign")
                 if time.monotonic() - started > limit:
-                    _kill(process)
+                    stop_child(process)
                     return RunResult(spec.run_id, "hung", None, time.monotonic() - started,
                                      None, f"watchdog: no result after {limit:g} s wall-clock; "
                                            f"killed")
-                try:
-                    code = process.wait(timeout=0.1)
-                except subprocess.TimeoutExpired:
-                    pass
+                if stop is not None:
+                    stop.wait(POLL_SECONDS)
+                else:
+                    time.sleep(POLL_SECONDS)
+                code = child_status(process)
         except BaseException:
-            _kill(process)  # the campaign is stopping: never leave a run behind
+            stop_child(process)  # the campaign is stopping: never leave a run behind
             raise
     wall = time.monotonic() - started
-    if code in (EXIT_INTERRUPTED, -signal.SIGINT, -signal.SIGTERM):
-        return RunResult(spec.run_id, "interrupted", code, wall, None, "interrupted")
-    if code == -signal.SIGKILL:
-        # Nothing in a run sends itself SIGKILL: a user (or the OOM killer) stopped it. It is
-        # absent, not failed, and the next session of the same command runs it again.
-        return RunResult(spec.run_id, "interrupted", code, wall, None,
-                         "killed (SIGKILL) from outside the campaign")
+    if code < 0:
+        # Whoever sent it, it was not the campaign (that case returned above): the run is over.
+        detail = _tail(work_dir / "campaign-stderr.txt")
+        return RunResult(spec.run_id, "crashed", code, wall, None,
+                         death_reason(code) + (f": {detail}" if detail else ""))
     summary, problem = _read_summary(work_dir / "summary.json")
     if summary is None:
         detail = _tail(work_dir / "campaign-stderr.txt")
-        what = f"killed by signal {-code}" if code is not None and code < 0 else \
-            f"exit status {code}"
         return RunResult(spec.run_id, "crashed", code, wall, None,
-                         f"{what}, {problem}" + (f": {detail}" if detail else ""))
+                         f"exit status {code}, {problem}" + (f": {detail}" if detail else ""))
     return RunResult(spec.run_id, "ran", code, wall, summary, "")
 
 
@@ -142,11 +158,6 @@ def run_environment() -> dict[str, str]:
     for name in THREAD_VARIABLES:
         env.setdefault(name, "1")
     return env
-
-
-def _kill(process: subprocess.Popen[bytes]) -> None:
-    process.kill()
-    process.wait()
 
 
 def execute_run_remote(spec: RunSpec, work_dir: str, timeout: float | None = None,
@@ -175,6 +186,6 @@ def execute_run_remote(spec: RunSpec, work_dir: str, timeout: float | None = Non
                     shutil.move(entry, target / entry.name)
             return result
         files = {p.relative_to(work).as_posix(): p.read_bytes()
-                 for p in sorted(work.rglob("*")) if p.is_file()}
+                 for p in sorted(work.rglob("*")) if p.is_file() and not p.is_symlink()}
     return RunResult(result.run_id, result.status, result.exit_code, result.wall_time,
                      result.summary, result.message, files)

@@ -65,5 +65,6 @@ def run_campaign(plan: CampaignPlan, root: Path, engine: CampaignEngine,
         records = tuple(store.records())
         if len(records) < len(plan.runs):
             print(f"{len(plan.runs) - len(records)} of {len(plan.runs)} runs are not recorded "
-                  f"(killed from outside); run the same command again to run them", file=out)
+                  f"(stopped by the campaign); run the same command again to run them",
+                  file=out)
         return CampaignResult(root, plan, records, ran)

@@ -14,11 +14,11 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
+from rei.generators.output import write_atomic
 from rei.lang.errors import Span
 from rei.lang.source import SourceText
 from rei.runtime.campaign.errors import CampaignError
 from rei.runtime.campaign.plan import CampaignPlan
-from rei.runtime.campaign.store import write_atomic
 
 REMOVED_ROLES = ("human", "dynamic")
 
@@ -103,11 +103,14 @@ def write_static_twins(plan: CampaignPlan) -> list[Path]:
         except CampaignError:
             continue
         target = Path(spec.mission_file)
+        for folder in (target.parent.parent, target.parent):  # DIR/static/NAME: never a link
+            if folder.is_symlink():
+                folder.unlink()
         target.parent.mkdir(parents=True, exist_ok=True)
         for path, text in ((target.parent / twin.room_name, twin.room_text),
                            (target, twin.mission_text)):
             data = text.encode("utf-8")
-            if not path.is_file() or path.read_bytes() != data:
+            if path.is_symlink() or not path.is_file() or path.read_bytes() != data:
                 write_atomic(path, data)
         written.append(target)
     return written

@@ -20,18 +20,20 @@ a mission.
 from __future__ import annotations
 
 import csv
+import errno
 import fcntl
 import io
 import json
 import math
 import os
-import shutil
 import uuid
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
 
+from rei.generators.output import OutputTree, remove_tree, write_tree
+from rei.generators.output import write_atomic as write_atomic  # re-exported for the report
 from rei.runtime.campaign.errors import CampaignError
 from rei.runtime.campaign.execute import RunResult
 from rei.runtime.campaign.plan import CampaignPlan, RunSpec
@@ -102,16 +104,6 @@ class RunRecord:
                          result.message, summary)
 
 
-def write_atomic(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` so that readers see the old file or the whole new one."""
-    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
-    with open(tmp, "wb") as handle:
-        handle.write(data)
-        handle.flush()
-        os.fsync(handle.fileno())
-    os.replace(tmp, path)
-
-
 def _dumps(data: Any) -> bytes:
     return (json.dumps(data, indent=1, sort_keys=True, allow_nan=False) + "\n").encode()
 
@@ -148,6 +140,9 @@ class CampaignStore:
                 f"{root}: not a REI campaign folder (it has files but no {MANIFEST}); "
                 f"refusing to write into it — choose an empty or new -o folder")
         root.mkdir(parents=True, exist_ok=True)
+        if (root / RUNS).is_symlink() or (root / RUNS).exists() and not (root / RUNS).is_dir():
+            raise CampaignError(f"{root / RUNS}: expected the folder of the recorded runs, "
+                                f"found a link or a file; refusing to write through it")
         lock = _lock(root)
         try:
             if manifest.is_file():
@@ -213,25 +208,23 @@ class CampaignStore:
     def record(self, spec: RunSpec, result: RunResult, work_dir: Path) -> RunRecord | None:
         """Make the attempt in ``work_dir`` the run's recorded result (None if interrupted)."""
         if result.status == "interrupted":
-            shutil.rmtree(work_dir, ignore_errors=True)
+            remove_tree(work_dir)
             return None
-        for name, data in result.files.items():
-            target = work_dir / name
-            target.parent.mkdir(parents=True, exist_ok=True)
-            target.write_bytes(data)
+        if result.files:  # sent back by a worker: checked to stay inside, links not followed
+            write_tree(OutputTree(dict(result.files)), work_dir)
         record = RunRecord.from_result(spec, result)
         write_atomic(work_dir / RECORD, _dumps(record.to_json()))
         final = self.run_dir(spec.run_id)
         if final.exists():  # only reachable by running one plan twice at once: keep the first
-            shutil.rmtree(work_dir, ignore_errors=True)
+            remove_tree(work_dir)
             return None
         os.rename(work_dir, final)
         return record
 
     def _discard_partial(self) -> None:
         partial = self.root / RUNS / PARTIAL
-        if partial.exists():
-            shutil.rmtree(partial)
+        if partial.exists() or partial.is_symlink():
+            remove_tree(partial)
 
     # -- tables -------------------------------------------------------------------------
 
@@ -240,7 +233,18 @@ class CampaignStore:
 
 
 def _lock(root: Path) -> IO[bytes]:
-    handle = open(root / ".lock", "wb")  # noqa: SIM115  (held for the store's lifetime)
+    path = root / ".lock"
+    # Neither truncated nor replaced (another campaign may hold a lock on this very file);
+    # a link at the name is removed, never followed.
+    try:
+        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o666)
+    except OSError as exc:
+        if exc.errno != errno.ELOOP:
+            raise CampaignError(f"{path}: cannot create the lock file ({exc.strerror})") \
+                from exc
+        path.unlink()
+        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o666)
+    handle = os.fdopen(fd, "wb")
     try:
         fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
     except BlockingIOError as exc:

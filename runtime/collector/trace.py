@@ -6,7 +6,16 @@ a trace gives back bit-identical numbers. Per-object poses and twists are writte
 rows that changed since the previous sample (static objects appear once), which keeps a
 trace of a room of walls small without losing exactness. The writer streams to
 ``NAME.partial`` and renames it into place at ``finish``: a trace file that exists is
-complete; a killed run leaves only the partial file. This module must never import pybullet.
+complete; a killed run leaves only the partial file.
+
+A recording is input like any other: the reader checks every field of every line (JSON
+types, with a bool never a number; finite numbers in their ranges; sequence numbers 0, 1, 2,
+... without gaps; times that never go back; known event kinds, outcomes and causes; object
+indices within the header's table; exactly one end line, last) and refuses the first
+violation with a ``TraceError`` naming ``path:line: field: expected ..., found ...``. The
+reader stays lazy: a damaged line 5000 is found when line 5000 is read. The writer applies
+the same rules to what it is about to write, so whatever it writes reads back and it never
+writes what the reader would refuse. This module must never import pybullet.
 """
 
 from __future__ import annotations
@@ -14,17 +23,22 @@ from __future__ import annotations
 import json
 import math
 import os
+import sys
 from collections.abc import Iterator
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, Any, BinaryIO, get_args
 
 import numpy as np
 
 from rei.catalogue import Box, Cylinder, Footprint, Polygon, Tile
+from rei.generators.output import open_output
 from rei.runtime.errors import RunError
 from rei.runtime.messages import (
     FAILURE_CAUSES,
+    MISSION_EVENT_KINDS,
+    OBJECT_ROLES,
     SCHEMA_VERSION,
+    TASK_EVENT_KINDS,
     GoalFacts,
     LaserScan,
     MissionEvent,
@@ -35,13 +49,16 @@ from rei.runtime.messages import (
     Sample,
     StreamHeader,
 )
+from rei.runtime.results import Outcome
 
 FORMAT = "rei-trace"
 TRACE_VERSION = 1
+OUTCOMES: tuple[str, ...] = get_args(Outcome)
+NAV_STATES: tuple[str, ...] = tuple(s.value for s in NavState)
 
 
 class TraceError(RunError):
-    """A trace file cannot be read: wrong format or version, or damaged."""
+    """A trace file cannot be read (or written): wrong format or version, or damaged."""
 
 
 def _dumps(value: Any) -> str:
@@ -58,24 +75,9 @@ def _footprint_json(fp: Footprint) -> dict[str, Any]:
     return {"shape": "tile"}
 
 
-def _footprint(data: dict[str, Any]) -> Footprint:
-    shape = data["shape"]
-    if shape == "box":
-        return Box(data["size"][0], data["size"][1])
-    if shape == "cylinder":
-        return Cylinder(data["radius"])
-    if shape == "polygon":
-        return Polygon(tuple(tuple(p) for p in data["points"]))
-    return Tile()
-
-
 def _object_json(o: ObservedObject) -> dict[str, Any]:
     return {"name": o.name, "role": o.role, "type": o.type,
             "footprint": _footprint_json(o.footprint), "height": o.height}
-
-
-def _object(d: dict[str, Any]) -> ObservedObject:
-    return ObservedObject(d["name"], d["role"], d["type"], _footprint(d["footprint"]), d["height"])
 
 
 def header_json(h: StreamHeader) -> dict[str, Any]:
@@ -101,8 +103,447 @@ def _event_json(e: MissionEvent) -> dict[str, Any]:
             "cause": e.cause}
 
 
+def _sample_json(sample: Sample, poses: list[list[Any]],
+                 twists: list[list[Any]]) -> dict[str, Any]:
+    b = sample.belief
+    scan = None
+    if b.scan is not None:
+        s = b.scan
+        scan = {"angle_min": s.angle_min, "angle_increment": s.angle_increment,
+                "range_min": s.range_min, "range_max": s.range_max,
+                "ranges": np.asarray(s.ranges, dtype=float).tolist()}
+    return {
+        "seq": sample.seq, "time": sample.time,
+        "robot_pose": list(sample.robot_pose), "robot_twist": list(sample.robot_twist),
+        "poses": poses, "twists": twists,
+        "belief": {"odom": list(b.odom), "odom_twist": list(b.odom_twist),
+                   "laser_min": b.laser_min, "scan": scan, "nav_state": b.nav_state.value,
+                   "task": b.task, "cmd": list(b.cmd)},
+        "events": [_event_json(e) for e in sample.events],
+        "contacts": list(sample.contacts),
+    }
+
+
+# ---- the rules: one set for the reader and the writer ----------------------------------------
+
+_HEADER_KEYS = frozenset(("format", "trace_version", "version", "world", "mission", "seed",
+                          "rate", "robot", "objects", "tile_size", "floors", "laser_mount",
+                          "mission_facts"))
+_OBJECT_KEYS = frozenset(("name", "role", "type", "footprint", "height"))
+_FOOTPRINT_KEYS = {"box": frozenset(("shape", "size")),
+                   "cylinder": frozenset(("shape", "radius")),
+                   "polygon": frozenset(("shape", "points")), "tile": frozenset(("shape",))}
+_FACTS_KEYS = frozenset(("goals", "cycles", "time_limit", "speed_limit", "turn_limit",
+                         "mission_max_speed"))
+_GOAL_KEYS = frozenset(("name", "x", "y", "heading", "tolerance", "heading_tolerance",
+                        "timeout"))
+_SAMPLE_KEYS = frozenset(("seq", "time", "robot_pose", "robot_twist", "poses", "twists",
+                          "belief", "events", "contacts"))
+_BELIEF_KEYS = frozenset(("odom", "odom_twist", "laser_min", "scan", "nav_state", "task",
+                          "cmd"))
+_SCAN_KEYS = frozenset(("angle_min", "angle_increment", "range_min", "range_max", "ranges"))
+_EVENT_KEYS = frozenset(("kind", "time", "task", "index", "reason", "cause"))
+_END_KEYS = frozenset(("end", "outcome", "reason"))
+_FLOATS = frozenset((float,))
+_COUNTS = {2: "two", 3: "three"}
+
+
+def _show(value: Any) -> str:
+    """A found value for a message: its repr, cut short (a damaged line can be megabytes)."""
+    try:
+        text = repr(value)
+    except ValueError:  # an int of more digits than Python converts to text
+        return "a number too large to show"
+    return text if len(text) <= 80 else text[:77] + "..."
+
+
+def _fmt(x: float) -> str:
+    return f"{x:.10g}"
+
+
+def _at(where: str, field: str) -> str:
+    return f"{where}: {field}" if field else where
+
+
+def _is_number(value: Any) -> bool:
+    """A finite JSON number; a bool is not one, nor an int too large for a float."""
+    if isinstance(value, float):
+        return math.isfinite(value)
+    return isinstance(value, int) and not isinstance(value, bool) \
+        and abs(value) <= sys.float_info.max
+
+
+def _is_whole(value: Any) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
+def _range_text(low: float, high: float, low_open: bool, note: str) -> str:
+    bounds = []
+    if math.isfinite(low):
+        bounds.append(f"{'>' if low_open else '>='} {_fmt(low)}")
+    if math.isfinite(high):
+        bounds.append(f"<= {_fmt(high)}")
+    return " and ".join(bounds) + (f" {note}" if note else "")
+
+
+def _number(value: Any, where: str, field: str, low: float = -math.inf,
+            high: float = math.inf, low_open: bool = False, note: str = "") -> float:
+    """``value`` as a finite number in its range, else a located error."""
+    if _is_number(value) and (value > low if low_open else value >= low) and value <= high:
+        return float(value)
+    expected = " ".join(("a finite number", _range_text(low, high, low_open, note))).strip()
+    raise TraceError(f"{_at(where, field)}: expected {expected}, found {_show(value)}")
+
+
+def _numbers(value: Any, where: str, field: str, n: int, form: str, low: float = -math.inf,
+             low_open: bool = False) -> tuple[float, ...]:
+    """Exactly ``n`` finite numbers (above ``low``, when given): a pose, a twist, a size."""
+    # the common case first, as cheap as it gets: floats only, finite, no bound
+    if type(value) is list and len(value) == n and low == -math.inf \
+            and _FLOATS.issuperset(map(type, value)) and all(map(math.isfinite, value)):
+        return tuple(value)
+    if isinstance(value, list) and len(value) == n and all(
+            _is_number(v) and (v > low if low_open else v >= low) for v in value):
+        return tuple(float(v) for v in value)
+    bound = _range_text(low, math.inf, low_open, "")
+    raise TraceError(f"{_at(where, field)}: expected {_COUNTS.get(n, str(n))} finite numbers"
+                     f"{' ' + bound if bound else ''} {form}, found {_show(value)}")
+
+
+class _Fields:
+    """One JSON object of a trace line, its fields taken out checked; every error names the
+    line (``where``) and the field's path from the line (``prefix.key``)."""
+
+    __slots__ = ("data", "prefix", "where")
+
+    def __init__(self, data: Any, where: str, prefix: str, keys: frozenset[str],
+                 what: str) -> None:
+        if not isinstance(data, dict):
+            raise TraceError(f"{_at(where, prefix)}: expected {what}, found {_show(data)}")
+        if data.keys() != keys:
+            missing = sorted(keys - data.keys())
+            if missing:
+                raise TraceError(f"{_at(where, prefix)}: expected {what} with the field "
+                                 f"'{missing[0]}', found none")
+            unknown = sorted(data.keys() - keys)
+            raise TraceError(f"{_at(where, prefix)}: expected only the fields "
+                             f"{', '.join(sorted(keys))}, found the unknown field "
+                             f"{_show(unknown[0])}")
+        self.data: dict[str, Any] = data
+        self.where = where
+        self.prefix = prefix
+
+    def field(self, key: str) -> str:
+        return f"{self.prefix}.{key}" if self.prefix else key
+
+    def number(self, key: str, low: float = -math.inf, high: float = math.inf,
+               low_open: bool = False, note: str = "") -> float:
+        return _number(self.data[key], self.where, self.field(key), low, high, low_open, note)
+
+    def optional_number(self, key: str, **bounds: Any) -> float | None:
+        return None if self.data[key] is None else self.number(key, **bounds)
+
+    def numbers(self, key: str, n: int, form: str, **bounds: Any) -> tuple[float, ...]:
+        return _numbers(self.data[key], self.where, self.field(key), n, form, **bounds)
+
+    def whole(self, key: str, low: int) -> int:
+        value = self.data[key]
+        if _is_whole(value) and value >= low:
+            return int(value)
+        raise TraceError(f"{self.where}: {self.field(key)}: expected a whole number >= {low}, "
+                         f"found {_show(value)}")
+
+    def text(self, key: str) -> str:
+        value = self.data[key]
+        if isinstance(value, str):
+            return value
+        raise TraceError(f"{self.where}: {self.field(key)}: expected a string, found "
+                         f"{_show(value)}")
+
+    def optional_text(self, key: str) -> str | None:
+        value = self.data[key]
+        if value is None or isinstance(value, str):
+            return value
+        raise TraceError(f"{self.where}: {self.field(key)}: expected a string or null, found "
+                         f"{_show(value)}")
+
+    def choice(self, key: str, allowed: tuple[str, ...], note: str = "") -> str:
+        value = self.data[key]
+        if isinstance(value, str) and value in allowed:
+            return value
+        raise TraceError(f"{self.where}: {self.field(key)}: expected one of "
+                         f"{', '.join(map(repr, allowed))}{note}, found {_show(value)}")
+
+    def fields(self, key: str, keys: frozenset[str], what: str) -> _Fields:
+        return _Fields(self.data[key], self.where, self.field(key), keys, what)
+
+    def array(self, key: str, what: str) -> list[Any]:
+        value = self.data[key]
+        if isinstance(value, list):
+            return value
+        raise TraceError(f"{self.where}: {self.field(key)}: expected a list of {what}, found "
+                         f"{_show(value)}")
+
+
+def _footprint(value: Any, where: str, field: str, robot: bool) -> Footprint:
+    shapes = tuple(s for s in _FOOTPRINT_KEYS if not (robot and s == "tile"))
+    shape = value.get("shape") if isinstance(value, dict) else None
+    if shape not in shapes:
+        if not isinstance(value, dict):
+            raise TraceError(f"{where}: {field}: expected a footprint (a JSON object), found "
+                             f"{_show(value)}")
+        raise TraceError(f"{where}: {field}.shape: expected one of {', '.join(map(repr, shapes))}"
+                         f"{' (a robot has its own footprint)' if robot else ''}, found "
+                         f"{_show(shape)}")
+    f = _Fields(value, where, field, _FOOTPRINT_KEYS[shape], f"a {shape} footprint")
+    if shape == "box":
+        x, y = f.numbers("size", 2, "[size_x, size_y]", low=0.0, low_open=True)
+        return Box(x, y)
+    if shape == "cylinder":
+        return Cylinder(f.number("radius", low=0.0, low_open=True))
+    if shape == "polygon":
+        points = f.data["points"]
+        if isinstance(points, list) and len(points) >= 3 and all(
+                isinstance(p, list) and len(p) == 2 and all(map(_is_number, p)) for p in points):
+            pts = tuple((float(p[0]), float(p[1])) for p in points)
+            # the shoelace area: a polygon of no area is a footprint nothing can touch
+            area = sum(a[0] * b[1] - b[0] * a[1] for a, b in zip(pts, pts[1:] + pts[:1],
+                                                                  strict=True))
+            if area != 0.0:
+                return Polygon(pts)
+        raise TraceError(f"{where}: {field}.points: expected at least three [x, y] points of "
+                         f"finite numbers enclosing an area, found {_show(points)}")
+    return Tile()
+
+
+def _object(value: Any, where: str, field: str, robot: bool = False) -> ObservedObject:
+    o = _Fields(value, where, field, _OBJECT_KEYS, "an observed object (a JSON object)")
+    return ObservedObject(o.text("name"), o.choice("role", OBJECT_ROLES),  # type: ignore[arg-type]
+                          o.text("type"), _footprint(o.data["footprint"], where,
+                                                     o.field("footprint"), robot),
+                          o.number("height", low=0.0))
+
+
+def _floor(value: Any, where: str, field: str) -> tuple[str, float, float]:
+    if isinstance(value, list) and len(value) == 3 and isinstance(value[0], str) \
+            and _is_number(value[1]) and _is_number(value[2]):
+        return value[0], float(value[1]), float(value[2])
+    raise TraceError(f"{where}: {field}: expected [name, x, y] with two finite numbers, found "
+                     f"{_show(value)}")
+
+
+def _mission_facts(value: Any, where: str) -> MissionFacts | None:
+    """The header's mission facts, every number checked: a requirement reading a NaN goal or
+    a zero speed limit would give verdicts about nothing."""
+    if value is None:
+        return None
+    f = _Fields(value, where, "mission_facts", _FACTS_KEYS,
+                "the mission's facts (a JSON object, or null)")
+    raw = f.array("goals", "goals")
+    if not raw:
+        raise TraceError(f"{where}: mission_facts.goals: expected at least one goal, found none")
+    goals = []
+    for i, item in enumerate(raw):
+        g = _Fields(item, where, f"mission_facts.goals[{i}]", _GOAL_KEYS,
+                    "a goal (a JSON object)")
+        goals.append(GoalFacts(
+            g.text("name"), g.number("x"), g.number("y"),
+            g.optional_number("heading", low=-math.pi, high=math.pi),
+            g.number("tolerance", low=0.0, low_open=True),
+            g.number("heading_tolerance", low=0.0, low_open=True, high=math.pi),
+            g.number("timeout", low=0.0, low_open=True)))
+    positive: dict[str, Any] = {"low": 0.0, "low_open": True}
+    return MissionFacts(tuple(goals), f.whole("cycles", 1),
+                        f.number("time_limit", **positive), f.number("speed_limit", **positive),
+                        f.number("turn_limit", **positive),
+                        f.optional_number("mission_max_speed", **positive))
+
+
+def _header(data: Any, where: str) -> StreamHeader:
+    if not isinstance(data, dict):
+        raise TraceError(f"{where}: expected a REI trace header (a JSON object), found "
+                         f"{_show(data)}")
+    if data.get("format") != FORMAT:
+        raise TraceError(f"{where}: format: expected a REI trace ('{FORMAT}'), found "
+                         f"{_show(data.get('format'))}")
+    if data.get("trace_version") != TRACE_VERSION or data.get("version") != SCHEMA_VERSION:
+        raise TraceError(f"{where}: expected trace version {TRACE_VERSION} with sample schema "
+                         f"{SCHEMA_VERSION}, found {data.get('trace_version')!r} with schema "
+                         f"{data.get('version')!r} (record it again with this REI)")
+    h = _Fields(data, where, "", _HEADER_KEYS, "a REI trace header")
+    objects = h.array("objects", "observed objects")
+    floors = h.array("floors", "floors")
+    laser_mount = h.numbers("laser_mount", 2, "[x, y]")
+    return StreamHeader(
+        SCHEMA_VERSION, h.text("world"), h.text("mission"), h.whole("seed", 0),
+        h.number("rate", low=0.0, low_open=True), _object(data["robot"], where, "robot", True),
+        tuple(_object(o, where, f"objects[{i}]") for i, o in enumerate(objects)),
+        h.number("tile_size", low=0.0, low_open=True),
+        tuple(_floor(f, where, f"floors[{i}]") for i, f in enumerate(floors)),
+        (laser_mount[0], laser_mount[1]), _mission_facts(data["mission_facts"], where))
+
+
+def _end(data: Any, where: str, last_time: float | None) -> tuple[float, str, str]:
+    """(end time, outcome, reason) of an end line after a sample at ``last_time``."""
+    e = _Fields(data, where, "", _END_KEYS, "the end line")
+    low, note = (0.0, "") if last_time is None else (last_time, "(the last sample's time)")
+    return e.number("end", low=low, note=note), e.choice("outcome", OUTCOMES), e.text("reason")
+
+
+class _StreamRules:
+    """What holds between the lines of one trace: sequence numbers without gaps, times that
+    never go back, mission events in order, rows within the header's object table."""
+
+    def __init__(self, n_objects: int) -> None:
+        self.n = n_objects
+        self.poses = np.zeros((n_objects, 3))
+        self.twists = np.zeros((n_objects, 3))
+        self.seq = 0
+        """The next sample's sequence number."""
+        self.time: float | None = None
+        """The previous sample's time."""
+        self.event_time = 0.0
+        self.events = 0
+        self.ended_at: float | None = None
+        """When the mission's 'end' event happened; nothing may follow it."""
+
+    def sample(self, data: Any, where: str) -> Sample:
+        d = _Fields(data, where, "", _SAMPLE_KEYS, "a sample line (a JSON object)")
+        seq = data["seq"]
+        if not (_is_whole(seq) and seq == self.seq):
+            raise TraceError(f"{where}: seq: expected {self.seq} (samples are numbered 0, 1, "
+                             f"2, ... without gaps), found {_show(seq)}")
+        previous = self.time
+        time = d.number("time", low=0.0 if previous is None else previous,
+                        note="" if previous is None else "(the previous sample's time)")
+        robot_pose = d.numbers("robot_pose", 3, "[x, y, yaw]")
+        robot_twist = d.numbers("robot_twist", 3, "[vx, vy, wz]")
+        first = previous is None
+        self._rows(d, "poses", self.poses, first)
+        self._rows(d, "twists", self.twists, first)
+        belief = self._belief(d.fields("belief", _BELIEF_KEYS,
+                                       "the robot's belief (a JSON object)"))
+        events = self._events(d, time, 0.0 if previous is None else previous)
+        contacts = self._contacts(data["contacts"], where)
+        self.seq, self.time = seq + 1, time
+        return Sample(seq, time, robot_pose, robot_twist,  # type: ignore[arg-type]
+                      self.poses.copy(), self.twists.copy(), belief, events, contacts)
+
+    def _rows(self, d: _Fields, key: str, target: np.ndarray, first: bool) -> None:
+        """Rows [index, a, b, c] of the objects that changed, by increasing index; the first
+        sample has every object's (an object never given would sit at the origin)."""
+        rows = d.array(key, "[index, a, b, c] rows")
+        n, last = self.n, -1
+        for k, row in enumerate(rows):
+            if not (isinstance(row, list) and len(row) == 4):
+                raise TraceError(f"{d.where}: {key}[{k}]: expected a row [index, a, b, c], "
+                                 f"found {_show(row)}")
+            i = row[0]
+            if not (_is_whole(i) and last < i < n):
+                order = f" above the previous row's {last}" if last >= 0 else ""
+                raise TraceError(f"{d.where}: {key}[{k}][0]: expected an index of the header's "
+                                 f"{n} objects (0 to {n - 1}){order}, found {_show(i)}")
+            if not (_is_number(row[1]) and _is_number(row[2]) and _is_number(row[3])):
+                raise TraceError(f"{d.where}: {key}[{k}]: expected three finite numbers after "
+                                 f"the index, found {_show(row)}")
+            target[i] = row[1:]
+            last = i
+        if first and len(rows) != n:
+            raise TraceError(f"{d.where}: {key}: expected a row for each of the header's {n} "
+                             f"objects in the first sample, found {len(rows)}")
+
+    def _belief(self, b: _Fields) -> RobotBelief:
+        odom = b.numbers("odom", 3, "[x, y, yaw]")
+        odom_twist = b.numbers("odom_twist", 2, "[linear, angular]")
+        laser_min = b.number("laser_min", low=0.0)
+        scan = None
+        if b.data["scan"] is not None:
+            scan = self._scan(b.fields("scan", _SCAN_KEYS, "a laser scan (a JSON object, or "
+                                                           "null)"))
+        nav_state = NavState(b.choice("nav_state", NAV_STATES))
+        task = b.optional_text("task")
+        cmd = b.numbers("cmd", 2, "[linear, angular]")
+        return RobotBelief(odom, odom_twist, laser_min, scan,  # type: ignore[arg-type]
+                           nav_state, task, cmd)  # type: ignore[arg-type]
+
+    @staticmethod
+    def _scan(s: _Fields) -> LaserScan:
+        angle_min = s.number("angle_min")
+        increment = s.number("angle_increment", low=0.0, low_open=True)
+        range_min = s.number("range_min", low=0.0)
+        range_max = s.number("range_max", low=range_min, low_open=True, note="(range_min)")
+        ranges = s.array("ranges", "ranges")
+        field = s.field("ranges")
+        if not ranges:
+            raise TraceError(f"{s.where}: {field}: expected at least one range, found none")
+        if not _FLOATS.issuperset(map(type, ranges)):  # 360 beams: one pass for the usual case
+            for k, r in enumerate(ranges):
+                _number(r, s.where, f"{field}[{k}]", low=0.0)
+        values = np.array(ranges, dtype=float)
+        if not (bool(np.isfinite(values).all()) and bool((values >= 0.0).all())):
+            k = int(np.flatnonzero(~(np.isfinite(values) & (values >= 0.0)))[0])
+            _number(ranges[k], s.where, f"{field}[{k}]", low=0.0)
+        return LaserScan(angle_min, increment, range_min, range_max, values)
+
+    def _events(self, d: _Fields, time: float, previous: float) -> tuple[MissionEvent, ...]:
+        raw = d.array("events", "mission events")
+        events = []
+        for k, item in enumerate(raw):
+            e = _Fields(item, d.where, f"events[{k}]", _EVENT_KEYS,
+                        "a mission event (a JSON object)")
+            kind = e.choice("kind", MISSION_EVENT_KINDS)
+            if self.ended_at is not None:
+                raise TraceError(f"{d.where}: events[{k}].kind: expected no event after the "
+                                 f"mission's 'end' at t={_fmt(self.ended_at)}, found "
+                                 f"{kind!r}")
+            if kind == "begin" and self.events:
+                raise TraceError(f"{d.where}: events[{k}].kind: expected 'begin' only as the "
+                                 f"first event of the mission, found it after {self.events}")
+            low = max(previous, self.event_time)
+            at = e.number("time", low=low, high=time,
+                          note="(after the previous event or sample, by this sample)")
+            if kind in TASK_EVENT_KINDS:
+                task, index = e.text("task"), e.whole("index", 0)
+            else:
+                for key in ("task", "index"):
+                    if e.data[key] is not None:
+                        raise TraceError(f"{d.where}: {e.field(key)}: expected null for kind "
+                                         f"{kind!r}, found {_show(e.data[key])}")
+                task, index = None, None
+            reason = e.text("reason")
+            allowed = FAILURE_CAUSES if kind == "task_fail" else ("",)
+            cause = e.choice("cause", allowed, f" for kind {kind!r}")
+            events.append(MissionEvent(kind, at, task, index, reason,  # type: ignore[arg-type]
+                                       cause))
+            self.event_time = at
+            self.events += 1
+            if kind == "end":
+                self.ended_at = at
+        return tuple(events)
+
+    def _contacts(self, value: Any, where: str) -> tuple[int, ...]:
+        """Indices of touched objects: a bad one would make the monitor see a collision with
+        the wrong body, or none."""
+        n = self.n
+        if isinstance(value, list) and all(_is_whole(i) and 0 <= i < n for i in value) \
+                and all(a < b for a, b in zip(value, value[1:], strict=False)):
+            return tuple(value)
+        raise TraceError(f"{where}: contacts: expected indices of the header's {n} objects "
+                         f"(0 to {n - 1}) in increasing order, found {_show(value)}")
+
+    def end(self, data: Any, where: str) -> tuple[float, str, str]:
+        return _end(data, where, self.time)
+
+
+# ---- writing --------------------------------------------------------------------------------
+
+
 class TraceWriter:
-    """A ``SampleSink`` writing the trace file; ``path`` appears only when finished."""
+    """A ``SampleSink`` writing the trace file; ``path`` appears only when finished.
+
+    Raises ``TraceError`` (and writes nothing more) for a header, sample or end the reader
+    would refuse: a non-finite number, a time going back, an unknown kind, ...
+    """
 
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
@@ -110,11 +551,26 @@ class TraceWriter:
         self._file: IO[str] | None = None
         self._poses: np.ndarray | None = None
         self._twists: np.ndarray | None = None
+        self._rules: _StreamRules | None = None
+        self._line = 0
+
+    def _refuse(self, exc: TraceError) -> TraceError:
+        if self._file is not None:
+            self._file.close()
+            self._file = None
+        return TraceError(f"cannot write the trace: {exc}")
 
     def start(self, header: StreamHeader) -> None:
+        data = header_json(header)
+        try:
+            _header(data, f"{self.partial}:1")
+        except TraceError as exc:
+            raise self._refuse(exc) from None
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        self._file = open(self.partial, "w", encoding="utf-8", newline="\n")  # noqa: SIM115
-        self._file.write(_dumps(header_json(header)) + "\n")
+        self._file = open_output(self.partial)  # never written through a link
+        self._file.write(_dumps(data) + "\n")
+        self._rules = _StreamRules(len(header.objects))
+        self._line = 1
 
     @staticmethod
     def _changed(new: np.ndarray, old: np.ndarray | None) -> list[list[Any]]:
@@ -125,33 +581,27 @@ class TraceWriter:
         return [[i, *new[i].tolist()] for i in rows]
 
     def feed(self, sample: Sample) -> None:
-        assert self._file is not None, "start() first"
-        b = sample.belief
-        scan = None
-        if b.scan is not None:
-            s = b.scan
-            scan = {"angle_min": s.angle_min, "angle_increment": s.angle_increment,
-                    "range_min": s.range_min, "range_max": s.range_max,
-                    "ranges": np.asarray(s.ranges, dtype=float).tolist()}
-        line = {
-            "seq": sample.seq, "time": sample.time,
-            "robot_pose": list(sample.robot_pose), "robot_twist": list(sample.robot_twist),
-            "poses": self._changed(sample.poses, self._poses),
-            "twists": self._changed(sample.twists, self._twists),
-            "belief": {"odom": list(b.odom), "odom_twist": list(b.odom_twist),
-                       "laser_min": b.laser_min, "scan": scan, "nav_state": b.nav_state.value,
-                       "task": b.task, "cmd": list(b.cmd)},
-            "events": [_event_json(e) for e in sample.events],
-            "contacts": list(sample.contacts),
-        }
+        assert self._file is not None and self._rules is not None, "start() first"
+        line = _sample_json(sample, self._changed(sample.poses, self._poses),
+                            self._changed(sample.twists, self._twists))
+        try:
+            self._rules.sample(line, f"{self.partial}:{self._line + 1}")
+        except TraceError as exc:
+            raise self._refuse(exc) from None
         self._file.write(_dumps(line) + "\n")
+        self._line += 1
         # Only what was written is the base of the next sample's changed rows.
         self._poses, self._twists = sample.poses.copy(), sample.twists.copy()
 
     def finish(self, end_time: float, outcome: str, reason: str) -> None:
-        if self._file is None:
+        if self._file is None or self._rules is None:
             return
-        self._file.write(_dumps({"end": end_time, "outcome": outcome, "reason": reason}) + "\n")
+        line = {"end": end_time, "outcome": outcome, "reason": reason}
+        try:
+            self._rules.end(line, f"{self.partial}:{self._line + 1}")
+        except TraceError as exc:
+            raise self._refuse(exc) from None
+        self._file.write(_dumps(line) + "\n")
         self._file.flush()
         os.fsync(self._file.fileno())
         self._file.close()
@@ -169,167 +619,120 @@ def write(path: str | Path, header: StreamHeader, samples: Iterator[Sample] | li
     writer.finish(end_time, outcome, reason)
 
 
-def _header(data: dict[str, Any], path: Path) -> StreamHeader:
-    if data.get("format") != FORMAT:
-        raise TraceError(f"{path}: expected a REI trace (format '{FORMAT}'), found "
-                         f"{data.get('format')!r}")
-    if data.get("trace_version") != TRACE_VERSION or data.get("version") != SCHEMA_VERSION:
-        raise TraceError(f"{path}: expected trace version {TRACE_VERSION} with sample schema "
-                         f"{SCHEMA_VERSION}, found {data.get('trace_version')!r} with schema "
-                         f"{data.get('version')!r} (record it again with this REI)")
-    return StreamHeader(data["version"], data["world"], data["mission"], data["seed"],
-                        data["rate"], _object(data["robot"]),
-                        tuple(_object(o) for o in data["objects"]), data["tile_size"],
-                        tuple((f[0], f[1], f[2]) for f in data["floors"]),
-                        _pair(data["laser_mount"], path, "laser_mount"),
-                        _mission_facts(data["mission_facts"], f"{path}:1: mission_facts"))
+# ---- reading --------------------------------------------------------------------------------
 
 
-def _is_number(value: Any) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) \
-        and math.isfinite(value)
+def _load(raw: bytes, where: str) -> Any:
+    """One line's JSON value; a line that is not JSON text is a located error."""
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise TraceError(f"{where}: expected UTF-8 text, found the bytes "
+                         f"{raw[exc.start:exc.start + 8]!r} at column {exc.start + 1}") from None
+    if not text.strip():
+        raise TraceError(f"{where}: expected a JSON object, found an empty line")
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise TraceError(f"{where}: expected a JSON object, found {_show(text.strip())} "
+                         f"({exc.msg} at column {exc.colno})") from None
+    except (ValueError, RecursionError) as exc:  # a 5000-digit number, [[[[... nested
+        raise TraceError(f"{where}: expected a JSON object, found a line JSON cannot hold "
+                         f"({type(exc).__name__}: {_show(str(exc))})") from None
 
 
-def _pair(value: Any, path: Path, what: str, line: int = 1,
-          form: str = "[x, y]") -> tuple[float, float]:
-    """Two finite numbers (the edge rejects what the monitor cannot use)."""
-    if not (isinstance(value, list) and len(value) == 2 and all(map(_is_number, value))):
-        raise TraceError(f"{path}:{line}: {what}: expected two finite numbers {form}, found "
-                         f"{value!r}")
-    return float(value[0]), float(value[1])
+def _open(path: Path) -> BinaryIO:
+    try:
+        return open(path, "rb")  # noqa: SIM115  (closed by the caller)
+    except OSError as exc:
+        raise TraceError(f"cannot read the trace '{path}': {exc.strerror}") from None
 
 
-def _number(data: dict[str, Any], key: str, where: str, *, low: float = -math.inf,
-            high: float = math.inf, low_open: bool = False) -> float:
-    """A finite number of the mission facts in its range; ``where`` locates the object."""
-    value = data[key]
-    if _is_number(value) and (value > low if low_open else value >= low) and value <= high:
-        return float(value)
-    bounds = []
-    if math.isfinite(low):
-        bounds.append(f"{'>' if low_open else '>='} {low:g}")
-    if math.isfinite(high):
-        bounds.append(f"<= {high:g}")
-    expected = " ".join(("a finite number", " and ".join(bounds))).strip()
-    raise TraceError(f"{where}.{key}: expected {expected}, found {value!r}")
+def _is_partial(path: Path) -> bool:
+    """A killed run's trace (``NAME.partial``) may lack its end line; a finished one may not."""
+    return path.name.endswith(".partial")
 
 
-def _optional(data: dict[str, Any], key: str, where: str, **bounds: Any) -> float | None:
-    return None if data[key] is None else _number(data, key, where, **bounds)
+def _no_end(path: Path, lineno: int) -> TraceError:
+    return TraceError(f"{path}:{lineno}: expected the end line {{\"end\": time, \"outcome\": "
+                      f"..., \"reason\": ...}} after the last sample, found the end of the file "
+                      f"(the trace was cut short; a killed run leaves only NAME.partial)")
 
 
-def _mission_facts(data: Any, where: str) -> MissionFacts | None:
-    """The header's mission facts, every number checked: a requirement reading a NaN goal or
-    a zero speed limit would give verdicts about nothing."""
-    if data is None:
-        return None
-    if not isinstance(data, dict) or not isinstance(data.get("goals"), list):
-        raise TraceError(f"{where}: expected an object with a list of goals, found {data!r}")
-    goals = []
-    for i, g in enumerate(data["goals"]):
-        at = f"{where}.goals[{i}]"
-        if not isinstance(g, dict) or not isinstance(g.get("name"), str):
-            raise TraceError(f"{at}: expected a goal with a name, found {g!r}")
-        goals.append(GoalFacts(
-            g["name"], _number(g, "x", at), _number(g, "y", at),
-            _optional(g, "heading", at, low=-math.pi, high=math.pi),
-            _number(g, "tolerance", at, low=0.0, low_open=True),
-            _number(g, "heading_tolerance", at, low=0.0, low_open=True, high=math.pi),
-            _number(g, "timeout", at, low=0.0, low_open=True)))
-    if not goals:
-        raise TraceError(f"{where}.goals: expected at least one goal, found none")
-    cycles = data["cycles"]
-    if not (isinstance(cycles, int) and not isinstance(cycles, bool) and cycles >= 1):
-        raise TraceError(f"{where}.cycles: expected a whole number >= 1, found {cycles!r}")
-    positive: dict[str, Any] = {"low": 0.0, "low_open": True}
-    return MissionFacts(tuple(goals), cycles, _number(data, "time_limit", where, **positive),
-                        _number(data, "speed_limit", where, **positive),
-                        _number(data, "turn_limit", where, **positive),
-                        _optional(data, "mission_max_speed", where, **positive))
-
-
-def _event(e: dict[str, Any], path: Path, lineno: int) -> MissionEvent:
-    cause = e["cause"]
-    allowed = FAILURE_CAUSES if e["kind"] == "task_fail" else ("",)
-    if cause not in allowed:
-        raise TraceError(f"{path}:{lineno}: events: a '{e['kind']}' event's cause expected one "
-                         f"of {', '.join(map(repr, allowed))}, found {cause!r}")
-    return MissionEvent(e["kind"], e["time"], e["task"], e["index"], e["reason"], cause)
-
-
-def _contacts(value: Any, n: int, path: Path, lineno: int) -> tuple[int, ...]:
-    """Indices of touched objects: a bad one would make the monitor see a collision with the
-    wrong body, or none."""
-    if not isinstance(value, list) or not all(
-            isinstance(i, int) and not isinstance(i, bool) and 0 <= i < n for i in value):
-        raise TraceError(f"{path}:{lineno}: contacts: expected indices of the header's "
-                         f"{n} objects (0 to {n - 1}), found {value!r}")
-    return tuple(value)
-
-
-def _samples(lines: Iterator[tuple[int, str]], n: int, path: Path) -> Iterator[Sample]:
-    poses = np.zeros((n, 3))
-    twists = np.zeros((n, 3))
-    for lineno, text in lines:
-        try:
-            d = json.loads(text)
-            if "end" in d:
-                return
-            for row in d["poses"]:
-                poses[row[0]] = row[1:]
-            for row in d["twists"]:
-                twists[row[0]] = row[1:]
-            b = d["belief"]
-            scan = None
-            if b["scan"] is not None:
-                s = b["scan"]
-                scan = LaserScan(s["angle_min"], s["angle_increment"], s["range_min"],
-                                 s["range_max"], np.array(s["ranges"], dtype=float))
-            cmd = _pair(b["cmd"], path, "belief.cmd", lineno, "[linear, angular]")
-            belief = RobotBelief(tuple(b["odom"]), tuple(b["odom_twist"]),
-                                 b["laser_min"], scan, NavState(b["nav_state"]), b["task"], cmd)
-            events = tuple(_event(e, path, lineno) for e in d["events"])
-            yield Sample(d["seq"], d["time"], tuple(d["robot_pose"]),
-                         tuple(d["robot_twist"]), poses.copy(), twists.copy(),
-                         belief, events, _contacts(d["contacts"], n, path, lineno))
-        except (KeyError, IndexError, TypeError, ValueError) as exc:
-            raise TraceError(f"{path}:{lineno}: damaged sample line ({exc})") from None
+def _samples(handle: BinaryIO, rules: _StreamRules, path: Path) -> Iterator[Sample]:
+    lineno = 1
+    with handle:
+        lines = enumerate(handle, start=2)
+        for lineno, raw in lines:
+            where = f"{path}:{lineno}"
+            data = _load(raw, where)
+            try:
+                if isinstance(data, dict) and "end" in data:
+                    rules.end(data, where)
+                    for later, _ in lines:
+                        raise TraceError(f"{path}:{later}: expected nothing after the end "
+                                         f"line (line {lineno}), found another line")
+                    return
+                sample = rules.sample(data, where)
+            except (KeyError, IndexError, TypeError, ValueError, OverflowError) as exc:
+                # the rules name every field they refuse; this is a last line of defence
+                raise TraceError(f"{where}: damaged line ({type(exc).__name__}: {exc})") from None
+            yield sample
+    if not _is_partial(path):
+        raise _no_end(path, lineno + 1)
 
 
 def read_trace(path: str | Path) -> tuple[StreamHeader, Iterator[Sample]]:
-    """The header and a lazy iterator over the samples of a trace (or its .partial file)."""
+    """The header and a lazy iterator over the samples of a trace (or its .partial file).
+
+    ``TraceError`` for a damaged header here, for a damaged line when the iterator reaches it
+    (also a finished trace without its end line, or anything after it)."""
     path = Path(path)
-    try:
-        handle = open(path, encoding="utf-8")  # noqa: SIM115  (closed by the generator)
-    except OSError as exc:
-        raise TraceError(f"cannot read the trace '{path}': {exc.strerror}") from None
+    handle = _open(path)
     try:
         first = handle.readline()
-        try:
-            header = _header(json.loads(first), path)
-        except json.JSONDecodeError:
-            raise TraceError(f"{path}:1: expected a REI trace header (JSON), found "
-                             f"{first[:40]!r}") from None
-        except (KeyError, TypeError, IndexError) as exc:
-            raise TraceError(f"{path}:1: damaged trace header ({exc})") from None
+        where = f"{path}:1"
+        data = _load(first, where)
+        if not isinstance(data, dict):
+            raise TraceError(f"{where}: expected a REI trace header (a JSON object), found "
+                             f"{_show(data)}")
+        header = _header(data, where)
     except BaseException:
         handle.close()
         raise
-
-    def lines() -> Iterator[tuple[int, str]]:
-        with handle:
-            for lineno, text in enumerate(handle, start=2):
-                if text.strip():
-                    yield lineno, text
-
-    return header, _samples(lines(), len(header.objects), path)
+    return header, _samples(handle, _StreamRules(len(header.objects)), path)
 
 
 def read_trace_end(path: str | Path) -> tuple[float, str, str] | None:
-    """(end time, outcome, reason) from the trace's last line; None if it has none."""
-    last = None
-    with open(path, encoding="utf-8") as handle:
-        for text in handle:
-            if text.startswith('{"end"'):
-                last = json.loads(text)
-    return (last["end"], last["outcome"], last["reason"]) if last else None
+    """(end time, outcome, reason) of the trace's end line, checked as ``read_trace`` checks
+    it: the only end line, the last line, no earlier than the last sample. None for a
+    ``.partial`` file without one; ``TraceError`` for a finished trace without one."""
+    path = Path(path)
+    end: tuple[int, Any] | None = None
+    last: tuple[int, Any] | None = None
+    lineno = 1
+    with _open(path) as handle:
+        handle.readline()
+        for lineno, raw in enumerate(handle, start=2):
+            if end is not None:
+                raise TraceError(f"{path}:{lineno}: expected nothing after the end line (line "
+                                 f"{end[0]}), found another line")
+            if raw.startswith(b'{"seq":'):  # a sample as the writer writes it: parsed if last
+                last = (lineno, raw)
+                continue
+            data = _load(raw, f"{path}:{lineno}")
+            if isinstance(data, dict) and "end" in data:
+                end = (lineno, data)
+            else:
+                last = (lineno, data)
+    if end is None:
+        if _is_partial(path):
+            return None
+        raise _no_end(path, lineno + 1)
+    last_time = None
+    if last is not None:
+        where = f"{path}:{last[0]}"
+        data = _load(last[1], where) if isinstance(last[1], bytes) else last[1]
+        time = data.get("time") if isinstance(data, dict) else None
+        last_time = _number(time, where, "time", low=0.0)
+    return _end(end[1], f"{path}:{end[0]}", last_time)

@@ -3,17 +3,23 @@
 Writes the results store (results.parquet / results.csv, a folder per run), report.html and
 junit.xml into DIR. Each mission gets a verdict against the required pass rate (--pass-rate,
 judged on the Wilson interval of its rate; see docs/campaign.md). Exit status 0 when every
-mission passes, 1 when any mission fails or is flaky, 2 for bad input, 130 when interrupted
-(run the same command to resume).
+mission passes, 1 when any mission fails or is flaky (a crashed or hung run is a run that did
+not pass), 2 for bad input, 130 when interrupted — Ctrl-C or SIGTERM of the campaign, the only
+way a run goes unrecorded (run the same command to resume).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import os
+import signal
 import sys
+import threading
+from collections.abc import Iterator
 from pathlib import Path
+from types import FrameType
 
 from rei.lang.cli_support import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK
 
@@ -57,10 +63,13 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         description="Run every mission (.mission files, folders, or the index CSV of a suite "
                     "from `rei-gen rooms`) --repeat times with seeds derived from --seed, each "
                     "run in its own `rei run` process under a watchdog. Results go to DIR: "
-                    "results.parquet/.csv, runs/RUN_ID/, report.html, junit.xml. Interrupted? "
-                    "Run the same command again: only the missing runs run. Exit status: 0 "
-                    "every mission passes (--pass-rate), 1 a mission fails or is flaky, 2 bad "
-                    "input, 130 interrupted.")
+                    "results.parquet/.csv, runs/RUN_ID/, report.html, junit.xml. Interrupted "
+                    "(Ctrl-C, SIGTERM)? Run the same command again: only the missing runs run. "
+                    "A run that dies any other way (kill -9, out of memory, a crash) is "
+                    "recorded as crashed, and runs killed with the campaign die with it. Exit "
+                    "status: 0 every mission passes (--pass-rate), 1 a mission fails or is "
+                    "flaky (crashed and hung runs did not pass), 2 bad input, 130 "
+                    "interrupted.")
     parser.add_argument("missions", nargs="+", type=Path, metavar="MISSIONS",
                         help=".mission files, folders with .mission files, or a suite index .csv")
     parser.add_argument("-o", "--output", type=Path, required=True, metavar="DIR",
@@ -146,7 +155,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"campaign: {len(plan.runs)} runs ({missions} missions x {plan.repeat}{twins}) "
               f"on {args.engine} engine -> {args.output}", file=sys.stderr)
     try:
-        with open(os.devnull, "w", encoding="utf-8") as silent:
+        with _terminate_as_interrupt(), open(os.devnull, "w", encoding="utf-8") as silent:
             result = run_campaign(plan, args.output, engine, provenance,
                                   stream=silent if args.quiet else None)
     except KeyboardInterrupt:
@@ -155,6 +164,24 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_INTERRUPTED
     return finish(args.output, no_report=args.no_report, complete=result.complete,
                   pass_rate=args.pass_rate, quiet=args.quiet, verbose=args.verbose)
+
+
+@contextlib.contextmanager
+def _terminate_as_interrupt() -> Iterator[None]:
+    """SIGTERM (a cancelled CI job, `kill`) stops the campaign as Ctrl-C does: its runs are
+    stopped, the finished ones kept and the tables written, instead of dying mid-write."""
+    if threading.current_thread() is not threading.main_thread():
+        yield  # signal handlers belong to the main thread (a campaign run from a library)
+        return
+
+    def interrupt(signum: int, frame: FrameType | None) -> None:
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def finish(root: Path, *, no_report: bool = False, complete: bool = True,

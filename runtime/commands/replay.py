@@ -49,7 +49,7 @@ def replay(trace: Path, vepl: Path | None, out_dir: Path) -> RunSummary:
 
     # The specification is checked and generated before the trace is opened: a bad .vepl
     # is reported without touching the trace.
-    automata = generate_automata(vepl, Path(out_dir) / "automata")
+    automata = generate_automata(vepl, Path(out_dir) / "automata", replace=True)
     needed = sorted(load_generated(automata).FUNCTIONS)
     if needed:
         raise MonitorError(f"the specification expected the user function(s) "

@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any, TextIO
 
 from rei.lang.cli_support import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_RUN_ERROR
+from rei.runtime.commands.run_config import apply_run_config, defer_defaults
 from rei.runtime.errors import RunError
 from rei.runtime.results import RunSummary, judge
 
@@ -69,9 +70,10 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                     "so. Results go to stdout, progress and diagnostics to stderr. Exit "
                     "status: 0 every requirement passed, 1 one failed or was inconclusive, "
                     "2 invalid input, 3 a run error, 130 interrupted.")
-    parser.add_argument("mission", type=Path, metavar="MISSION", help="the .mission file")
-    parser.add_argument("-o", "--output", type=Path, required=True, metavar="DIR",
-                        help="output folder (created if missing)")
+    parser.add_argument("mission", type=Path, nargs="?", default=None, metavar="MISSION",
+                        help="the .mission file (optional with --config)")
+    parser.add_argument("-o", "--output", type=Path, default=None, metavar="DIR",
+                        help="output folder (created if missing; required without --config)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the run (default 0)")
     parser.add_argument("--controller", default="reference", metavar="NAME",
                         help="robot under test: reference, teleop, teleop:SCRIPT (a scripted "
@@ -101,6 +103,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.add_argument("--no-monitor", action="store_true",
                         help="record the trace only (monitor it later with `rei replay`)")
     add_verbosity(parser)
+    defer_defaults(parser)
     parser.set_defaults(func=run)
 
 
@@ -149,6 +152,7 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
     The controller runs in this process: a controller that ends or stalls the process ends
     the caller too. `rei run` supervises it instead (``rei.runtime.supervisor.supervise``).
     """
+    from rei.generators.output import open_output  # noqa: PLC0415
     from rei.runtime.collector import TraceWriter, load_monitor_config  # noqa: PLC0415
     from rei.runtime.evaluator import merge_summary, write_summary  # noqa: PLC0415
     from rei.runtime.monitor import MonitorSink, generate_automata  # noqa: PLC0415
@@ -161,10 +165,10 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
     _make_folder(out_dir)
     # The specification is checked and generated first: a bad .vepl is reported (exit 2)
     # before any world is built.
-    automata = generate_automata(vepl, out_dir / "automata") if monitor else None
+    automata = generate_automata(vepl, out_dir / "automata", replace=True) if monitor else None
     monitor_sink = MonitorSink(vepl, out_dir, automata=automata) if monitor else None
     world_dir = out_dir / "world"
-    mission = generate_world(mission_path, world_dir)
+    mission = generate_world(mission_path, world_dir, replace=True)
     if probe is not None:
         probe.begin(mission.name, mission.world.name)
     manifest = load_manifest(world_dir)
@@ -185,7 +189,7 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
                        f"[{'#' * done}{'.' * (width - done)}]")
         progress.flush()
 
-    with open(out_dir / LOG, "w", encoding="utf-8", newline="\n") as log_file:
+    with open_output(out_dir / LOG) as log_file:
         def log(line: str) -> None:
             log_file.write(line + "\n")
             log_file.flush()
@@ -230,6 +234,7 @@ def execute_request(request: RunRequest, probe: RunProbe) -> tuple[int, dict[str
 def run(args: argparse.Namespace) -> int:
     from rei.runtime.supervisor import RunRequest, supervise  # noqa: PLC0415
 
+    args = apply_run_config(args)
     out: Path = args.output
     check_options(args.mission, args.duration, args.watchdog, args.physics_rate,
                   args.odom_drift, args.laser_noise)

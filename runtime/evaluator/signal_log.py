@@ -8,6 +8,8 @@ import csv
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from rei.generators.output import open_output
+
 COLUMNS = ("time", "signal", "utility", "total_utility", "objects")
 
 
@@ -40,7 +42,7 @@ class SignalLog:
         return counts
 
     def write_csv(self, path: str | Path) -> None:
-        with open(path, "w", newline="", encoding="utf-8") as handle:
+        with open_output(path, newline="") as handle:  # never written through a link
             writer = csv.writer(handle, lineterminator="\n")
             writer.writerow(COLUMNS)
             for r in self.rows:

@@ -11,6 +11,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
+from rei.generators.output import open_output
 from rei.runtime.results import RunSummary, Verdict
 
 
@@ -50,7 +51,7 @@ def write_summary(summary: RunSummary, out_dir: str | Path) -> Path:
     """Write summary.json through a temporary file, so a kill never leaves it torn."""
     path = Path(out_dir) / "summary.json"
     tmp = path.with_name(".summary.json.tmp")
-    with open(tmp, "w", encoding="utf-8", newline="\n") as handle:
+    with open_output(tmp) as handle:  # never written through a link
         handle.write(summary_text(summary))
         handle.flush()
         os.fsync(handle.fileno())

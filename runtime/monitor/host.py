@@ -43,14 +43,16 @@ FINISHED = ("completed", "failed")
 """Outcomes after which the run's evidence is complete (timeout, error, interrupted: not)."""
 
 
-def generate_automata(vepl: str | Path | None, out_dir: str | Path) -> Path:
-    """Generate the `rx` target of a .vepl file (the default one when None) into out_dir."""
+def generate_automata(vepl: str | Path | None, out_dir: str | Path,
+                      replace: bool = False) -> Path:
+    """Generate the `rx` target of a .vepl file (the default one when None) into out_dir
+    (with ``replace``, whatever else was in it goes)."""
     from rei.generators.output import write_tree  # noqa: PLC0415  (generation is a stage above)
     from rei.generators.pipeline import plan  # noqa: PLC0415
 
     source = Path(vepl) if vepl is not None else DEFAULT_VEPL
     result = plan(source, "rx")
-    write_tree(result.tree, out_dir)
+    write_tree(result.tree, out_dir, replace=replace)
     return Path(out_dir) / "automata.py"
 
 

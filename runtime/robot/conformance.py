@@ -126,10 +126,11 @@ def check_controller(controller: Controller, steps: int = 600) -> list[str]:
                                 f"expected preempted")
         except Exception as exc:  # noqa: BLE001  (a broken controller is what we report)
             problems.append(f"raised {type(exc).__name__}: {exc}")
-            return problems
+            return list(dict.fromkeys(problems))
         runs.append(trace)
     if runs[0] != runs[1]:
         problems.append("two runs after reset() with the same observations gave different "
                         "commands (state leaks across reset or the controller is not "
                         "deterministic)")
-    return problems
+    # Both runs (and every step) meet the same broken promise: say each one once.
+    return list(dict.fromkeys(problems))

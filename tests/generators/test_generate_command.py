@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import shutil
 from pathlib import Path
 
@@ -34,8 +35,9 @@ def test_all_targets_write_into_their_own_folders(
     accepting = {n for n, t in available_targets().items() if ".mission" in t.accepts}
     assert folders == accepting
     assert (tmp_path / "mission" / "mission.xml").is_file()
-    # The launch file's reference to the mission resolves in this layout.
-    assert (tmp_path / "launch" / "../mission/mission.xml").resolve().is_file()
+    # run.json names the mission it runs relative to itself, inside the launch folder.
+    run = json.loads((tmp_path / "launch" / "run.json").read_text())
+    assert (tmp_path / "launch" / run["mission"]).is_file()
     assert "wrote" in capsys.readouterr().err
 
 

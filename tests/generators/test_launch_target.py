@@ -1,18 +1,26 @@
-"""The `launch` target: a ROS 2 launch file, a robot-less world, animator config and run.json."""
+"""The `launch` target: run.json that `rei run --config` consumes, the sources it names, the
+full Gazebo world and a ROS 2 launch file naming only programs that exist."""
 
 from __future__ import annotations
 
 import json
-import math
+import re
 
 import pytest
 from lxml import etree
 
 from rei.generators.errors import GenerationError
 from rei.generators.targets import check_target
-from rei.generators.targets.launch import TARGET
+from rei.generators.targets.launch import BUILT_IN_CONTROLLERS, TARGET
+from rei.runtime.robot import BUILT_IN
 from tests.conftest import EXAMPLES
-from tests.generators.conftest import RequestFor
+from tests.generators.conftest import RequestFor, Write
+
+LAUNCH_TAGS = {"launch", "arg", "include", "node", "param", "let", "set_env", "group",
+               "executable", "remap"}
+"""Elements of ROS 2's XML launch front end (launch_xml) this file may use."""
+ROS_PACKAGES = {"ros_gz_sim", "ros_gz_bridge", "tf2_ros"}
+"""Packages of ROS 2 (Humble and later) and ros_gz that the launch file may start."""
 
 
 def files_of(request) -> dict[str, bytes]:
@@ -23,52 +31,92 @@ def test_target_conforms() -> None:
     assert check_target(TARGET) == []
 
 
-def test_launch_file_spawns_the_robot_at_its_start_pose(request_for: RequestFor) -> None:
-    files = files_of(request_for(EXAMPLES / "small_dense" / "small_dense.mission"))
-    assert sorted(files) == ["animator.json", "rei_test.launch.xml", "run.json", "world.sdf"]
-    launch = etree.fromstring(files["rei_test.launch.xml"])
-    spawn = next(n for n in launch.iter("node") if n.get("exec") == "create")
-    # The robot of small_dense stands on its origin floor facing +y (heading 90).
-    assert "-x 0 -y 0 -z 0.01 -Y 1.570796" in spawn.get("args", "")
-    executables = [n.get("exec") for n in launch.iter("node")]
-    assert {"animator", "data_collector", "mission_executor"} <= set(executables)
-    mission = next(n for n in launch.iter("node") if n.get("exec") == "mission_executor")
-    param = mission.find("param[@name='mission']")
-    assert param is not None and param.get("value") == "$(dirname)/../mission/mission.xml"
-    world = etree.fromstring(files["world.sdf"])
-    assert "waffle" not in [m.get("name") for m in world.iter("model")]
+def test_controllers_are_rei_runs_built_in_ones() -> None:
+    assert set(BUILT_IN_CONTROLLERS) == set(BUILT_IN)
 
 
-def test_a_room_has_no_mission_executor(request_for: RequestFor) -> None:
-    files = files_of(request_for(EXAMPLES / "navigation" / "navigation.room"))
-    launch = etree.fromstring(files["rei_test.launch.xml"])
-    assert "mission_executor" not in [n.get("exec") for n in launch.iter("node")]
+def test_a_mission_gets_run_json_with_its_sources(request_for: RequestFor) -> None:
+    files = files_of(request_for(EXAMPLES / "navigation" / "navigation.mission"))
+    assert sorted(files) == ["rei_test.launch.xml", "run.json", "sources/navigation.mission",
+                             "sources/navigation.room", "world.sdf"]
+    assert files["sources/navigation.room"] == (
+        EXAMPLES / "navigation" / "navigation.room").read_bytes()
     run = json.loads(files["run.json"])
-    assert run["sources"]["mission"] is None and run["artifacts"]["mission_xml"] is None
-    assert run["duration"] == 60.0
-
-
-def test_run_configuration_names_world_mission_monitor_and_seed(request_for: RequestFor) -> None:
-    files = files_of(request_for(EXAMPLES / "navigation" / "navigation.mission", seed="7",
-                                 monitor="watch.vepl", controller="scripted", duration="12.5"))
-    run = json.loads(files["run.json"])
-    assert run["seed"] == 7 and run["controller"] == "scripted" and run["duration"] == 12.5
-    assert run["sources"] == {
-        "comment": "paths relative to the folder of the generated file's input",
-        "room": "navigation.room", "mission": "navigation.mission", "monitor": "watch.vepl"}
-    assert run["artifacts"]["gazebo_world"] == "world.sdf"
-    assert run["robot"]["floor"] == "start"
+    assert run == {"format": "rei-run/1", "mission": "sources/navigation.mission",
+                   "vepl": None, "controller": "reference", "seed": 0, "duration": None,
+                   "physics_rate": 100.0, "odom_drift": 0.0, "laser_noise": None,
+                   "variation": True, "monitor": True}
     assert list(run) == sorted(run)  # sorted keys: stable diffs
 
 
-def test_animator_gets_every_trajectory_in_the_world_frame(request_for: RequestFor) -> None:
-    files = files_of(request_for(EXAMPLES / "navigation" / "navigation.room"))
-    animator = json.loads(files["animator.json"])
-    (walker,) = animator["objects"]
-    assert walker["name"] == "walker" and walker["loop"] is True
-    # lab_2_6 is 5 tiles right of and 1 below the robot's floor lab_1_1 ("start").
-    assert walker["points"][0] == {"t": 0.0, "x": 5.0, "y": -1.0}
-    assert walker["points"][-1]["x"] == 5.0 and walker["points"][-1]["y"] == -1.0
+def test_options_reach_run_json_and_the_vepl_is_copied(request_for: RequestFor) -> None:
+    files = files_of(request_for(EXAMPLES / "navigation" / "navigation.mission", seed="7",
+                                 monitor="human_safety.vepl", controller="teleop:circle",
+                                 duration="12.5"))
+    run = json.loads(files["run.json"])
+    assert (run["seed"], run["controller"], run["duration"]) == (7, "teleop:circle", 12.5)
+    assert run["vepl"] == "sources/human_safety.vepl" and run["vepl"] in files
+
+
+def test_sources_keep_their_relative_layout(write: Write, request_for: RequestFor) -> None:
+    """A mission that names its room in another folder, and a room with its own catalogue:
+    the copies still find each other."""
+    write("types/extra.toml", '[types.crate]\nkind = "static"\n'
+                              'footprint = { shape = "box", size = [0.4, 0.4] }\nheight = 0.5\n')
+    write("rooms/r.room", 'room r {\n catalogue "../types/extra.toml"\n grid g {\n'
+                          '  "#####"\n  "#...#"\n  "#####"\n }\n'
+                          ' robot bot : turtlebot3_waffle on g_1_1\n'
+                          ' object c : crate on g_1_3\n}\n')
+    mission = write("missions/m.mission", 'mission m in "../rooms/r.room" {\n'
+                                          ' goal a at g_1_1\n goal b at g_1_2\n}\n')
+    files = files_of(request_for(mission))
+    assert {"sources/missions/m.mission", "sources/rooms/r.room",
+            "sources/types/extra.toml"} <= set(files)
+    assert json.loads(files["run.json"])["mission"] == "sources/missions/m.mission"
+
+
+def test_a_room_gets_no_run_json_and_refuses_run_options(request_for: RequestFor) -> None:
+    room = EXAMPLES / "navigation" / "navigation.room"
+    assert sorted(files_of(request_for(room))) == ["rei_test.launch.xml", "world.sdf"]
+    with pytest.raises(GenerationError, match="option seed: expected a .mission file"):
+        TARGET.generate(request_for(room, seed="3"))
+
+
+@pytest.mark.parametrize("name", ["navigation/navigation.mission", "navigation/navigation.room",
+                                  "small_dense/small_dense.mission"])
+def test_launch_file_names_only_programs_that_exist(request_for: RequestFor, name: str) -> None:
+    files = files_of(request_for(EXAMPLES / name))
+    launch = etree.fromstring(files["rei_test.launch.xml"])
+    assert launch.tag == "launch"
+    assert {e.tag for e in launch.iter() if isinstance(e.tag, str)} <= LAUNCH_TAGS
+    assert {n.get("pkg") for n in launch.iter("node")} <= ROS_PACKAGES
+    args = {a.get("name") for a in launch.findall("arg")}
+    text = files["rei_test.launch.xml"].decode()
+    assert set(re.findall(r"\$\(var (\w+)\)", text)) <= args
+    assert set(re.findall(r"\$\(find-pkg-share (\w+)\)", text)) <= ROS_PACKAGES
+    assert "rei_ros" not in text and "navigator" not in text
+    includes = [i.get("file") for i in launch.iter("include")]
+    assert includes == ["$(find-pkg-share ros_gz_sim)/launch/gz_sim.launch.py",
+                        "$(var navigation_launch)"]
+    # The navigation stack is the user's: a required argument, no default to guess.
+    nav = launch.find("arg[@name='navigation_launch']")
+    assert nav is not None and nav.get("default") is None
+    # The bridge carries the topics the generated world's robot publishes and listens on.
+    world = etree.fromstring(files["world.sdf"])
+    drive = next(world.iter("plugin"), None)
+    assert drive is not None
+    bridge = next(n for n in launch.iter("node") if n.get("pkg") == "ros_gz_bridge")
+    topics = {arg.split("@")[0] for arg in bridge.get("args", "").split()}
+    assert {"/cmd_vel", "/odom", "/scan", "/clock", "/tf"} == topics
+    sdf_topics = {e.text for e in world.iter("topic", "odom_topic", "tf_topic")}
+    assert {"cmd_vel", "odom", "scan", "tf"} <= sdf_topics
+
+
+def test_the_world_is_the_gazebo_targets(request_for: RequestFor) -> None:
+    from rei.generators.targets.gazebo import TARGET as GAZEBO
+
+    request = request_for(EXAMPLES / "navigation" / "navigation.mission")
+    assert files_of(request)["world.sdf"] == GAZEBO.generate(request).files["world.sdf"]
 
 
 @pytest.mark.parametrize("key,value,message", [
@@ -76,7 +124,11 @@ def test_animator_gets_every_trajectory_in_the_world_frame(request_for: RequestF
     ("seed", "x", "option seed"),
     ("duration", "nan", "option duration: expected a finite"),
     ("duration", "0", "option duration"),
-    ("controller", "", "option controller"),
+    ("controller", "", "option controller: expected one of reference"),
+    ("controller", "navigator", "option controller: expected one of reference"),
+    ("controller", "refrence", "did you mean 'reference'"),
+    ("monitor", "missing.vepl", "option monitor: expected a .vepl file"),
+    ("monitor", "navigation.room", "option monitor: expected a .vepl file"),
 ])
 def test_bad_options_are_reported_by_name(
     request_for: RequestFor, key: str, value: str, message: str,
@@ -84,9 +136,3 @@ def test_bad_options_are_reported_by_name(
     request = request_for(EXAMPLES / "navigation" / "navigation.mission", **{key: value})
     with pytest.raises(GenerationError, match=message):
         TARGET.generate(request)
-
-
-def test_angles_in_run_json_are_normalised(request_for: RequestFor) -> None:
-    run = json.loads(files_of(request_for(EXAMPLES / "small_dense" / "small_dense.room"))
-                     ["run.json"])
-    assert run["robot"]["yaw"] == round(math.pi / 2, 6)

@@ -24,6 +24,7 @@ def test_the_checker_reports_broken_controllers(name: str) -> None:
 def test_the_checker_reports_a_controller_that_never_finishes() -> None:
     problems = check_controller(make_controller("tests.runtime.faulty:Idle"), steps=50)
     assert any("did not end" in p for p in problems)
+    assert len(problems) == len(set(problems)), problems  # each broken promise said once
 
 
 def test_unknown_names_say_what_was_expected() -> None:

@@ -117,7 +117,8 @@ def test_the_laser_mount_travels_in_the_header_and_a_bad_one_is_refused(tmp_path
             read_trace(path)
     del head["laser_mount"]
     path.write_text("\n".join([json.dumps(head), *lines[1:]]) + "\n")
-    with pytest.raises(TraceError, match="damaged trace header"):
+    with pytest.raises(TraceError, match=":1: expected a REI trace header with the field "
+                                         "'laser_mount', found none"):
         read_trace(path)
 
 
@@ -160,18 +161,20 @@ def _set(*keys_and_value: Any) -> Callable[[dict[str, Any]], None]:
     (_set("belief", "cmd", [0.1]), r":3: belief.cmd: expected two finite numbers .*\[0.1\]"),
     (_set("belief", "cmd", None), r":3: belief.cmd: .* found None"),
     (_set("contacts", [2]),
-     r":3: contacts: expected indices of the header's 2 objects \(0 to 1\), found \[2\]"),
+     r":3: contacts: expected indices of the header's 2 objects \(0 to 1\) in increasing "
+     r"order, found \[2\]"),
+    (_set("contacts", [1, 0]), r":3: contacts: .* in increasing order, found \[1, 0\]"),
     (_set("contacts", [-1]), r":3: contacts: .* found \[-1\]"),
     (_set("contacts", [0.5]), r":3: contacts: .* found \[0.5\]"),
     (_set("contacts", [True]), r":3: contacts: .* found \[True\]"),
     (_set("contacts", "0"), r":3: contacts: .* found '0'"),
-    (_set("events", [{"kind": "task_fail", "time": 0.2, "task": "goal", "index": 0,
+    (_set("events", [{"kind": "task_fail", "time": 0.1, "task": "goal", "index": 0,
                       "reason": "", "cause": "bad luck"}]),
-     r":3: events: a 'task_fail' event's cause expected one of 'aborted', .*'abandoned', 'cut', "
-     r"found 'bad luck'"),
-    (_set("events", [{"kind": "begin", "time": 0.2, "task": None, "index": None,
+     r":3: events\[0\].cause: expected one of 'aborted', .*'abandoned', 'cut' for kind "
+     r"'task_fail', found 'bad luck'"),
+    (_set("events", [{"kind": "end", "time": 0.1, "task": None, "index": None,
                       "reason": "", "cause": "timeout"}]),
-     r":3: events: a 'begin' event's cause expected one of '', found 'timeout'"),
+     r":3: events\[0\].cause: expected one of '' for kind 'end', found 'timeout'"),
 ])
 def test_corrupted_new_sample_fields_are_located_errors(
         tmp_path: Path, change: Callable[[dict[str, Any]], None], message: str) -> None:
@@ -203,16 +206,17 @@ def _goal_json() -> dict[str, Any]:
     (_set("mission_facts", "goals", [{**_goal_json(), "x": float("nan")}]),
      r"mission_facts.goals\[0\].x: expected a finite number, found nan"),
     (_set("mission_facts", "goals", [{**_goal_json(), "heading": 4.0}]),
-     r"mission_facts.goals\[0\].heading: expected a finite number >= -3.14159 and <= "
-     r"3.14159, found 4.0"),
+     r"mission_facts.goals\[0\].heading: expected a finite number >= -3.141592654 and <= "
+     r"3.141592654, found 4.0"),
     (_set("mission_facts", "goals", [{**_goal_json(), "heading_tolerance": 0}]),
      r"mission_facts.goals\[0\].heading_tolerance: expected a finite number > 0 and <= "
-     r"3.14159, found 0"),
+     r"3.141592654, found 0"),
     (_set("mission_facts", "goals", [{**_goal_json(), "tolerance": "0.3"}]),
      r"mission_facts.goals\[0\].tolerance: expected a finite number > 0, found '0.3'"),
     (_set("mission_facts", "goals", [{**_goal_json(), "name": 3}]),
-     r"mission_facts.goals\[0\]: expected a goal with a name, found"),
-    (_set("mission_facts", [1, 2]), r"mission_facts: expected an object with a list of goals"),
+     r"mission_facts.goals\[0\].name: expected a string, found 3"),
+    (_set("mission_facts", [1, 2]),
+     r"mission_facts: expected the mission's facts \(a JSON object, or null\), found \[1, 2\]"),
 ])
 def test_bad_mission_facts_are_located_errors(
         tmp_path: Path, change: Callable[[dict[str, Any]], None], message: str) -> None:
