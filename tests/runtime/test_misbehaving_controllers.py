@@ -9,6 +9,7 @@ breaks the contract at its 20th control step (t = 1.9 s).
 from __future__ import annotations
 
 import json
+import signal
 import subprocess
 import sys
 import time
@@ -208,3 +209,26 @@ def test_the_conformance_checker_reports_what_would_end_a_run_in_error() -> None
            "'active'" in check_controller(faulty.BadFeedback())
     assert "raised ValueError: assignment destination is read-only" in \
            check_controller(faulty.MutatesScan())
+
+
+def test_a_second_ctrl_c_stops_a_simulation_that_cannot_end_cleanly(tmp_path: Path) -> None:
+    """The first Ctrl-C is passed on; a controller holding the interpreter cannot hear it,
+    so the second one kills the simulation and the run ends interrupted all the same."""
+    process = subprocess.Popen(
+        [sys.executable, "-m", "rei.runtime.cli", "run", str(NAVIGATION), "-o", str(tmp_path),
+         "--controller", "tests.runtime.faulty:HangsInC", "--watchdog", "60", "--quiet"],
+        cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    log = tmp_path / "run.log"
+    started = time.monotonic()
+    # the controller is stuck once the log shows the first task (t = 0) and a while has passed
+    while process.poll() is None and (not log.exists() or "task_start" not in log.read_text()):
+        assert time.monotonic() - started < SAFETY_LIMIT
+        time.sleep(0.05)
+    time.sleep(3.0)  # past its 20th step (t = 1.9 s simulated, well under a second of wall time)
+    process.send_signal(signal.SIGINT)
+    time.sleep(1.0)
+    process.send_signal(signal.SIGINT)
+    out, _ = process.communicate(timeout=SAFETY_LIMIT)
+    assert process.returncode == 130
+    assert summary_of(tmp_path)["outcome"] == "interrupted"
+    assert out.splitlines()[-1].startswith("verdict: INTERRUPTED (interrupted by the user")
