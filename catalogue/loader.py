@@ -26,7 +26,8 @@ from rei.catalogue.model import (
     solid_inertia,
 )
 from rei.lang.errors import Diagnostic, Span
-from rei.lang.source import read_source
+from rei.lang.parsing import deepest_nesting
+from rei.lang.source import SourceText, read_source
 from rei.lang.suggest import did_you_mean
 
 _TYPE_FIELDS = {"kind", "description", "footprint", "height", "mass", "inertia", "colour",
@@ -188,6 +189,13 @@ def parse_catalogue(path: str, text: str) -> Catalogue:
     """A catalogue from TOML text; raises CatalogueError with every problem found."""
     try:
         data = tomllib.loads(text)
+    except RecursionError:  # tomllib nests arrays and inline tables by recursion
+        depth, offset = deepest_nesting(text)
+        line, col = SourceText(path, text).line_col(offset)
+        raise CatalogueError([Diagnostic(
+            Span.point(path, line, col), "CATALOGUE-SYNTAX",
+            f"expected arrays and tables nested less deeply, found {depth} levels here")]
+        ) from None
     except tomllib.TOMLDecodeError as exc:
         match = re.search(r"\(at line (\d+), column (\d+)\)", str(exc))
         line, col = (int(match.group(1)), int(match.group(2))) if match else (1, 1)

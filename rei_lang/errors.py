@@ -13,8 +13,22 @@ exceptions: a checker collects all of them and the caller decides what to do.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from enum import StrEnum
+
+_UNPRINTABLE = re.compile("[\x00-\x1f\x7f-\x9f\u061c\u200e\u200f\u202a-\u202e"
+                          "\u2066-\u2069\u2028\u2029]")
+"""C0 and C1 controls (ESC starts a terminal's escape sequences), DEL, and the invisible
+direction marks and overrides that make a terminal or an editor show text out of order."""
+
+
+def printable(text: str) -> str:
+    """``text`` with every control character written as an escape (``\\x1b``, ``\\u202e``):
+    what a user's file contains is shown, never interpreted by the terminal or the editor."""
+    return _UNPRINTABLE.sub(
+        lambda m: f"\\x{ord(m.group(0)):02x}" if ord(m.group(0)) < 0x100
+        else f"\\u{ord(m.group(0)):04x}", text)
 
 
 class Severity(StrEnum):
@@ -46,9 +60,14 @@ class Diagnostic:
     message: str
     severity: Severity = Severity.ERROR
 
+    def __post_init__(self) -> None:
+        # Messages quote the input (tokens, names, paths): every place that shows one (the
+        # command line, JSON, the editor) gets it with its control characters escaped.
+        object.__setattr__(self, "message", printable(self.message))
+
     def __str__(self) -> str:
         prefix = "" if self.severity is Severity.ERROR else "warning: "
-        where = f"{self.span.file}:{self.span.line}:{self.span.col}"
+        where = f"{printable(self.span.file)}:{self.span.line}:{self.span.col}"
         return f"{where}: {self.rule}: {prefix}{self.message}"
 
     @property

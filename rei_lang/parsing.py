@@ -90,7 +90,30 @@ def parse(language: str, source: SourceText) -> Any | Diagnostic:
             f"expected {_expected(err)}, found {_found(source.text, line, col)}",
         )
     except RecursionError:
-        return Diagnostic(Span.point(source.path), "SYNTAX-DEPTH", MAX_NESTING_MESSAGE)
+        depth, offset = deepest_nesting(source.text)
+        line, col = source.line_col(offset)
+        return Diagnostic(Span(source.path, line, col, line, col + 1), "SYNTAX-DEPTH",
+                          f"expected brackets nested less deeply, found {depth} levels here; "
+                          f"{MAX_NESTING_MESSAGE}")
+
+
+_BRACKETS = re.compile(r'"[^"]*"?|//[^\n]*|/\*(?:[^*]|\*(?!/))*(?:\*/)?|[(\[{]|[)\]}]')
+"""Strings and comments (skipped whole) and brackets, the things nesting is made of."""
+
+
+def deepest_nesting(text: str) -> tuple[int, int]:
+    """The deepest bracket nesting of a text and the offset of the bracket that first opens
+    it (brackets inside strings and comments do not count): where a SYNTAX-DEPTH points."""
+    depth = best = where = 0
+    for match in _BRACKETS.finditer(text):
+        token = match.group(0)
+        if token in "([{":
+            depth += 1
+            if depth > best:
+                best, where = depth, match.start()
+        elif token in ")]}":
+            depth = max(0, depth - 1)
+    return best, where
 
 
 def span_of(obj: Any, source: SourceText) -> Span:

@@ -19,13 +19,18 @@ class Rule:
 
 
 RULES: tuple[Rule, ...] = (
-    Rule("INPUT-READ", "all", "the file exists and can be read"),
-    Rule("INPUT-KIND", "all", "the file ends in a known suffix"),
+    Rule("INPUT-READ", "all", "the file exists, is a regular file (not a folder, FIFO or "
+         "device, which are never opened) and can be read; a symbolic link loop is named"),
+    Rule("INPUT-KIND", "all", "the file ends in a known suffix (a mission imports a .room "
+         "file, nothing else is read as one)"),
     Rule("INPUT-EMPTY", "all", "the file is not empty"),
-    Rule("INPUT-SIZE", "all", "the file is at most 32 MiB"),
+    Rule("INPUT-SIZE", "all", "the file is at most 32 MiB (at most that much is ever read)"),
     Rule("INPUT-ENCODING", "all", "the file is UTF-8 text (no NUL bytes)"),
+    Rule("INTERNAL", "all", "the editor shows a failure of REI's own checks as a diagnostic "
+         "(please report it): a file is never shown clean because a check broke"),
     Rule("SYNTAX", "all", "the text follows the grammar (the parser stops at the first error)"),
-    Rule("SYNTAX-DEPTH", "all", "the text does not nest deeper than the parser can follow"),
+    Rule("SYNTAX-DEPTH", "all", "the text does not nest deeper than the parser can follow "
+         "(located at the deepest bracket)"),
     Rule("NUM-FINITE", "all", "every number is finite (no inf, nan, or overflow like 1e999)"),
     Rule("NUM-RANGE", "all", "every number lies in its field's range (tile 0.05..100 m, times "
          ">= 0, headings within +-360 degrees, ...)"),
@@ -66,6 +71,10 @@ RULES: tuple[Rule, ...] = (
     Rule("TRAJ-VERTICES", "room", "a trajectory has at least two control vertices"),
     Rule("TRAJ-TIMES", "room", "a trajectory has a time on every vertex (increasing) or a "
          "total time", "thesis 4.2.1"),
+    Rule("TRAJ-SPEED", "room", "a trajectory's body moves at most 10 m/s between consecutive "
+         "vertices, which are at least 0.01 s apart (times as the generators write them: "
+         "a 'total' shared out by length, a loop's way back at its mean speed)",
+         "the animator walks every accepted trajectory"),
     Rule("TRAJ-START", "room", "a trajectory starts on its object's floor"),
     Rule("TRAJ-BLOCKED", "room", "no trajectory vertex lies on a floor with a standing object",
          "thesis 4.1.2"),
@@ -90,6 +99,10 @@ RULES: tuple[Rule, ...] = (
     Rule("VEPL-NOT-WINDOW", "vepl", "a pattern that ends in NOT has a time window"),
     Rule("VEPL-MULTIPLICITY", "vepl", "{n} is a whole number from 1 to 100"),
     Rule("VEPL-CYCLE", "vepl", "queries do not find each other in a circle"),
+    Rule("VEPL-LIMIT", "vepl", "a complex event's pattern has at most 500 parts with every "
+         "{n} and {+} written out, and operators nested at most 50 deep; a query's condition "
+         "has at most 2,000 operators and operands",
+         "the generated automata must load and run: nested {+} double a pattern's automaton"),
     Rule("VEPL-PARAM", "vepl", "eps_collision is below eps_close and the hysteresis band is "
          "at least 0"),
 )

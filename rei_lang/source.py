@@ -1,12 +1,19 @@
 """Reading a user's source file defensively, before any parser sees it.
 
-Binary junk, undecodable bytes, empty and oversized files become located diagnostics
-here, so the parsers only ever receive reasonable text.
+Every file REI reads as input (.room, .mission, .vepl, imported rooms, catalogue TOML) comes
+through ``read_source``: only regular files are read (a FIFO, a device or a folder is named,
+never opened for reading, so nothing blocks), and at most ``MAX_SOURCE_BYTES + 1`` bytes are
+read whatever ``stat`` says (``/proc`` files and growing files lie about their size). Binary
+junk, undecodable bytes, empty and oversized files become located diagnostics here, so the
+parsers only ever receive reasonable text. This module must never block or read unboundedly.
 """
 
 from __future__ import annotations
 
 import bisect
+import errno
+import os
+import stat
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -15,6 +22,10 @@ from rei.lang.errors import Diagnostic, Span
 
 MAX_SOURCE_BYTES = 32 * 1024 * 1024
 """Larger than any room a person or `rei-gen rooms` writes (10,000 floors is ~0.5 MiB)."""
+
+_KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
+          (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+          (stat.S_ISSOCK, "a socket"))
 
 
 @dataclass(frozen=True)
@@ -45,14 +56,17 @@ def line_col(text: str, offset: int) -> tuple[int, int]:
     return line, col
 
 
+def _too_big(path: str, size: int) -> Diagnostic:
+    shown = (f"{size / (1024 * 1024):.1f} MiB" if size > MAX_SOURCE_BYTES + 1
+             else "more than that")
+    return Diagnostic(Span.point(path), "INPUT-SIZE",
+                      f"expected a file of at most {MAX_SOURCE_BYTES // (1024 * 1024)} MiB, "
+                      f"found {shown}")
+
+
 def decode_source(path: str, data: bytes) -> SourceText | Diagnostic:
     if len(data) > MAX_SOURCE_BYTES:
-        return Diagnostic(
-            Span.point(path),
-            "INPUT-SIZE",
-            f"expected a file of at most {MAX_SOURCE_BYTES // (1024 * 1024)} MiB, "
-            f"found {len(data) / (1024 * 1024):.1f} MiB",
-        )
+        return _too_big(path, len(data))
     nul = data.find(b"\x00")
     if nul >= 0:
         line, col = line_col(data[:nul].decode("utf-8", "replace"), nul)
@@ -77,24 +91,65 @@ def decode_source(path: str, data: bytes) -> SourceText | Diagnostic:
     return SourceText(path, text)
 
 
-def read_source(path: str | Path) -> SourceText | Diagnostic:
-    """The file's text, or one diagnostic saying why it cannot be read."""
-    p = Path(path)
+def file_kind(mode: int) -> str | None:
+    """What a non-regular file is ("a FIFO (named pipe)", ...); None for a regular file."""
+    if stat.S_ISREG(mode):
+        return None
+    return next((name for test, name in _KINDS if test(mode)), "not a regular file")
+
+
+def read_bounded(path: str | Path, limit: int = MAX_SOURCE_BYTES) -> bytes | Diagnostic:
+    """At most ``limit + 1`` bytes of a regular file, or one diagnostic saying why not.
+
+    The file is checked with ``stat`` before it is opened (a FIFO would block ``open``),
+    opened with O_NONBLOCK (in case it was swapped for a FIFO in between) and checked again
+    through the open descriptor; the read stops after ``limit + 1`` bytes whatever the size
+    ``stat`` reported.
+    """
     shown = str(path)
+    if shown == "":
+        return Diagnostic(Span.point(shown), "INPUT-READ",
+                          "expected a file name, found an empty string")
     try:
-        if p.is_dir():
-            return Diagnostic(Span.point(shown), "INPUT-READ", "expected a file, found a folder")
-        size = p.stat().st_size
-        if size > MAX_SOURCE_BYTES:
-            return Diagnostic(
-                Span.point(shown),
-                "INPUT-SIZE",
-                f"expected a file of at most {MAX_SOURCE_BYTES // (1024 * 1024)} MiB, "
-                f"found {size / (1024 * 1024):.1f} MiB",
-            )
-        data = p.read_bytes()
+        kind = file_kind(os.stat(path).st_mode)
+        if kind is not None:
+            return Diagnostic(Span.point(shown), "INPUT-READ",
+                              f"expected a regular file, found {kind}")
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
+        try:
+            info = os.fstat(fd)
+            kind = file_kind(info.st_mode)
+            if kind is not None:
+                return Diagnostic(Span.point(shown), "INPUT-READ",
+                                  f"expected a regular file, found {kind}")
+            if info.st_size > limit:
+                return _too_big(shown, info.st_size)
+            chunks: list[bytes] = []
+            left = limit + 1
+            while left > 0:
+                chunk = os.read(fd, min(left, 1 << 20))
+                if not chunk:
+                    break
+                chunks.append(chunk)
+                left -= len(chunk)
+            return b"".join(chunks)
+        finally:
+            os.close(fd)
     except FileNotFoundError:
         return Diagnostic(Span.point(shown), "INPUT-READ", "no such file")
     except OSError as exc:
-        return Diagnostic(Span.point(shown), "INPUT-READ", f"cannot read the file: {exc.strerror}")
-    return decode_source(shown, data)
+        if exc.errno == errno.ELOOP:
+            return Diagnostic(Span.point(shown), "INPUT-READ",
+                              "expected a file, found a loop of symbolic links")
+        return Diagnostic(Span.point(shown), "INPUT-READ",
+                          f"cannot read the file: {exc.strerror or exc}")
+    except ValueError as exc:  # a NUL character in the name
+        return Diagnostic(Span.point(shown), "INPUT-READ", f"cannot read the file: {exc}")
+
+
+def read_source(path: str | Path) -> SourceText | Diagnostic:
+    """The file's text, or one diagnostic saying why it cannot be read."""
+    data = read_bounded(path)
+    if isinstance(data, Diagnostic):
+        return data
+    return decode_source(str(path), data)

@@ -7,6 +7,7 @@ not saved yet (an editor's buffers); otherwise it reads the disk.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -20,7 +21,12 @@ Document = RoomDocument | MissionDocument
 
 
 def _key(path: str | Path) -> str:
-    return str(Path(path).resolve())
+    """The path with symbolic links resolved, as far as they resolve (a loop of links or an
+    unreadable folder keeps the absolute path: reading it then says what is wrong)."""
+    try:
+        return str(Path(path).resolve())
+    except (OSError, RuntimeError, ValueError):
+        return os.path.abspath(path)
 
 
 @dataclass
@@ -57,7 +63,17 @@ class Workspace:
         return self._rooms[key]
 
     def mission(self, path: str | Path) -> MissionDocument:
-        return analyse_mission(self.source(path), self.room)
+        return analyse_mission(self.source(path), self._imported_room)
+
+    def _imported_room(self, path: str | Path) -> RoomDocument:
+        """The room a mission imports; a file that is not a .room is never read (its text
+        would be parsed as a room and echoed in the syntax error)."""
+        if path and Path(path).suffix != ".room":
+            name = Path(path).name
+            return analyse_room(Diagnostic(
+                Span.point(str(path)), "INPUT-KIND",
+                f"expected a .room file, found '{name}'"))
+        return self.room(path)
 
     def check(self, path: str | Path) -> list[Diagnostic]:
         """Every diagnostic of one file (for a mission, problems of its room are summarised)."""

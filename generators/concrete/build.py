@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-from itertools import pairwise
 from pathlib import Path
 
 from rei.catalogue import Catalogue
@@ -21,6 +20,7 @@ from rei.lang.errors import LanguageError
 from rei.lang.mission.document import MissionDocument
 from rei.lang.room.document import RoomDocument
 from rei.lang.room.model import Room, Trajectory
+from rei.lang.room.motion import vertex_times
 from rei.lang.workspace import Workspace, load_mission
 
 
@@ -30,24 +30,7 @@ def _xy(cell: tuple[int, int], tile: float) -> tuple[float, float]:
 
 def _timed(traj: Trajectory, room: Room, cells: dict[str, tuple[int, int]]) -> TimedTrajectory:
     pts = [_xy(cells[v.floor.name], room.tile_size) for v in traj.vertices]
-    if traj.total_time is None:
-        times = [float(v.time or 0.0) for v in traj.vertices]
-        if traj.loop:
-            # The way back to the first vertex is walked at the trajectory's mean speed.
-            length = sum(math.dist(a, b) for a, b in pairwise(pts))
-            speed = length / (times[-1] - times[0]) if times[-1] > times[0] else 0.0
-            back = math.dist(pts[-1], pts[0])
-            times.append(times[-1] + (back / speed if speed > 0 else times[-1] - times[0]))
-            pts.append(pts[0])
-    else:
-        if traj.loop:
-            pts.append(pts[0])
-        seg = [math.dist(a, b) for a, b in pairwise(pts)]
-        total_len = sum(seg)
-        times = [0.0]
-        for s in seg:
-            share = s / total_len if total_len > 0 else 1.0 / len(seg)
-            times.append(times[-1] + share * traj.total_time)
+    times, pts = vertex_times(traj, pts)  # the very times the checker judged (TRAJ-SPEED)
     points = tuple(TimedPoint(t, x, y) for t, (x, y) in zip(times, pts, strict=True))
     return TimedTrajectory(points, traj.loop)
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -94,7 +95,15 @@ class _Writer:
             args = "".join(", " + c(a) for a in e.args)
             return f"w.call({e.function!r}{args})"
         if isinstance(e, vm.Arith):
-            return f"({c(e.left)} {e.op} {c(e.right)})"
+            # A sum or product of many terms is a chain nested to the left: written flat
+            # (Python's + - and * / associate to the left too), never as nested brackets,
+            # which Python refuses beyond 200 levels.
+            terms: list[str] = []
+            node: vm.Expr = e
+            while isinstance(node, vm.Arith) and _same_level(node, e):
+                terms.append(f" {node.op} {c(node.right)}")
+                node = node.left
+            return "(" + c(node) + "".join(reversed(terms)) + ")"
         if isinstance(e, vm.Compare):
             left = c(e.left)
             if isinstance(e.right, vm.StateName):
@@ -127,16 +136,36 @@ class _Writer:
         return e.name
 
     def margins(self, e: vm.Expr, out: list[str]) -> None:
-        if isinstance(e, vm.Compare) and not isinstance(e.right, vm.StateName):
-            if _measured(e.left) or _measured(e.right):
-                base = f"{self.code(e.left, False)} - {self.code(e.right, False)}"
-                out.append(f"np.asarray({base}, dtype=float)")
-                if self.h > 0 and e.op in ("<", "<=", ">", ">="):
-                    out.append(f"np.asarray({base} - HYSTERESIS, dtype=float)")
-                    out.append(f"np.asarray({base} + HYSTERESIS, dtype=float)")
-            return
-        for child in _children(e):
-            self.margins(child, out)
+        stack = [e]  # pre-order without recursion, as _nodes, but not below a comparison
+        while stack:
+            node = stack.pop()
+            if isinstance(node, vm.Compare) and not isinstance(node.right, vm.StateName):
+                if _measured(node.left) or _measured(node.right):
+                    base = f"{self.code(node.left, False)} - {self.code(node.right, False)}"
+                    out.append(f"np.asarray({base}, dtype=float)")
+                    if self.h > 0 and node.op in ("<", "<=", ">", ">="):
+                        out.append(f"np.asarray({base} - HYSTERESIS, dtype=float)")
+                        out.append(f"np.asarray({base} + HYSTERESIS, dtype=float)")
+                continue
+            stack.extend(reversed(_children(node)))
+
+
+def _same_level(a: vm.Arith, b: vm.Arith) -> bool:
+    return (a.op in "+-") == (b.op in "+-")
+
+
+def _nodes(e: vm.Expr, into_call: Callable[[vm.Call], bool] = lambda _: True
+           ) -> Iterator[vm.Expr]:
+    """Every node of an expression in reading order (pre-order), without recursion: a sum of
+    a thousand terms is a chain a thousand deep. ``into_call`` says whether to look inside a
+    call's arguments."""
+    stack = [e]
+    while stack:
+        node = stack.pop()
+        yield node
+        if isinstance(node, vm.Call) and not into_call(node):
+            continue
+        stack.extend(reversed(_children(node)))
 
 
 def _children(e: vm.Expr) -> tuple[vm.Expr, ...]:
@@ -152,58 +181,59 @@ def _children(e: vm.Expr) -> tuple[vm.Expr, ...]:
 
 
 def _reads_parameter(e: vm.Expr) -> bool:
-    if isinstance(e, vm.Var) or (isinstance(e, vm.Find) and e.arg is not None):
-        return True
-    if isinstance(e, vm.Call) and not e.user:
-        return True  # distance(robot, o), on(robot, f), state(t): arrays over the domain
-    return any(_reads_parameter(c) for c in _children(e))
+    # distance(robot, o), on(robot, f), state(t): arrays over the domain
+    return any(isinstance(n, vm.Var) or (isinstance(n, vm.Find) and n.arg is not None)
+               or (isinstance(n, vm.Call) and not n.user) for n in _nodes(e))
 
 
 def _measured(e: vm.Expr) -> bool:
-    if isinstance(e, vm.Measure):
-        return e.name in INTERPOLATED
-    if isinstance(e, vm.Call):
-        return e.function == "distance" or e.user
-    return any(_measured(c) for c in _children(e))
+    def counts(n: vm.Expr) -> bool:
+        if isinstance(n, vm.Measure):
+            return n.name in INTERPOLATED
+        return isinstance(n, vm.Call) and (n.function == "distance" or n.user)
+
+    # A built-in call other than distance reads no measure, whatever its arguments.
+    return any(counts(n) for n in _nodes(e, into_call=lambda _: False))
 
 
 def _constant(e: vm.Expr) -> float | None:
     if isinstance(e, vm.Num):
         return e.value
     if isinstance(e, vm.Arith):
-        a, b = _constant(e.left), _constant(e.right)
-        if a is None or b is None:
-            return None
-        return {"+": a + b, "-": a - b, "*": a * b, "/": a / b if b else math.inf}[e.op]
+        chain: list[vm.Arith] = []
+        node: vm.Expr = e
+        while isinstance(node, vm.Arith):  # down the left chain without recursion
+            chain.append(node)
+            node = node.left
+        value = _constant(node)
+        for link in reversed(chain):
+            right = _constant(link.right)
+            if value is None or right is None:
+                return None
+            value = {"+": value + right, "-": value - right, "*": value * right,
+                     "/": value / right if right else math.inf}[link.op]
+        return value
     return None
 
 
 def distance_cutoff(spec: vm.Specification) -> float:
     """The largest threshold a footprint distance is compared with (inf if not constant)."""
     worst = 0.0
-
-    def visit(e: vm.Expr) -> None:
-        nonlocal worst
-        if isinstance(e, vm.Compare):
-            sides = (e.left, e.right)
-            for side, other in (sides, sides[::-1]):
-                if isinstance(side, vm.Call) and side.function == "distance":
-                    value = _constant(other)
-                    worst = max(worst, math.inf if value is None else value)
-                elif _uses_distance(side):
-                    worst = math.inf
-        for child in _children(e):
-            visit(child)
-
     for q in spec.queries:
-        visit(q.condition)
+        for e in _nodes(q.condition):
+            if isinstance(e, vm.Compare):
+                sides = (e.left, e.right)
+                for side, other in (sides, sides[::-1]):
+                    if isinstance(side, vm.Call) and side.function == "distance":
+                        value = _constant(other)
+                        worst = max(worst, math.inf if value is None else value)
+                    elif _uses_distance(side):
+                        worst = math.inf
     return worst + spec.hysteresis if math.isfinite(worst) else math.inf
 
 
 def _uses_distance(e: vm.Expr) -> bool:
-    if isinstance(e, vm.Call) and e.function == "distance":
-        return True
-    return any(_uses_distance(c) for c in _children(e))
+    return any(isinstance(n, vm.Call) and n.function == "distance" for n in _nodes(e))
 
 
 def _pyrepr(value: Any, indent: int = 8, width: int = 96) -> str:

@@ -11,15 +11,15 @@ import re
 from collections.abc import Iterator
 from dataclasses import dataclass
 from importlib import resources
-from pathlib import Path
 from typing import Literal
 
 from rei.catalogue import Box, Catalogue, Cylinder, ObjectType, Polygon, Tile
-from rei.lang.errors import Span
+from rei.lang.errors import Diagnostic, Span
 from rei.lang.lsp.positions import LineIndex, contains
 from rei.lang.mission.document import MissionDocument
 from rei.lang.room.document import RoomDocument
 from rei.lang.room.model import PlacedObject, Room, Side
+from rei.lang.source import read_source
 
 Kind = Literal["block", "object", "type", "file"]
 DEFAULT_CATALOGUE_SOURCE = "<default catalogue>"
@@ -306,10 +306,10 @@ def type_declaration(catalogue: Catalogue, name: str) -> Place | None:
     pattern = re.compile(rf"^[ \t]*\[types\.{re.escape(name)}[\].]", re.MULTILINE)
     for source in reversed(catalogue.sources):
         path = catalogue_file(source)
-        try:
-            text = Path(path).read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError):
+        source_text = read_source(path)  # bounded, and never blocks on a FIFO
+        if isinstance(source_text, Diagnostic):
             continue
+        text = source_text.text
         match = pattern.search(text)
         if match is None:
             continue

@@ -28,7 +28,7 @@ from lsprotocol import types
 from pygls.lsp.server import LanguageServer
 from pygls.uris import from_fs_path, to_fs_path
 
-from rei.lang.errors import Diagnostic, Severity
+from rei.lang.errors import Diagnostic, Severity, Span
 from rei.lang.lsp import completion as completing
 from rei.lang.lsp import vepl_support
 from rei.lang.lsp.navigation import Found, Place, find_in_mission, find_in_room
@@ -36,6 +36,7 @@ from rei.lang.lsp.outline import Symbol, mission_outline, room_outline
 from rei.lang.lsp.positions import LineIndex, Units, units_for
 from rei.lang.mission.document import MissionDocument
 from rei.lang.room.document import RoomDocument
+from rei.lang.source import read_bounded
 from rei.lang.workspace import Workspace, known_suffixes
 
 __all__ = ["ReiLanguageServer", "build_server", "main"]
@@ -237,10 +238,10 @@ class ReiLanguageServer(LanguageServer):
 
 
 def _read_text(path: str) -> str:
-    try:
-        return Path(path).read_text(encoding="utf-8", errors="replace")
-    except OSError:
-        return ""
+    """A file's text for positions, or "" (bounded, regular files only: a FIFO named as a
+    catalogue must not stop the server)."""
+    data = read_bounded(path)
+    return "" if isinstance(data, Diagnostic) else data.decode("utf-8", errors="replace")
 
 
 MAX_LISTED_ROOMS = 200
@@ -256,9 +257,28 @@ def _room_files(mission_path: str) -> list[str]:
     return names[:MAX_LISTED_ROOMS]
 
 
+INTERNAL_MESSAGE = ("internal error while checking: {error}; the file is not known to be valid. "
+                    "Please report this, with the file, at the REI issue tracker")
+
+
 def _analyse(workspace: Workspace, uri: str, path: str, text: str, version: int | None
              ) -> Analysis:
-    """Runs on the checker thread: the workspace's diagnostics and models of one file."""
+    """Runs on the checker thread: the workspace's diagnostics and models of one file.
+
+    A bug in a check must never look like a clean file: whatever escapes the checker is
+    shown as an INTERNAL diagnostic at 1:1 (and logged with its traceback)."""
+    try:
+        return _checked(workspace, uri, path, text, version)
+    except Exception as exc:  # any bug of any check (RecursionError included)
+        log.exception("checking %s failed", path)
+        error = f"{type(exc).__name__}: {exc}"[:300]
+        diagnostic = Diagnostic(Span.point(path), "INTERNAL",
+                                INTERNAL_MESSAGE.format(error=error))
+        return Analysis(uri, path, version, text, (diagnostic,))
+
+
+def _checked(workspace: Workspace, uri: str, path: str, text: str, version: int | None
+             ) -> Analysis:
     if workspace.overlays.get(_resolved(path)) != text:
         # Normally set already (in edit order) by buffer_changed; setting it again would
         # throw away the cached rooms, which a mission re-check after a room edit reuses.

@@ -31,7 +31,9 @@ MAX_CYCLES = 10_000
 
 
 def room_path_of(textx_mission: Any, source: SourceText) -> str:
-    return str(Path(source.path).parent / textx_mission.room.path)
+    written = textx_mission.room.path
+    # An empty name must not become the mission's folder (read as "a folder").
+    return str(Path(source.path).parent / written) if written else ""
 
 
 def link_mission(textx_mission: Any, source: SourceText, room_doc: RoomDocument
@@ -133,11 +135,21 @@ def _check_against_room(mission: Mission, room_doc: RoomDocument) -> list[Diagno
     if room_doc.room is None or not room_doc.ok:
         errors = [d for d in room_doc.diagnostics if d.is_error]
         first = errors[0] if errors else None
-        if first is not None and first.rule == "INPUT-READ":
-            message = f"expected a room file at '{mission.room_path}', found {first.message}"
+        if first is not None and first.rule.startswith("INPUT-"):
+            # The file could not be read as text at all: say why, in its own words.
+            if "expected" not in first.message:  # "no such file", "cannot read the file: …"
+                message = f"expected a room file at '{mission.room_path}', found {first.message}"
+            else:
+                message = (f"room '{mission.room_path}': {first.message}" if mission.room_path
+                           else first.message)
         else:
+            # A syntax error's message quotes the file; a file that is not a room (imported
+            # by mistake) must not have its contents echoed, so only say where it is.
+            shown = ("" if first is None else f"; first: {first.span.file}:{first.span.line}:"
+                     f"{first.span.col}: {first.rule}" + (
+                         "" if first.rule.startswith("SYNTAX") else f": {first.message}"))
             message = (f"expected a valid room, found {len(errors)} problem(s) in "
-                       f"'{mission.room_path}'" + (f"; first: {first}" if first else ""))
+                       f"'{mission.room_path}'" + shown)
         out.append(Diagnostic(mission.room_span, "MISSION-ROOM", message))
         if room_doc.room is None:
             return out

@@ -11,6 +11,7 @@ from rei.lang.room.checks import check_placement, check_types
 from rei.lang.room.layout import Layout, compute_layout
 from rei.lang.room.linker import link_room
 from rei.lang.room.model import Room
+from rei.lang.room.motion import check_motion
 from rei.lang.source import SourceText
 
 
@@ -38,6 +39,7 @@ def analyse_room(source: SourceText | Diagnostic) -> RoomDocument:
     room, diagnostics = link_room(parsed, source)
     layout, layout_diagnostics = compute_layout(room)
     diagnostics.extend(layout_diagnostics)
+    diagnostics.extend(check_motion(room, layout.cells))
     catalogue: Catalogue | None
     try:
         catalogue = load_catalogue(room.catalogue_path)

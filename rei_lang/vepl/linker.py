@@ -5,7 +5,8 @@ Rules (ids in the report / rei.lang.rules): VEPL-UNKNOWN (a name that is not dec
 is defined), VEPL-WINDOW (a time window that is not positive), VEPL-TYPE (an expression that
 mixes kinds of values), VEPL-NOT-WINDOW (a pattern ending in NOT without a window),
 VEPL-MULTIPLICITY ({n} below 1 or not whole), VEPL-CYCLE (queries finding each other in a
-circle), VEPL-PARAM (ε_collision < ε_close, hysteresis >= 0), plus the shared NAME-UNIQUE,
+circle), VEPL-PARAM (ε_collision < ε_close, hysteresis >= 0), VEPL-LIMIT (a pattern or a
+condition too big for the generated automata to run), plus the shared NAME-UNIQUE,
 NUM-FINITE and NUM-RANGE. This module must never import the runtime.
 """
 
@@ -23,6 +24,18 @@ from rei.lang.suggest import did_you_mean
 from rei.lang.vepl import model as m
 
 MAX_WINDOW_MS = 1e9
+MAX_PATTERN_SIZE = 500
+"""Parts of a complex event's pattern once every {n} is written out n times and every {+}
+as one copy followed by {*} (the automaton the runtime builds): matching one event costs
+about 10 ms at this size, growing with its square, and nested {+} double the size at every
+level."""
+MAX_PATTERN_DEPTH = 50
+"""Pattern operators nested in each other (each suffix counts): the generated automata and
+the runtime walk patterns recursively."""
+MAX_CONDITION_SIZE = 2000
+"""Operators and operands in one query's condition: the generated condition is one Python
+expression (a sum of 1,000 terms), and Python compiles a chain of a few thousand
+operators only with a deeper stack than a run has to spare."""
 BUILTINS = {"distance": 2, "on": 2, "state": 1, "failure": 1, "approach": 1}
 NAMED_STATES = {"mission_state": m.MISSION_STATES,
                 "nav_state": ("idle", "pending", "active", "succeeded", "aborted", "preempted")}
@@ -155,17 +168,23 @@ class _Linker:
                 graph.add_edge(other, name)
             valid = [p for p in parts if p is not None]
             condition: m.Expr = valid[0] if len(valid) == 1 else m.BoolOp("and", tuple(valid))
+            size = condition_size(condition)
+            if size > MAX_CONDITION_SIZE:
+                self.error(tx, "VEPL-LIMIT", f"query '{name}': expected a condition of at most "
+                                             f"{MAX_CONDITION_SIZE} operators and operands, "
+                                             f"found {size}")
             linked[name] = m.Query(name, param, condition, self.span(tx))
-        order = list(tx_queries)
-        for found in sorted(nx.simple_cycles(graph), key=lambda c: sorted(map(order.index, c))):
-            at = min(range(len(found)), key=lambda i: order.index(found[i]))
+        order = {n: i for i, n in enumerate(tx_queries)}
+        for found in sorted(nx.simple_cycles(graph),
+                            key=lambda c: sorted(map(order.__getitem__, c))):
+            at = min(range(len(found)), key=lambda i: order[found[i]])
             cycle = found[at:] + found[:at]  # start where the reader meets it first
             first = tx_queries[cycle[0]]
             self.error(first, "VEPL-CYCLE", "expected queries that do not find each other in a "
                                             f"circle, found {' -> '.join(cycle + cycle[:1])}")
             return list(linked.values())
         return [linked[n] for n in nx.lexicographical_topological_sort(
-            graph, key=lambda n: list(tx_queries).index(n))]
+            graph, key=order.__getitem__)]
 
     def _constraint(self, c: Any) -> m.Expr | None:
         if type(c).__name__ == "Find":
@@ -401,6 +420,21 @@ class _Linker:
         text = " ".join(self.source.text[start:end].split())
         return m.ComplexEvent(tx.name, pattern, context, text, self.span(tx))
 
+    def _limited(self, pattern: m.Pattern, where: Any) -> m.Pattern | None:
+        """The pattern, or None with a VEPL-LIMIT when it is too big or too deep to run."""
+        size, depth = pattern_measure(pattern)
+        if size > MAX_PATTERN_SIZE:
+            self.error(where, "VEPL-LIMIT", f"complexEvent '{self.ce_name}': expected a pattern "
+                                            f"of at most {MAX_PATTERN_SIZE} parts with every "
+                                            f"{{n}} and {{+}} written out, found {size}")
+            return None
+        if depth > MAX_PATTERN_DEPTH:
+            self.error(where, "VEPL-LIMIT", f"complexEvent '{self.ce_name}': expected operators "
+                                            f"nested at most {MAX_PATTERN_DEPTH} deep, found "
+                                            f"{depth}")
+            return None
+        return pattern
+
     def _pattern(self, e: Any, defined: dict[str, str], later: dict[str, str]
                  ) -> m.Pattern | None:
         kind = type(e).__name__
@@ -412,13 +446,15 @@ class _Linker:
             if len(valid) == 1:
                 return valid[0]
             if kind == "EventOr":
-                return m.EvOr(valid)
+                return self._limited(m.EvOr(valid), e)
             if kind == "EventAnd":
-                return m.EvAnd(valid)
-            return m.EvSeq(valid)
+                return self._limited(m.EvAnd(valid), e)
+            return self._limited(m.EvSeq(valid), e)
         if kind == "EventNot":
             inner = self._pattern(e.operand, defined, later)
-            return m.EvNot(inner) if inner is not None and e.negated else inner
+            if inner is None or not e.negated:
+                return inner
+            return self._limited(m.EvNot(inner), e)
         if kind == "EventPostfix":
             result = self._pattern(e.base, defined, later)
             for s in e.suffixes:
@@ -447,6 +483,9 @@ class _Linker:
                                                            f"1 to 100, found {s.count}")
                         return None
                     result = m.EvRepeat(result, int(n), True)
+                # Checked after every suffix: a chain of a thousand {+} stops at the first
+                # that is too much, before anything walks the whole chain.
+                result = self._limited(result, s)
             return result
         if kind == "EventGroup":
             return self._pattern(e.inner, defined, later)
@@ -511,6 +550,43 @@ class _Linker:
             ok = False
         return m.Requirement(tx.name, tx.description or "", tuple(clauses),
                              self.span(tx), premise) if ok else None
+
+
+def pattern_measure(p: m.Pattern) -> tuple[int, int]:
+    """(size, depth) of a pattern: size counts the parts of the automaton the runtime builds
+    from it ({n} repeats its operand n times, {+} is one copy and a {*}), depth the
+    operators nested in each other. Only called on patterns whose parts passed the limits,
+    so its recursion is bounded by MAX_PATTERN_DEPTH."""
+    if isinstance(p, m.EvRef):
+        return 1, 1
+    if isinstance(p, m.EvSeq | m.EvAnd | m.EvOr):
+        parts = [pattern_measure(x) for x in (p.options if isinstance(p, m.EvOr) else p.parts)]
+        glue = 1 if isinstance(p, m.EvOr) else len(parts) - 1
+        return sum(s for s, _ in parts) + glue, 1 + max(d for _, d in parts)
+    size, depth = pattern_measure(p.operand)
+    if isinstance(p, m.EvRepeat):
+        if p.exact:
+            return p.low * size + p.low - 1, depth + 1
+        return (p.low + 1) * size + p.low + 1, depth + 1
+    return size + 1, depth + 1
+
+
+def condition_size(e: m.Expr) -> int:
+    """Operators and operands of a condition, counted without recursion (a sum of thousands of
+    terms is a left-nested chain thousands deep)."""
+    count, stack = 0, [e]
+    while stack:
+        node = stack.pop()
+        count += 1
+        if isinstance(node, m.BoolOp):
+            stack.extend(node.operands)
+        elif isinstance(node, m.Not):
+            stack.append(node.operand)
+        elif isinstance(node, m.Compare | m.Arith):
+            stack.extend((node.left, node.right))
+        elif isinstance(node, m.Call):
+            stack.extend(node.args)
+    return count
 
 
 def _ends_in_unwindowed_not(p: m.Pattern) -> bool:

@@ -41,6 +41,7 @@ from rei.runtime.animator.variation import (
     draw_variations,
     mean_speed,
 )
+from rei.runtime.errors import RunError
 from rei.runtime.world.manifest import BodySpec, Trajectory
 
 CATCH_UP_GAIN = 1.0
@@ -80,9 +81,18 @@ class Reactions:
     social: SocialForce = field(default_factory=SocialForce)
 
 
-def spline_of(trajectory: Trajectory) -> CatmullRom:
-    pts = np.array(trajectory.points, dtype=float)
-    return CatmullRom(pts[:, 0], pts[:, 1:3], trajectory.loop)
+def spline_of(trajectory: Trajectory, name: str = "body") -> CatmullRom:
+    """The body's spline; RunError (naming it) for control points no spline passes through
+    (the checker's TRAJ-SPEED keeps generated worlds clear of them; a world.json edited by
+    hand may not be)."""
+    pts = np.array(trajectory.points, dtype=float).reshape(-1, 3)
+    times = pts[:, 0]
+    if len(times) < 2 or not np.all(np.diff(times) > 0):
+        raise RunError(f"world.json: the trajectory of '{name}': expected at least two control "
+                       f"points at increasing times, found times "
+                       f"{', '.join(f'{t:g}' for t in times[:6])}"
+                       + (" ..." if len(times) > 6 else ""))
+    return CatmullRom(times, pts[:, 1:3], trajectory.loop)
 
 
 def animated_bodies(objects: tuple[BodySpec, ...], body_ids: list[int], seed: int,
@@ -90,7 +100,7 @@ def animated_bodies(objects: tuple[BodySpec, ...], body_ids: list[int], seed: in
     """The world's bodies with a trajectory, by name, in declaration order; humans get
     their behaviour and (with ``vary``) their seeded variation."""
     named = [(b.name, body_ids[i], b) for i, b in enumerate(objects) if b.trajectory is not None]
-    splines = [spline_of(b.trajectory) for _, _, b in named if b.trajectory is not None]
+    splines = [spline_of(b.trajectory, name) for name, _, b in named if b.trajectory is not None]
     humans = [k for k, (_, _, b) in enumerate(named) if b.role == "human"]
     drawn = draw_variations(seed, [splines[k] for k in humans]) if vary else ()
     variation = dict(zip(humans, drawn, strict=False))

@@ -18,9 +18,10 @@ HELPERS = {"valid.room", "bad_types.toml", "__init__.py"}
 CORPUS_FILES = sorted(p for folder in (CORPUS, VEPL_CORPUS) for p in folder.iterdir()
                       if p.name not in HELPERS and p.is_file())
 
-# Rules whose inputs cannot be written as a corpus file; tests/lang/test_input_edges.py covers them.
+# Rules whose inputs cannot be written as a corpus file; tests/lang/test_input_edges.py covers
+# them (INTERNAL: tests/lsp/test_lsp_robustness.py).
 COVERED_ELSEWHERE = {"INPUT-READ", "INPUT-KIND", "INPUT-EMPTY", "INPUT-SIZE", "INPUT-ENCODING",
-                     "SYNTAX-DEPTH"}
+                     "SYNTAX-DEPTH", "INTERNAL"}
 
 
 def expectation(path: Path) -> tuple[str, int]:

@@ -18,7 +18,8 @@ from rei.lang.workspace import Workspace
 CORPUS = Path(__file__).parent / "corpus"
 MARK = re.compile(r"//! ([A-Z-]+)")
 VEPL_RULES = ("VEPL-UNKNOWN", "VEPL-ARITY", "VEPL-ORDER", "VEPL-WINDOW", "VEPL-TYPE",
-              "VEPL-NOT-WINDOW", "VEPL-MULTIPLICITY", "VEPL-CYCLE", "VEPL-PARAM")
+              "VEPL-NOT-WINDOW", "VEPL-MULTIPLICITY", "VEPL-CYCLE", "VEPL-PARAM",
+              "VEPL-LIMIT")
 
 TABLE_3 = {"SIG_MISSION_BEGIN": 20, "SIG_MISSION_END": 20, "SIG_MISSION_TASK_START": 5,
            "SIG_MISSION_TASK_FAIL": -100, "SIG_MISSION_TASK_SUCCESS": 10,
