@@ -1,7 +1,8 @@
 """Errors of the run stage: a simulation run could not be set up.
 
-A run that breaks *while running* (a controller that raises, hangs or sends non-finite
-commands) is not an exception to the caller: it ends with outcome ``error`` and a reason.
+A run that breaks *while running* (a controller that raises, hangs or answers outside its
+contract; under `rei run`, also a simulation process that dies or stops responding) is not an
+exception to the caller: it ends with outcome ``error`` and a reason.
 """
 
 from rei.lang.errors import ReiError

@@ -60,11 +60,12 @@ def die_with_parent() -> Callable[[], None] | None:
 def start_child(argv: Sequence[str], *, stdin: Stream = subprocess.DEVNULL,
                 stdout: Stream = None, stderr: Stream = None,
                 env: Mapping[str, str] | None = None,
-                cwd: str | os.PathLike[str] | None = None) -> subprocess.Popen[bytes]:
+                cwd: str | os.PathLike[str] | None = None,
+                pass_fds: Sequence[int] = ()) -> subprocess.Popen[bytes]:
     """Start ``argv`` as a child that dies with the calling thread (Linux) and leads its own
     process group; end it with ``stop_child``, or wait for it with ``child_status``."""
     return subprocess.Popen(argv, stdin=stdin, stdout=stdout, stderr=stderr, env=env, cwd=cwd,
-                            process_group=0, preexec_fn=die_with_parent())
+                            process_group=0, preexec_fn=die_with_parent(), pass_fds=pass_fds)
 
 
 def child_status(process: subprocess.Popen[bytes]) -> int | None:

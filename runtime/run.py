@@ -6,10 +6,14 @@ comes from ``numpy.random.Generator``s seeded from the run's seed (the main stre
 ``default_rng(seed)``, each variation such as the start-pose jitter from its own
 ``default_rng([seed, k])``, so adding one never shifts another), iteration is in
 declaration order and no wall-clock time enters the outputs, so the same inputs and seed give
-the same bytes. A controller that raises, hangs past the watchdog or sends a non-finite
-command ends the run with outcome ``error``; Ctrl-C ends it ``interrupted``; in both cases the
-sinks are finished, so what was written stays consistent. This module must never judge the
-run beyond task outcomes (the monitor and the evaluator do that, as sinks).
+the same bytes. A controller that raises, hangs past the watchdog or answers outside its
+contract (a malformed command or feedback) ends the run with outcome ``error``; Ctrl-C ends it
+``interrupted``; in both cases the sinks are finished, so what was written stays consistent.
+The controller sees the sensors through read-only copies: the sinks record what the sensors
+measured, whatever the controller does with its view. A ``RunProbe`` hears the loop's
+progress (each control tick), so a supervising process can tell a hung or dead run from a
+slow one. This module must never judge the run beyond task outcomes (the monitor and the
+evaluator do that, as sinks).
 """
 
 from __future__ import annotations
@@ -19,7 +23,7 @@ import time as wallclock
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -47,6 +51,7 @@ from rei.runtime.robot.protocol import (
     MapObstacle,
     Observation,
     VelocityCommand,
+    read_only_scan,
 )
 from rei.runtime.robot.watchdog import ControllerFault, GuardedController
 from rei.runtime.sensors.laser import Laser2D, ShapeSet, merge_wall_tiles, shapes_of
@@ -149,6 +154,19 @@ def stream_header(manifest: WorldManifest, monitor: MonitorConfig,
                         (manifest.laser.mount_x, manifest.laser.mount_y), facts)
 
 
+class RunProbe(Protocol):
+    """Hears how far a run got: the supervisor's heartbeat (``rei.runtime.supervisor``)."""
+
+    def begin(self, mission: str, room: str) -> None:
+        """The mission is checked and its world generated (called by ``run_into``)."""
+
+    def tick(self, time: float) -> None:
+        """The loop reached simulated ``time`` and is about to call the controller."""
+
+    def end(self, time: float) -> None:
+        """The loop ended at simulated ``time``; the sinks are finishing."""
+
+
 class _Contacts:
     """Contact episodes of the robot: a new episode starts when a body starts touching it."""
 
@@ -172,7 +190,8 @@ class _Contacts:
 def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: MonitorConfig,
                 controller: Controller, sinks: Sequence[SampleSink], config: RunConfig,
                 progress: Callable[[float, float], None] | None = None,
-                log: Callable[[str], None] | None = None) -> RunRecord:
+                log: Callable[[str], None] | None = None,
+                probe: RunProbe | None = None) -> RunRecord:
     """Run the mission once; the record of how it ended (never raises for controller faults)."""
     say = log or (lambda line: None)
     every_control = _every(config.physics_rate, config.control_rate, "the control rate")
@@ -243,6 +262,7 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
                             robot_spec.footprint.circumradius())
         collector.start()
         scan: LaserScan | None = None
+        seen_scan: LaserScan | None = None  # the controller's read-only copy, one per scan
         scan_time: float | None = None
         cmd: VelocityCommand = STOP
         raw: VelocityCommand = STOP
@@ -270,6 +290,8 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
 
         nav_view: tuple[NavState, str | None] = (NavState.IDLE, None)
         try:
+            if probe is not None:
+                probe.tick(0.0)
             guard.reset(context)
             for k in range(last_step + 1):
                 steps = k
@@ -285,21 +307,27 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
                         moving = shapes_of([manifest.objects[i] for i in seen_index],
                                            poses[seen_index])
                     ranges = laser.scan(truth, moving, rng, laser_noise)
+                    ranges.flags.writeable = False  # what was measured; sinks keep it
                     min_laser = min(min_laser, float(ranges.min()))
                     scan = LaserScan(laser.angle_min, laser.angle_increment, laser_spec.min_range,
                                      laser_spec.max_range, ranges)
+                    seen_scan = None
                     scan_time = now
                 if k % every_control == 0:
                     path_length += math.hypot(truth[0] - last_truth[0], truth[1] - last_truth[1])
                     last_truth = truth
                     odom.update(truth, every_control / config.physics_rate)
+                    if probe is not None:
+                        probe.tick(now)
                     emit(executor.tick(now, guard, truth))
                     fb = guard.feedback()
                     nav_view = (fb.state, executor.current_task)
                     if executor.finished:
                         record_sample(now, truth)
                         break
-                    obs = Observation(now, odom.pose, odom.twist, scan, scan_time)
+                    if seen_scan is None:
+                        seen_scan = read_only_scan(scan)
+                    obs = Observation(now, odom.pose, odom.twist, seen_scan, scan_time)
                     raw = guard.step(obs)
                     # The motor driver saturates: commands beyond the drive limits are clipped.
                     cmd = VelocityCommand(min(max(raw.linear, -vmax), vmax),
@@ -340,6 +368,8 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
             reason = (f"{len(failed)} of {len(executor.results)} tasks failed" if failed
                       else f"all {len(executor.results)} tasks succeeded")
         say(f"t={now:9.3f}  outcome {outcome}: {reason}")
+        if probe is not None:
+            probe.end(now)
         collector.finish(now, outcome, reason)
     finally:
         guard.close()

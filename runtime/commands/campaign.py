@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import math
+import os
 import signal
 import sys
 import threading
@@ -115,12 +116,13 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                              "starts at the exact declared scene (only the laser noise differs)")
     parser.add_argument("--no-report", action="store_true",
                         help="skip report.html (tables and junit.xml are still written)")
+    from rei.runtime.commands.run import add_verbosity  # noqa: PLC0415
+
+    add_verbosity(parser)  # -q: the final verdict line alone; -v: every failed run's rerun
     parser.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    import os  # noqa: PLC0415
-
     from rei.runtime.campaign import (  # noqa: PLC0415
         CampaignError,
         DaskEngine,
@@ -151,17 +153,19 @@ def run(args: argparse.Namespace) -> int:
                   "pass_rate": args.pass_rate}
     twins = " + static twins" if args.pair_static else ""
     missions = len({s.mission_file for s in plan.runs if not s.static_pair})
-    print(f"campaign: {len(plan.runs)} runs ({missions} missions x {plan.repeat}{twins}) on "
-          f"{args.engine} engine -> {args.output}", file=sys.stderr)
+    if not args.quiet:
+        print(f"campaign: {len(plan.runs)} runs ({missions} missions x {plan.repeat}{twins}) "
+              f"on {args.engine} engine -> {args.output}", file=sys.stderr)
     try:
-        with _terminate_as_interrupt():
-            result = run_campaign(plan, args.output, engine, provenance)
+        with _terminate_as_interrupt(), open(os.devnull, "w", encoding="utf-8") as silent:
+            result = run_campaign(plan, args.output, engine, provenance,
+                                  stream=silent if args.quiet else None)
     except KeyboardInterrupt:
         print(f"rei campaign: interrupted; the finished runs are kept in {args.output}. Run "
               f"the same command again to finish the missing ones.", file=sys.stderr)
         return EXIT_INTERRUPTED
     return finish(args.output, no_report=args.no_report, complete=result.complete,
-                  pass_rate=args.pass_rate)
+                  pass_rate=args.pass_rate, quiet=args.quiet, verbose=args.verbose)
 
 
 @contextlib.contextmanager
@@ -183,7 +187,7 @@ def _terminate_as_interrupt() -> Iterator[None]:
 
 
 def finish(root: Path, *, no_report: bool = False, complete: bool = True,
-           pass_rate: float | None = None) -> int:
+           pass_rate: float | None = None, quiet: bool = False, verbose: bool = False) -> int:
     """Write junit.xml and the report of a campaign folder; the exit status of its mission
     verdicts against ``pass_rate`` (None: the rate the campaign's last session required)."""
     from rei.runtime.campaign import CampaignStore  # noqa: PLC0415
@@ -196,15 +200,28 @@ def finish(root: Path, *, no_report: bool = False, complete: bool = True,
     from rei.runtime.report import build_report  # noqa: PLC0415
 
     outcome = build_report(root, html=not no_report)
-    print(outcome.describe(), file=sys.stderr)
+    if not quiet:
+        print(outcome.describe(), file=sys.stderr)
     _, manifest, records = CampaignStore.read(root)
     required = required_pass_rate(manifest) if pass_rate is None else pass_rate
     verdicts = mission_verdicts(records, required)
     causes = {p.mission: p.cause for p in classify_pairs(records)}
     for verdict in verdicts:
         cause = causes.get(verdict.mission)
-        print(f"  {verdict.verdict.upper():5}  {verdict.mission}: {verdict.reason}"
-              + (f"; {cause}" if cause and cause != "passes" else ""), file=sys.stderr)
+        if not quiet:
+            print(f"  {verdict.verdict.upper():5}  {verdict.mission}: {verdict.reason}"
+                  + (f"; {cause}" if cause and cause != "passes" else ""), file=sys.stderr)
+    if verbose:
+        from rei.runtime.report.build import rerun_command  # noqa: PLC0415
+
+        for record in outcome.failed:
+            print(f"    {record.spec.run_id}: {record.verdict}; rerun: "
+                  f"{rerun_command(record.spec)}", file=sys.stderr)
+    passed = campaign_passed(verdicts)
+    good = sum(v.verdict == "pass" for v in verdicts)
+    where = f"; report: {outcome.html}" if outcome.html is not None else ""
+    print(f"verdict: {'PASS' if passed else 'FAIL'}{'' if complete else ' (incomplete)'}; "
+          f"{good} of {len(verdicts)} missions passed{where}")
     if not complete:
         return EXIT_INTERRUPTED
-    return EXIT_OK if campaign_passed(verdicts) else EXIT_FAILED
+    return EXIT_OK if passed else EXIT_FAILED

@@ -49,6 +49,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.add_argument("--vepl", type=Path, default=None, metavar="FILE",
                         help="monitoring specification passed to every `rei run` (default: "
                              "REI's default.vepl)")
+    from rei.runtime.commands.run import add_verbosity  # noqa: PLC0415
+
+    add_verbosity(parser)  # as `rei campaign`: -q the final lines alone, -v failed runs' reruns
     parser.set_defaults(func=run)
 
 
@@ -86,25 +89,32 @@ def run(args: argparse.Namespace) -> int:
     out: Path = args.output
     if args.vepl is not None and not args.vepl.is_file():  # before minutes of generation
         raise CampaignError(f"--vepl: file '{args.vepl}' does not exist")
-    print(f"1/3 generating {args.count} {args.preset} rooms into {out / 'suite'}",
-          file=sys.stderr)
+
+    def say(text: str) -> None:
+        if not args.quiet:
+            print(text, file=sys.stderr)
+
+    say(f"1/3 generating {args.count} {args.preset} rooms into {out / 'suite'}")
     inputs = generate_suite(out / "suite", args.count, args.preset, args.seed)
     plan = plan_campaign(inputs, repeat=args.repeat, seed=args.seed, controller=args.controller,
                          vepl=args.vepl)
     engine = LocalEngine(args.workers or os.cpu_count() or 1)
     who = f" of {args.controller}" if args.controller else ""
-    print(f"2/3 running {len(plan.runs)} runs{who} on {engine.workers} worker(s) into "
-          f"{out / 'campaign'}", file=sys.stderr)
+    say(f"2/3 running {len(plan.runs)} runs{who} on {engine.workers} worker(s) into "
+        f"{out / 'campaign'}")
     provenance = collect(["rei", *sys.argv[1:]], engine.describe(), args.controller, None)
     try:
-        run_campaign(plan, out / "campaign", engine, provenance)
+        with open(os.devnull, "w", encoding="utf-8") as silent:
+            run_campaign(plan, out / "campaign", engine, provenance,
+                         stream=silent if args.quiet else None)
     except KeyboardInterrupt:
         print("rei demo: interrupted; run the same command again to finish", file=sys.stderr)
         return EXIT_INTERRUPTED
-    print("3/3 writing the report", file=sys.stderr)
-    finish(out / "campaign")
+    say("3/3 writing the report")
+    finish(out / "campaign", quiet=args.quiet, verbose=args.verbose)
     report = (out / "campaign" / "report.html").resolve()
-    print(f"\nOpen the report: {report.as_uri()}")
-    print(f"Re-run any failure with the command listed in it; rebuild it with "
-          f"`rei report {out / 'campaign'}`.")
+    print(f"{'' if args.quiet else chr(10)}Open the report: {report.as_uri()}")
+    if not args.quiet:
+        print(f"Re-run any failure with the command listed in it; rebuild it with "
+              f"`rei report {out / 'campaign'}`.")
     return EXIT_OK

@@ -3,9 +3,11 @@
 The trace's samples go through the same generated automata and evaluator as a live run, so
 the event log and verdicts equal the live run's (same trace, same specification). Writes
 DIR/events.csv, DIR/summary.json, DIR/automata/automata.py and DIR/report.html (the run's
-page, drawn from the trace; its map needs the run's world/ folder beside the trace). Exit
-status: 0 every requirement passed, 1 one failed or was inconclusive, 2 invalid input (a bad
-.vepl or an unreadable trace), 3 a monitor error.
+page, drawn from the trace; its map needs the run's world/ folder beside the trace). Prints
+the results on stdout as `rei run` does (``print_results``: the same lines, --quiet and
+--verbose), diagnostics on stderr. Exit status: 0 every requirement passed, 1 one failed or
+was inconclusive, 2 invalid input (a bad .vepl or an unreadable trace), 3 a monitor error or a
+recorded run error, 130 a recorded interrupted run.
 """
 
 from __future__ import annotations
@@ -16,13 +18,8 @@ from pathlib import Path
 from typing import cast
 
 from rei.lang.cli_support import EXIT_RUN_ERROR
-from rei.runtime.collector.trace import read_trace, read_trace_end
-from rei.runtime.commands.run import write_page
-from rei.runtime.evaluator.summary import merge_summary, write_summary
-from rei.runtime.monitor import MonitorSink, generate_automata
-from rei.runtime.monitor.errors import MonitorError
-from rei.runtime.monitor.functions import load_functions
-from rei.runtime.results import RESULTS_VERSION, Outcome, RunSummary, judge
+from rei.runtime.commands.run import add_verbosity, print_results, write_page
+from rei.runtime.results import RESULTS_VERSION, Outcome, RunSummary
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -31,7 +28,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         description="Feed a trace recorded by `rei run` through the event automata generated "
                     "from a .vepl specification (the default one unless --vepl) and write "
                     "events.csv, summary.json and report.html (the run's page). Same trace "
-                    "and specification give the same events and verdicts as the live run.")
+                    "and specification give the same events and verdicts as the live run. "
+                    "Results go to stdout, diagnostics to stderr.")
     parser.add_argument("trace", type=Path, metavar="TRACE", help="a trace.jsonl file")
     parser.add_argument("--vepl", type=Path, default=None, metavar="FILE",
                         help="the specification (default: REI's default.vepl)")
@@ -40,12 +38,18 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                              "functions the specification declares with 'function'")
     parser.add_argument("-o", "--output", type=Path, required=True, metavar="DIR",
                         help="output folder (created if missing)")
+    add_verbosity(parser)
     parser.set_defaults(func=run)
 
 
 def replay(trace: Path, vepl: Path | None, out_dir: Path,
            functions: str | None = None) -> RunSummary:
     """Monitor ``trace`` into ``out_dir``; the summary (also written as summary.json)."""
+    from rei.runtime.collector.trace import read_trace, read_trace_end  # noqa: PLC0415
+    from rei.runtime.evaluator.summary import merge_summary, write_summary  # noqa: PLC0415
+    from rei.runtime.monitor import MonitorSink, generate_automata  # noqa: PLC0415
+    from rei.runtime.monitor.functions import load_functions  # noqa: PLC0415
+
     # The specification is checked and generated before the trace is opened: a bad .vepl
     # is reported without touching the trace.
     automata = generate_automata(vepl, Path(out_dir) / "automata", replace=True)
@@ -76,16 +80,14 @@ def replay(trace: Path, vepl: Path | None, out_dir: Path,
 
 
 def run(args: argparse.Namespace) -> int:
+    from rei.runtime.monitor.errors import MonitorError  # noqa: PLC0415
+
     try:
         summary = replay(args.trace, args.vepl, args.output, args.functions)
     except MonitorError as exc:
         print(f"rei replay: error: {exc}", file=sys.stderr)
         return EXIT_RUN_ERROR
-    for v in summary.verdicts:
-        print(f"{v.requirement}: {v.status.replace('_', ' ')} ({v.reason})")
-    write_page(args.output, args.trace)
-    verdict = judge(summary)
-    print(f"verdict: {verdict.upper()}; total utility {summary.total_utility:g}; wrote "
-          f"{args.output / 'events.csv'}")
+    page = write_page(args.output, args.trace)
     # the one pass rule of `rei run`; a recorded run error stays an error
-    return 0 if verdict == "pass" else EXIT_RUN_ERROR if verdict == "error" else 1
+    return print_results(summary, args.output, page=page, quiet=args.quiet,
+                         verbose=args.verbose)

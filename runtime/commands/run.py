@@ -6,9 +6,14 @@ stream), ``events.csv`` (one row per signal), ``summary.json`` (a RunSummary wit
 ``report.html`` (the run's page: verdicts, timeline, distances, speed, map; not with
 --no-monitor) and ``run.log`` (the mission events and the outcome). Every output is a
 function of the inputs, the seed and the REI version only: wall-clock time goes to the
-terminal, never into DIR. Exit status: 0 every requirement passed, 1 one failed or was
-inconclusive (without the monitor: a task failed or the time ran out), 2 invalid input, 3 a
-run error, 130 interrupted (the outputs are then marked incomplete).
+terminal, never into DIR. The simulation runs in a child process under
+``rei.runtime.supervisor`` (``run`` here validates the options, starts it and prints);
+``run_into`` is the same work in the caller's process, for the library and tests. Results
+(the outcome line, the requirements, the page, the final verdict line) go to stdout,
+progress and diagnostics to stderr; --quiet leaves the final verdict line alone. Exit status:
+0 every requirement passed (without the monitor: the run did not break), 1 one failed or was
+inconclusive, 2 invalid input, 3 a run error (the controller broke the contract or the
+simulation's process died or hung), 130 interrupted (the outputs are then marked incomplete).
 """
 
 from __future__ import annotations
@@ -18,28 +23,38 @@ import math
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import IO
+from typing import IO, TYPE_CHECKING, Any, TextIO
 
-from rei.generators.output import open_output
 from rei.lang.cli_support import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_RUN_ERROR
-from rei.lang.errors import ReiError
-from rei.runtime.collector import SampleSink, TraceWriter, load_monitor_config
 from rei.runtime.commands.run_config import apply_run_config, defer_defaults
 from rei.runtime.errors import RunError
-from rei.runtime.evaluator import merge_summary, write_summary
-from rei.runtime.monitor import MonitorSink, generate_automata
-from rei.runtime.monitor.functions import load_functions
 from rei.runtime.results import RunSummary, judge
-from rei.runtime.robot import BUILT_IN, make_controller
-from rei.runtime.run import RunConfig, RunRecord, generate_world, run_mission, summary_of
-from rei.runtime.world import load_manifest
-from rei.runtime.world.start_jitter import START_JITTER
+
+if TYPE_CHECKING:
+    from rei.runtime.collector import SampleSink
+    from rei.runtime.run import RunProbe, RunRecord
+    from rei.runtime.supervisor import RunRequest
+
+# The simulator, the monitor and the generators are imported where they are used: `rei run`
+# itself only supervises the process that runs them (rei.runtime.supervisor), and pays for
+# those imports once, in that process.
 
 PAGE = "report.html"
 TRACE = "trace.jsonl"
 SUMMARY = "summary.json"
 LOG = "run.log"
 EVENTS = "events.csv"
+
+
+def add_verbosity(parser: argparse.ArgumentParser) -> None:
+    """--quiet and --verbose, with the same meaning for rei run, replay, campaign and demo:
+    results on stdout, progress and diagnostics on stderr."""
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument("-q", "--quiet", action="store_true",
+                       help="no progress; print only the final verdict line (on stdout)")
+    group.add_argument("-v", "--verbose", action="store_true",
+                       help="more detail: every requirement with its reason, passed ones "
+                            "too, and the mission's events as they happen (on stderr)")
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -49,22 +64,27 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                     "with the robot under test, monitor it with the event automata of a .vepl "
                     "specification, and write trace.jsonl, events.csv, summary.json (with the "
                     "requirement verdicts), report.html (the run's page) and run.log into the "
-                    "output folder. Same inputs and "
-                    "seed give byte-identical outputs. Exit status: 0 every requirement passed, "
-                    "1 one failed or was inconclusive, 2 invalid input, 3 a run error, "
-                    "130 interrupted.")
+                    "output folder. Same inputs and seed give byte-identical outputs. The "
+                    "simulation runs in a supervised child process: a controller that kills "
+                    "it, ends it or hangs it ends the run as an error, with a summary saying "
+                    "so. Results go to stdout, progress and diagnostics to stderr. Exit "
+                    "status: 0 every requirement passed, 1 one failed or was inconclusive, "
+                    "2 invalid input, 3 a run error, 130 interrupted.")
     parser.add_argument("mission", type=Path, nargs="?", default=None, metavar="MISSION",
                         help="the .mission file (optional with --config)")
     parser.add_argument("-o", "--output", type=Path, default=None, metavar="DIR",
                         help="output folder (created if missing; required without --config)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the run (default 0)")
     parser.add_argument("--controller", default="reference", metavar="NAME",
-                        help=f"robot under test: {', '.join(BUILT_IN)}, or module:Class "
-                             f"(default reference)")
+                        help="robot under test: reference, teleop, teleop:SCRIPT (a scripted "
+                             "drive), or module:Class of your own navigator (default reference)")
     parser.add_argument("--duration", type=float, default=None, metavar="S",
                         help="stop after S simulated seconds (default: the mission's time limit)")
     parser.add_argument("--watchdog", type=float, default=5.0, metavar="S",
-                        help="wall-clock seconds a controller call may take (default 5)")
+                        help="wall-clock seconds a controller call may take (default 5); a "
+                             "simulation that reports no progress for S + max(S, 5) seconds "
+                             "(a hang the call's watchdog cannot see, e.g. native code holding "
+                             "the interpreter) is killed")
     parser.add_argument("--physics-rate", type=float, default=100.0, metavar="HZ",
                         help="physics steps per simulated second (default 100)")
     parser.add_argument("--odom-drift", type=float, default=0.0, metavar="SIGMA",
@@ -85,7 +105,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                              "functions the specification declares with 'function'")
     parser.add_argument("--no-monitor", action="store_true",
                         help="record the trace only (monitor it later with `rei replay`)")
-    parser.add_argument("--quiet", action="store_true", help="no progress display")
+    add_verbosity(parser)
     defer_defaults(parser)
     parser.set_defaults(func=run)
 
@@ -95,16 +115,9 @@ def _finite(name: str, value: float | None) -> None:
         raise RunError(f"{name}: expected a finite number, found {value}")
 
 
-def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", seed: int = 0,
-             duration: float | None = None, watchdog: float | None = 5.0,
-             physics_rate: float = 100.0, odom_drift: float = 0.0,
-             sinks: Sequence[SampleSink] = (), progress: IO[str] | None = None,
-             vepl: Path | None = None, monitor: bool = True, laser_noise: float | None = None,
-             variation: bool = True, functions: str | None = None
-             ) -> tuple[RunSummary, RunRecord]:
-    """Everything `rei run` does: generate, run, monitor with the .vepl's automata (the
-    default specification unless ``vepl``; none when ``monitor`` is False), write outputs.
-    Extra ``sinks`` see the same stream as the trace and the monitor."""
+def check_options(mission_path: Path, duration: float | None, watchdog: float | None,
+                  physics_rate: float, odom_drift: float, laser_noise: float | None) -> None:
+    """RunError for an option out of range, before anything is generated or started."""
     for name, value in (("--duration", duration), ("--watchdog", watchdog),
                         ("--physics-rate", physics_rate), ("--odom-drift", odom_drift),
                         ("--laser-noise", laser_noise)):
@@ -118,10 +131,43 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
         raise RunError(f"--laser-noise: expected metres from 0 to 1, found {laser_noise:g}")
     if mission_path.suffix != ".mission":
         raise RunError(f"expected a .mission file to run, found '{mission_path}'")
+
+
+def _make_folder(out_dir: Path) -> None:
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise RunError(f"cannot create the output folder '{out_dir}': {exc.strerror}") from None
+
+
+def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", seed: int = 0,
+             duration: float | None = None, watchdog: float | None = 5.0,
+             physics_rate: float = 100.0, odom_drift: float = 0.0,
+             sinks: Sequence[SampleSink] = (), progress: IO[str] | None = None,
+             vepl: Path | None = None, monitor: bool = True, laser_noise: float | None = None,
+             variation: bool = True, probe: RunProbe | None = None,
+             echo: IO[str] | None = None, functions: str | None = None
+             ) -> tuple[RunSummary, RunRecord]:
+    """Everything `rei run` does, in this process: generate, run, monitor with the .vepl's
+    automata (the default specification unless ``vepl``; none when ``monitor`` is False),
+    write outputs. Extra ``sinks`` see the same stream as the trace and the monitor; ``probe``
+    hears the loop's progress; ``echo`` gets run.log's lines as they are written.
+
+    The controller runs in this process: a controller that ends or stalls the process ends
+    the caller too. `rei run` supervises it instead (``rei.runtime.supervisor.supervise``).
+    """
+    from rei.generators.output import open_output  # noqa: PLC0415
+    from rei.runtime.collector import TraceWriter, load_monitor_config  # noqa: PLC0415
+    from rei.runtime.evaluator import merge_summary, write_summary  # noqa: PLC0415
+    from rei.runtime.monitor import MonitorSink, generate_automata  # noqa: PLC0415
+    from rei.runtime.monitor.functions import load_functions  # noqa: PLC0415
+    from rei.runtime.robot import make_controller  # noqa: PLC0415
+    from rei.runtime.run import RunConfig, generate_world, run_mission, summary_of  # noqa: PLC0415
+    from rei.runtime.world import load_manifest  # noqa: PLC0415
+    from rei.runtime.world.start_jitter import START_JITTER  # noqa: PLC0415
+
+    check_options(mission_path, duration, watchdog, physics_rate, odom_drift, laser_noise)
+    _make_folder(out_dir)
     # The specification is checked and generated first: a bad .vepl is reported (exit 2)
     # before any world is built.
     automata = generate_automata(vepl, out_dir / "automata", replace=True) if monitor else None
@@ -130,6 +176,8 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
         if monitor else None
     world_dir = out_dir / "world"
     mission = generate_world(mission_path, world_dir, replace=True)
+    if probe is not None:
+        probe.begin(mission.name, mission.world.name)
     manifest = load_manifest(world_dir)
     monitor_config = load_monitor_config(world_dir)
     robot = make_controller(controller)
@@ -152,6 +200,9 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
         def log(line: str) -> None:
             log_file.write(line + "\n")
             log_file.flush()
+            if echo is not None:
+                echo.write(("\n" if progress is not None else "") + line + "\n")
+                echo.flush()
 
         log(f"mission {mission.name} in room {mission.world.name}, controller {controller}, "
             f"seed {seed}")
@@ -159,7 +210,8 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
                              [TraceWriter(out_dir / TRACE),
                               *([monitor_sink] if monitor_sink is not None else []), *sinks],
                              config,
-                             progress=show if progress is not None else None, log=log)
+                             progress=show if progress is not None else None, log=log,
+                             probe=probe)
     if progress is not None:
         progress.write("\n")
     summary = summary_of(record, mission, controller, seed)
@@ -169,59 +221,141 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
     return summary, record
 
 
+def execute_request(request: RunRequest, probe: RunProbe) -> tuple[int, dict[str, Any]]:
+    """The supervised child's work: run ``request``, write the page; (exit status, the
+    loop's wall and CPU seconds and the page's path for the supervisor)."""
+    summary, record = run_into(
+        Path(request.mission), Path(request.output), request.controller, request.seed,
+        request.duration, request.watchdog, request.physics_rate, request.odom_drift,
+        progress=sys.stderr if request.progress else None,
+        vepl=Path(request.vepl) if request.vepl is not None else None,
+        monitor=request.monitor, laser_noise=request.laser_noise,
+        variation=request.variation, probe=probe,
+        echo=sys.stderr if request.echo_events else None, functions=request.functions)
+    page = write_page(Path(request.output)) if request.monitor else None
+    return exit_code(summary, request.monitor), {
+        "wall": record.wall_seconds, "cpu": record.cpu_seconds,
+        "page": str(page) if page is not None else None}
+
+
 def run(args: argparse.Namespace) -> int:
+    from rei.runtime.supervisor import RunRequest, supervise  # noqa: PLC0415
+
     args = apply_run_config(args)
-    progress = None if args.quiet or not sys.stderr.isatty() else sys.stderr
-    summary, record = run_into(args.mission, args.output, args.controller, args.seed,
-                               args.duration, args.watchdog, args.physics_rate, args.odom_drift,
-                               progress=progress, vepl=args.vepl, monitor=not args.no_monitor,
-                               laser_noise=args.laser_noise, variation=not args.no_variation,
-                               functions=args.functions)
-    rtf = record.duration / record.wall_seconds if record.wall_seconds > 0 else math.inf
-    cpu_rtf = record.duration / record.cpu_seconds if record.cpu_seconds > 0 else math.inf
-    m = summary.measurements
-    print(f"{summary.mission}: {summary.outcome} ({summary.reason}) after "
-          f"{summary.duration:.1f} s simulated, {m['tasks_succeeded']} task(s) succeeded, "
-          f"{m['tasks_failed']} failed, {m['collisions']} collision(s); "
-          f"{rtf:.0f}x real time ({cpu_rtf:.0f}x per CPU second); outputs in {args.output}",
-          file=sys.stderr)
-    if not args.no_monitor:
-        write_page(args.output)
-    return exit_status(summary, args.output, monitored=not args.no_monitor)
+    out: Path = args.output
+    check_options(args.mission, args.duration, args.watchdog, args.physics_rate,
+                  args.odom_drift, args.laser_noise)
+    _make_folder(out)
+    # Outputs of an earlier run into the same folder go now: a run that dies must not leave
+    # them beside its own error summary.
+    for stale in (SUMMARY, TRACE, TRACE + ".partial", EVENTS, PAGE):
+        (out / stale).unlink(missing_ok=True)
+    request = RunRequest(
+        str(args.mission), str(out), args.controller, args.seed, args.duration, args.watchdog,
+        args.physics_rate, args.odom_drift, args.laser_noise,
+        str(args.vepl) if args.vepl is not None else None, not args.no_monitor,
+        not args.no_variation, progress=not args.quiet and sys.stderr.isatty(),
+        echo_events=args.verbose, functions=args.functions)
+    ended = supervise(request)
+    summary = _read_summary(out) if ended.status != 2 else None
+    if summary is None:
+        # bad input (the child said why on stderr), or interrupted before anything was run
+        if ended.status == EXIT_INTERRUPTED:
+            print(f"verdict: INTERRUPTED (before the run started); outputs in {out}")
+        return ended.status
+    if not args.quiet and ended.wall_seconds > 0:
+        rtf = summary.duration / ended.wall_seconds
+        cpu_rtf = summary.duration / ended.cpu_seconds if ended.cpu_seconds > 0 else math.inf
+        print(f"  {rtf:.0f}x real time ({cpu_rtf:.0f}x per CPU second)", file=sys.stderr)
+    return print_results(summary, out, monitored=not args.no_monitor,
+                         page=Path(ended.page) if ended.page else None, quiet=args.quiet,
+                         verbose=args.verbose)
+
+
+def _read_summary(out: Path) -> RunSummary | None:
+    import json  # noqa: PLC0415
+
+    try:
+        return RunSummary.from_json(json.loads((out / SUMMARY).read_text(encoding="utf-8")))
+    except (OSError, ValueError, TypeError, KeyError):
+        return None
 
 
 def write_page(out_dir: Path, trace: Path | None = None) -> Path | None:
-    """Write the run's report.html; a page that cannot be written is reported, never allowed
-    to change the run's verdict or exit status."""
+    """Write the run's report.html; a page that cannot be written is reported (on stderr),
+    never allowed to change the run's verdict or exit status."""
+    from rei.lang.errors import ReiError  # noqa: PLC0415
     from rei.runtime.report.run_page import write_run_page  # noqa: PLC0415  (matplotlib)
 
     try:
-        page = write_run_page(out_dir, trace)
+        return write_run_page(out_dir, trace)
     except (ReiError, OSError) as exc:
         print(f"  report.html not written: {exc}", file=sys.stderr)
         return None
-    print(f"  run page: {page}", file=sys.stderr)
-    return page
 
 
-def exit_status(summary: RunSummary, out_dir: Path, monitored: bool = True) -> int:
-    """Print the verdicts and return the exit status of the one pass rule
-    (rei.runtime.results.judge): 0 pass (or, without the monitor, unjudged), 1 fail or
-    inconclusive, 3 run error, 130 interrupted."""
+def exit_code(summary: RunSummary, monitored: bool = True) -> int:
+    """The exit status of the one pass rule (rei.runtime.results.judge): 0 pass (or, without
+    the monitor, unjudged), 1 fail or inconclusive, 3 run error, 130 interrupted."""
     verdict = judge(summary)
     if verdict == "error":
-        print(f"rei run: error: {summary.reason}", file=sys.stderr)
         return EXIT_RUN_ERROR
     if verdict == "interrupted":
         return EXIT_INTERRUPTED
-    if not monitored:
-        print("  not judged (--no-monitor): judge the trace with `rei replay`", file=sys.stderr)
+    if not monitored or verdict == "pass":
         return EXIT_OK
+    return EXIT_FAILED
+
+
+def verdict_lines(summary: RunSummary, verbose: bool) -> list[str]:
+    """One line per requirement that kept the run from passing (every requirement, with its
+    reason, when ``verbose``), then how many passed or did not apply when not all shown."""
+    lines = []
+    hidden: dict[str, int] = {}
     for v in summary.verdicts:
+        if not verbose and v.status in ("pass", "not_applicable"):
+            hidden[v.status] = hidden.get(v.status, 0) + 1
+            continue
         at = f" at t={v.decided_at:g} s" if v.decided_at is not None and v.status in (
             "fail", "inconclusive") else ""
-        print(f"  {v.requirement}: {v.status.replace('_', ' ')}{at} ({v.reason})",
-              file=sys.stderr)
-    print(f"  verdict: {verdict.upper()}; total utility {summary.total_utility:g}; events in "
-          f"{out_dir / EVENTS}", file=sys.stderr)
-    return EXIT_OK if verdict == "pass" else EXIT_FAILED
+        lines.append(f"  {v.requirement}: {v.status.replace('_', ' ')}{at} ({v.reason})")
+    if hidden:
+        words = {"pass": "passed", "not_applicable": "not applicable"}
+        lines.append("  " + ", ".join(f"{hidden[s]} {words[s]}" for s in words if s in hidden))
+    return lines
+
+
+def final_line(summary: RunSummary, out_dir: Path, monitored: bool = True) -> str:
+    """The last line on stdout: the run's one verdict, and where the outputs are."""
+    verdict = judge(summary)
+    if verdict in ("error", "interrupted"):
+        return f"verdict: {verdict.upper()} ({summary.reason}); outputs in {out_dir}"
+    if not monitored:
+        return (f"verdict: NOT JUDGED (--no-monitor: judge the trace with `rei replay`); "
+                f"outputs in {out_dir}")
+    return (f"verdict: {verdict.upper()}; total utility {summary.total_utility:g}; outputs "
+            f"in {out_dir}")
+
+
+def print_results(summary: RunSummary, out_dir: Path, *, monitored: bool = True,
+                  page: Path | None = None, quiet: bool = False, verbose: bool = False,
+                  stream: TextIO | None = None) -> int:
+    """Print the run's results on stdout and return its exit status (``exit_code``):
+    the outcome, the requirements (``verdict_lines``), the page and the final verdict line;
+    with ``quiet`` the final line alone."""
+    out = stream if stream is not None else sys.stdout
+    if not quiet:
+        m = summary.measurements
+        if "tasks_succeeded" in m:
+            print(f"{summary.mission}: {summary.outcome} ({summary.reason}) after "
+                  f"{summary.duration:.1f} s simulated, {m['tasks_succeeded']} task(s) "
+                  f"succeeded, {m['tasks_failed']} failed, {m['collisions']} collision(s)",
+                  file=out)
+        else:
+            print(f"{summary.mission}: {summary.outcome} ({summary.reason})", file=out)
+        for line in verdict_lines(summary, verbose):
+            print(line, file=out)
+        if page is not None:
+            print(f"  run page: {page}", file=out)
+    print(final_line(summary, out_dir, monitored), file=out)
+    return exit_code(summary, monitored)

@@ -16,14 +16,17 @@ from rei.catalogue import DriveSpec, LaserSpec
 from rei.runtime.messages import LaserScan, NavState
 from rei.runtime.robot.protocol import (
     TERMINAL,
+    ContractViolation,
     Controller,
     ControllerContext,
-    GoalFeedback,
     MapObstacle,
     NavGoal,
     Observation,
     VelocityCommand,
+    checked_command,
+    checked_feedback,
     observable_transition,
+    read_only_scan,
 )
 
 DT = 0.1
@@ -52,13 +55,13 @@ def _drive(controller: Controller, ctx: ControllerContext, steps: int, t0: float
            states: list[NavState]) -> float:
     t = t0
     for _ in range(steps):
-        obs = Observation(t, (pose[0], pose[1], pose[2]), (0.0, 0.0), _scan(), t)
-        cmd = controller.step(obs)
-        if not isinstance(cmd, VelocityCommand):
-            problems.append(f"step() returned {type(cmd).__name__}, expected a VelocityCommand")
-            return t
-        if not cmd.finite:
-            problems.append(f"step() returned a non-finite command {cmd}")
+        obs = Observation(t, (pose[0], pose[1], pose[2]), (0.0, 0.0), read_only_scan(_scan()),
+                          t)
+        try:  # the run's own boundary check: what fails here ends a run in error
+            cmd = checked_command(controller.step(obs))
+        except ContractViolation as problem:
+            what = "sent a non-finite command" if problem.non_finite else "broke the contract"
+            problems.append(f"step() {what}: {problem}")
             return t
         if (abs(cmd.linear) > ctx.drive.max_linear + 1e-9
                 or abs(cmd.angular) > ctx.drive.max_angular + 1e-9):
@@ -67,9 +70,10 @@ def _drive(controller: Controller, ctx: ControllerContext, steps: int, t0: float
         pose[0] += cmd.linear * math.cos(pose[2]) * DT
         pose[1] += cmd.linear * math.sin(pose[2]) * DT
         pose[2] = math.remainder(pose[2] + cmd.angular * DT, math.tau)
-        fb = controller.feedback()
-        if not isinstance(fb, GoalFeedback):
-            problems.append(f"feedback() returned {type(fb).__name__}, expected GoalFeedback")
+        try:
+            fb = checked_feedback(controller.feedback())
+        except ContractViolation as problem:
+            problems.append(f"feedback() broke the contract: {problem}")
             return t
         if not observable_transition(states[-1], fb.state):
             problems.append(f"illegal goal state change {states[-1].value} -> {fb.state.value}")

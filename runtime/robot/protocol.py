@@ -7,14 +7,22 @@ answers a ``VelocityCommand``. Navigation goals go through the action state mach
 Figure 22 (the ROS actionlib states): ``send_goal`` makes a goal PENDING, the controller makes
 it ACTIVE and ends it SUCCEEDED or ABORTED; ``cancel_goal`` (or a new goal) ends it PREEMPTED.
 ``GoalTracker`` implements those transitions so a controller cannot make an illegal one.
-This module must never import pybullet.
+
+What a controller answers is checked at the boundary (``checked_command``,
+``checked_feedback``): the run never lets a string, a complex number, an array or an int
+beyond float range travel into the physics, the trace or the monitor, where it would surface
+as a traceback far from its cause. What it is handed is read-only (``read_only_scan``): a
+controller cannot change what the sensors measured. This module must never import pybullet.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-from typing import Protocol, runtime_checkable
+import numbers
+from dataclasses import dataclass, field, replace
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
 
 from rei.catalogue import DriveSpec, LaserSpec
 from rei.runtime.messages import LaserScan, NavState
@@ -115,6 +123,101 @@ class Controller(Protocol):
     def feedback(self) -> GoalFeedback: ...
 
     def step(self, observation: Observation) -> VelocityCommand: ...
+
+
+class ContractViolation(ValueError):
+    """A controller's answer is not what the contract promises; ``str()`` is the reason,
+    naming the field, what was expected and what was found."""
+
+    def __init__(self, reason: str, non_finite: bool = False) -> None:
+        super().__init__(reason)
+        self.non_finite = non_finite
+        """The value was a real number, but NaN or infinite (a numeric fault, not a type one)."""
+
+
+def _shown(value: Any) -> str:
+    """A value as an error message shows it: its type and a short repr."""
+    if isinstance(value, np.ndarray):
+        return f"numpy array of shape {value.shape}"
+    if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 64:
+        # repr of a huge int is slow, long, or refused (more than 4300 digits)
+        return f"int of about {int(value.bit_length() * math.log10(2)) + 1} digits"
+    try:
+        text = repr(value)
+    except Exception:  # noqa: BLE001  (a user's object whose repr breaks)
+        text = "<unprintable>"
+    if len(text) > 40:
+        text = text[:37] + "..."
+    return f"{type(value).__name__} {text}"
+
+
+def real_number(value: Any, where: str) -> float:
+    """``value`` as a finite float; ContractViolation unless it is a finite real number.
+
+    Python and numpy integers and floats are real numbers; bool is not (``True`` as a speed
+    is a bug, not 1 m/s), nor are complex numbers, strings, None or arrays (even of one
+    element: a controller that sends ``np.array([0.1])`` has a shape bug worth seeing).
+    """
+    if isinstance(value, bool | np.bool_) or not isinstance(value, numbers.Real) \
+            or isinstance(value, np.ndarray):
+        raise ContractViolation(f"{where}: expected a finite real number, found {_shown(value)}")
+    try:
+        number = float(value)
+    except (OverflowError, ValueError, TypeError):
+        raise ContractViolation(f"{where}: expected a finite real number, found "
+                                f"{_shown(value)} (beyond float range)") from None
+    if not math.isfinite(number):
+        raise ContractViolation(f"{where}: expected a finite real number, found {number}",
+                                non_finite=True)
+    return number
+
+
+def checked_command(value: Any) -> VelocityCommand:
+    """A plain ``VelocityCommand`` of two finite floats, or ContractViolation saying why not."""
+    if not isinstance(value, VelocityCommand):
+        raise ContractViolation(f"command: expected a VelocityCommand, found {_shown(value)}")
+    return VelocityCommand(real_number(value.linear, "command.linear"),
+                           real_number(value.angular, "command.angular"))
+
+
+def checked_feedback(value: Any) -> GoalFeedback:
+    """A plain ``GoalFeedback`` with fields of the promised types, or ContractViolation."""
+    if not isinstance(value, GoalFeedback):
+        raise ContractViolation(f"feedback: expected a GoalFeedback, found {_shown(value)}")
+    if not isinstance(value.state, NavState):
+        raise ContractViolation(f"feedback.state: expected a NavState, found "
+                                f"{_shown(value.state)}")
+    if value.goal is not None and not isinstance(value.goal, str):
+        raise ContractViolation(f"feedback.goal: expected a goal name or None, found "
+                                f"{_shown(value.goal)}")
+    distance = value.distance_remaining
+    if distance is not None:
+        # inf is an honest answer (no path known); NaN and negative distances are not
+        try:
+            distance = real_number(distance, "feedback.distance_remaining")
+        except ContractViolation as problem:
+            if not (problem.non_finite and distance == math.inf):
+                raise
+            distance = math.inf
+        if distance < 0:
+            raise ContractViolation(f"feedback.distance_remaining: expected metres >= 0, inf "
+                                    f"or None, found {distance}")
+    if not isinstance(value.message, str):
+        raise ContractViolation(f"feedback.message: expected a string, found "
+                                f"{_shown(value.message)}")
+    return GoalFeedback(NavState(value.state), None if value.goal is None else str(value.goal),
+                        distance, str(value.message))
+
+
+def read_only_scan(scan: LaserScan | None) -> LaserScan | None:
+    """The controller's copy of a scan: its own ranges, read-only (writing raises), so the
+    sensor's array that the trace and the monitor record stays what was measured."""
+    if scan is None:
+        return None
+    ranges = np.array(scan.ranges, dtype=float)
+    ranges.flags.writeable = False
+    # A view of a read-only array cannot be made writeable again (its owner could).
+    return replace(scan, ranges=ranges.view())
 
 
 class IllegalTransition(RuntimeError):

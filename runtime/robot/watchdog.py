@@ -1,28 +1,49 @@
-"""Calling the robot under test safely: a hang, an exception or a non-finite command is a fault.
+"""Calling the robot under test safely: a hang, an exception or a malformed answer is a fault.
 
 Every call goes to one daemon worker thread and the run waits for its answer at most
 ``timeout`` seconds of wall time. A call that does not return in time leaves its thread
 behind (a daemon, so it never keeps the process alive) and raises ``ControllerFault``, as does
-a call that raises. The run loop turns a fault into the outcome ``error`` with its reason.
-This module must never import pybullet.
+a call that raises (``sys.exit()`` included: in the worker it is an exception like any other)
+and an answer that breaks the contract (``checked_command``, ``checked_feedback``: a string, a
+complex number, an array, an int beyond float range, a non-finite number, a feedback of the
+wrong types). The fault is raised where the answer is received, so its reason names the call.
+The run loop turns a fault into the outcome ``error`` with its reason.
+
+What this thread cannot catch is a call that never gives the interpreter back (a loop in C
+holding the GIL) or that ends the process (``os._exit``, a signal): the main thread is then
+stopped too, so those are caught one level up, by the process that supervises the run
+(``rei.runtime.supervisor``). This module must never import pybullet.
 """
 
 from __future__ import annotations
 
-import math
 import queue
 import threading
 from collections.abc import Callable
 from typing import Any
 
 from rei.runtime.robot.protocol import (
+    ContractViolation,
     Controller,
     ControllerContext,
     GoalFeedback,
     NavGoal,
     Observation,
     VelocityCommand,
+    checked_command,
+    checked_feedback,
 )
+
+
+def _raised(what: str, exc: BaseException) -> str:
+    """The reason for a call that raised; never raises itself (a user's __str__ may)."""
+    try:
+        text = str(exc)
+    except Exception:  # noqa: BLE001
+        text = "<unprintable>"
+    if isinstance(exc, SystemExit):
+        return f"controller {what}() tried to end the process (SystemExit: {text})"
+    return f"controller {what}() raised {type(exc).__name__}: {text}"
 
 
 class ControllerFault(Exception):
@@ -60,8 +81,10 @@ class GuardedController:
         if self._worker is None:
             try:
                 return fn(*args)
-            except Exception as exc:  # noqa: BLE001
-                self._broken = f"controller {what}() raised {type(exc).__name__}: {exc}"
+            except KeyboardInterrupt:
+                raise
+            except BaseException as exc:  # noqa: BLE001  (SystemExit too: a fault, not an exit)
+                self._broken = _raised(what, exc)
                 raise ControllerFault(self._broken) from None
         self._jobs.put((fn, args))
         try:
@@ -73,9 +96,15 @@ class GuardedController:
         if not ok:
             if isinstance(value, KeyboardInterrupt):
                 raise value
-            self._broken = f"controller {what}() raised {type(value).__name__}: {value}"
+            self._broken = _raised(what, value)
             raise ControllerFault(self._broken)
         return value
+
+    def _violated(self, what: str, problem: ContractViolation) -> ControllerFault:
+        kind = "a non-finite" if problem.non_finite else "an invalid"
+        noun = "command" if what == "step" else "feedback"
+        self._broken = f"controller {what}() sent {kind} {noun}: {problem}"
+        return ControllerFault(self._broken)
 
     def close(self) -> None:
         if self._worker is not None and self._broken is None:
@@ -92,21 +121,21 @@ class GuardedController:
         self._call("cancel_goal", self.controller.cancel_goal)
 
     def feedback(self) -> GoalFeedback:
-        fb = self._call("feedback", self.controller.feedback)
-        if not isinstance(fb, GoalFeedback):
-            self._broken = (f"controller feedback() returned {type(fb).__name__}, "
-                            f"expected GoalFeedback")
-            raise ControllerFault(self._broken)
-        return fb
+        answer = self._call("feedback", self.controller.feedback)
+        try:
+            return checked_feedback(answer)
+        except ContractViolation as problem:
+            raise self._violated("feedback", problem) from None
+        except Exception as exc:  # noqa: BLE001  (a user's subclass whose fields raise)
+            self._broken = _raised("feedback", exc) + " while its answer was read"
+            raise ControllerFault(self._broken) from None
 
     def step(self, observation: Observation) -> VelocityCommand:
-        cmd = self._call("step", self.controller.step, observation)
-        if not isinstance(cmd, VelocityCommand):
-            self._broken = (f"controller step() returned {type(cmd).__name__}, "
-                            f"expected a VelocityCommand")
-            raise ControllerFault(self._broken)
-        if not (math.isfinite(cmd.linear) and math.isfinite(cmd.angular)):
-            self._broken = (f"controller step() sent a non-finite command "
-                            f"({cmd.linear}, {cmd.angular})")
-            raise ControllerFault(self._broken)
-        return cmd
+        answer = self._call("step", self.controller.step, observation)
+        try:
+            return checked_command(answer)
+        except ContractViolation as problem:
+            raise self._violated("step", problem) from None
+        except Exception as exc:  # noqa: BLE001  (a user's subclass whose fields raise)
+            self._broken = _raised("step", exc) + " while its answer was read"
+            raise ControllerFault(self._broken) from None

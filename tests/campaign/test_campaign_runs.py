@@ -166,8 +166,11 @@ def test_crashed_and_hung_runs_are_recorded_and_the_campaign_goes_on(tmp_path: P
                         "--controller", "bad_controllers:Segfaulting")
     assert crashed.returncode == 1, crashed.stderr
     records = CampaignStore.read(tmp_path / "crash")[2]
-    assert [r.status for r in records] == ["crashed", "crashed"]
-    assert "killed by signal 11" in records[0].message
+    # `rei run` supervises its simulation: the crash is the run's error, with its summary
+    assert [r.status for r in records] == ["ran", "ran"]
+    assert [r.verdict for r in records] == ["error", "error"]
+    assert records[0].summary is not None
+    assert "killed by signal 11 (SIGSEGV)" in records[0].summary.reason
     # A watchdog far shorter than the run: it is killed and recorded as hung.
     hung = _campaign(tmp_path, tmp_path / "hung", good, "--duration", "100", "--timeout", "2",
                      "--controller", "bad_controllers:Crawling")

@@ -5,8 +5,14 @@ They are importable as `tests.runtime.faulty:NAME`, the way a user names their o
 
 from __future__ import annotations
 
+import os
+import signal
+import sys
 import threading
 
+import numpy as np
+
+from rei.runtime.messages import LaserScan
 from rei.runtime.robot import ControllerContext, GoalFeedback, NavGoal, Observation, VelocityCommand
 from rei.runtime.robot.protocol import GoalTracker
 
@@ -17,6 +23,7 @@ class _Base:
     def __init__(self) -> None:
         self.tracker = GoalTracker()
         self.calls = 0
+        self.scan: LaserScan | None = None
 
     def reset(self, context: ControllerContext) -> None:
         self.tracker = GoalTracker()
@@ -108,3 +115,153 @@ class AbortsAtOnce(_Base):
         if self.tracker.state.value == "active":
             self.tracker.abort("no path to the goal")
         return VelocityCommand(0.0, 0.0)
+
+
+# The misbehaving robots of the conformance suite (tests/runtime/test_misbehaving_controllers.py):
+# each breaks the contract at its 20th step (t = 1.9 s) in one way a real navigator might.
+
+
+class StopsAtTwenty(_Base):
+    """Drives like the others and stops at its 20th step: the honest twin of FalsifiesScanCopy."""
+
+    def fault(self) -> VelocityCommand:
+        return VelocityCommand(0.0, 0.0)
+
+
+class SendsStr(_Base):
+    def fault(self) -> VelocityCommand:
+        return VelocityCommand("abc", 0.0)  # type: ignore[arg-type]
+
+
+class SendsNone(_Base):
+    def fault(self) -> VelocityCommand:
+        return VelocityCommand(0.1, None)  # type: ignore[arg-type]
+
+
+class SendsComplex(_Base):
+    def fault(self) -> VelocityCommand:
+        return VelocityCommand(0.1 + 0.5j, 0.0)  # type: ignore[arg-type]
+
+
+class SendsHugeInt(_Base):
+    def fault(self) -> VelocityCommand:
+        return VelocityCommand(10**400, 0.0)
+
+
+class SendsArray(_Base):
+    def fault(self) -> VelocityCommand:
+        return VelocityCommand(np.array([0.1, 0.2]), 0.0)  # type: ignore[arg-type]
+
+
+class SendsBool(_Base):
+    def fault(self) -> VelocityCommand:
+        return VelocityCommand(True, 0.0)
+
+
+class SendsTuple(_Base):
+    """Answers a bare tuple instead of a VelocityCommand."""
+
+    def fault(self) -> VelocityCommand:
+        return (0.1, 0.0)  # type: ignore[return-value]
+
+
+class SendsNumpyScalars(StopsAtTwenty):
+    """Numpy scalars are real numbers: this one keeps the contract."""
+
+    def step(self, observation: Observation) -> VelocityCommand:
+        super().step(observation)
+        return VelocityCommand(np.float32(0.1), np.int64(0))  # type: ignore[arg-type]
+
+
+class BadFeedback(StopsAtTwenty):
+    """Reports its goal state as a plain string once it is under way."""
+
+    def feedback(self) -> GoalFeedback:
+        fb = self.tracker.feedback()
+        if self.calls >= 19:  # asked before its 20th step
+            return GoalFeedback("active", fb.goal)  # type: ignore[arg-type]
+        return fb
+
+
+class NaNFeedback(StopsAtTwenty):
+    def feedback(self) -> GoalFeedback:
+        fb = self.tracker.feedback()
+        if self.calls >= 19:  # asked before its 20th step
+            return GoalFeedback(fb.state, fb.goal, float("nan"))
+        return fb
+
+
+class SpinsInPython(_Base):
+    """A busy loop in Python: the call's watchdog sees it."""
+
+    def fault(self) -> VelocityCommand:
+        while True:
+            pass
+
+
+class HangsInC(_Base):
+    """A loop in C that never releases the interpreter lock: only the supervisor sees it."""
+
+    def fault(self) -> VelocityCommand:
+        return VelocityCommand(float(sum(range(10**13))), 0.0)
+
+
+class ExitsProcess(_Base):
+    """Ends the simulation's process as if the run were over and fine."""
+
+    def fault(self) -> VelocityCommand:
+        os._exit(0)
+
+
+class KillsProcess(_Base):
+    def fault(self) -> VelocityCommand:
+        os.kill(os.getpid(), signal.SIGKILL)
+        return VelocityCommand(0.0, 0.0)
+
+
+class CallsSysExit(_Base):
+    def fault(self) -> VelocityCommand:
+        sys.exit(0)
+
+
+class MutatesScan(_Base):
+    """Writes into the scan it was handed, to hide an obstacle from the recorded trace."""
+
+    def fault(self) -> VelocityCommand:
+        scan = self.scan
+        assert scan is not None
+        scan.ranges[:] = 3.5
+        return VelocityCommand(0.0, 0.0)
+
+    def step(self, observation: Observation) -> VelocityCommand:
+        self.scan = observation.scan
+        return super().step(observation)
+
+
+class FalsifiesScanCopy(StopsAtTwenty):
+    """Works around the read-only flag (through the copy's owner) and writes anyway: it only
+    changes its own copy, never what the sensors recorded."""
+
+    def step(self, observation: Observation) -> VelocityCommand:
+        if observation.scan is not None:
+            owner = observation.scan.ranges.base
+            if owner is not None:
+                owner.flags.writeable = True
+                owner[:] = 0.0
+        return super().step(observation)
+
+
+class Chatty(StopsAtTwenty):
+    """Prints its debugging on stdout, as navigators do."""
+
+    def step(self, observation: Observation) -> VelocityCommand:
+        print(f"chatty: step at t={observation.time:.1f}", flush=True)
+        return super().step(observation)
+
+
+class LeavesAThread(StopsAtTwenty):
+    """Starts a thread that never ends (not a daemon): the run's result must still count."""
+
+    def reset(self, context: ControllerContext) -> None:
+        super().reset(context)
+        threading.Thread(target=threading.Event().wait, name="forever").start()

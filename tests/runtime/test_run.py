@@ -212,18 +212,18 @@ def test_an_attached_sink_sees_exactly_the_recorded_stream(tmp_path: Path) -> No
         assert live.belief.laser_min == replayed.belief.laser_min
 
 
-def test_bad_laser_noise_and_bad_vepl_are_located_input_errors(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+def test_bad_laser_noise_and_bad_vepl_are_located_input_errors(tmp_path: Path, capfd) -> None:  # type: ignore[no-untyped-def]
     assert main(["run", str(NAVIGATION), "-o", str(tmp_path / "a"), "--laser-noise", "inf",
                  "--quiet"]) == 2
-    assert "--laser-noise: expected a finite number, found inf" in capsys.readouterr().err
+    assert "--laser-noise: expected a finite number, found inf" in capfd.readouterr().err
     assert main(["run", str(NAVIGATION), "-o", str(tmp_path / "b"), "--laser-noise", "2",
                  "--quiet"]) == 2
-    assert "--laser-noise: expected metres from 0 to 1, found 2" in capsys.readouterr().err
+    assert "--laser-noise: expected metres from 0 to 1, found 2" in capfd.readouterr().err
     spec = tmp_path / "bad.vepl"
     spec.write_text("specification bad\nquery q() { laser_mni < 1 }\n", encoding="utf-8")
     assert main(["run", str(NAVIGATION), "-o", str(tmp_path / "c"), "--vepl", str(spec),
                  "--quiet"]) == 2
-    err = capsys.readouterr().err
+    err = capfd.readouterr().err
     assert f"{spec}:2:" in err and "VEPL-UNKNOWN" in err and "laser_min" in err
     assert not (tmp_path / "c" / "world").exists()  # refused before any world was built
 

@@ -1,0 +1,234 @@
+"""A robot under test cannot end, stall or falsify its own test (issue 13.2).
+
+Every misbehaviour runs through the real `rei run` command in a subprocess, as a CI job runs
+it: each must end with exit status 3 and a summary.json whose verdict is "error" and whose
+reason names what the controller did. The controllers are in tests/runtime/faulty.py; each
+breaks the contract at its 20th control step (t = 1.9 s).
+"""
+
+from __future__ import annotations
+
+import json
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from rei.runtime.collector import read_trace
+from rei.runtime.collector.trace import read_trace_end
+from rei.runtime.robot.protocol import (
+    ContractViolation,
+    GoalFeedback,
+    VelocityCommand,
+    checked_command,
+    checked_feedback,
+)
+from tests.conftest import EXAMPLES, REPO
+
+NAVIGATION = EXAMPLES / "navigation" / "navigation.mission"
+SAFETY_LIMIT = 600.0
+"""Seconds after which a stuck test fails instead of hanging CI (not a performance limit)."""
+
+
+def rei_run(out: Path, controller: str, *extra: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "rei.runtime.cli", "run", str(NAVIGATION), "-o", str(out),
+         "--duration", "5", "--controller", f"tests.runtime.faulty:{controller}", *extra],
+        cwd=REPO, capture_output=True, text=True, timeout=SAFETY_LIMIT, check=False)
+
+
+def summary_of(out: Path) -> dict[str, object]:
+    data: dict[str, object] = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+    return data
+
+
+MISBEHAVIOURS = [
+    ("Raising", "step() raised ValueError: the planner lost its map"),
+    ("SendsStr", "command.linear: expected a finite real number, found str 'abc'"),
+    ("SendsNone", "command.angular: expected a finite real number, found NoneType None"),
+    ("SendsComplex", "command.linear: expected a finite real number, found complex"),
+    ("SendsHugeInt", "command.linear: expected a finite real number, found int of about 401 "
+                     "digits (beyond float range)"),
+    ("SendsArray", "command.linear: expected a finite real number, found numpy array of "
+                   "shape (2,)"),
+    ("SendsBool", "command.linear: expected a finite real number, found bool True"),
+    ("SendsTuple", "command: expected a VelocityCommand, found tuple (0.1, 0.0)"),
+    ("NonFinite", "step() sent a non-finite command: command.linear: expected a finite real "
+                  "number, found nan"),
+    ("BadFeedback", "feedback() sent an invalid feedback: feedback.state: expected a "
+                    "NavState, found str 'active'"),
+    ("NaNFeedback", "feedback.distance_remaining: expected a finite real number, found nan"),
+    ("Hanging", "step() did not return within the watchdog's 0.5 s"),
+    ("SpinsInPython", "step() did not return within the watchdog's 0.5 s"),
+    ("HangsInC", "the simulation stopped responding at t≈1.9 s: no progress for 5.5 s"),
+    ("ExitsProcess", "the simulation process exited with status 0 at t≈1.9 s without a "
+                     "result"),
+    ("KillsProcess", "the simulation process was killed by signal 9 (SIGKILL) at t≈1.9 s"),
+    ("CallsSysExit", "controller step() tried to end the process (SystemExit: 0)"),
+    ("MutatesScan", "step() raised ValueError: assignment destination is read-only"),
+]
+
+
+@pytest.mark.parametrize(("controller", "reason"), MISBEHAVIOURS,
+                         ids=[name for name, _ in MISBEHAVIOURS])
+def test_a_misbehaving_controller_is_a_run_error_with_a_summary(
+        controller: str, reason: str, tmp_path: Path) -> None:
+    done = rei_run(tmp_path, controller, "--watchdog", "0.5")
+    assert done.returncode == 3, done.stderr
+    summary = summary_of(tmp_path)
+    assert summary["verdict"] == "error" and summary["outcome"] == "error"
+    assert reason in str(summary["reason"]), summary["reason"]
+    assert summary["mission"] == "to_the_elevator" and summary["room"] == "navigation"
+    # the result is on stdout, and it is the same reason
+    assert done.stdout.splitlines()[-1].startswith("verdict: ERROR (")
+    assert reason in done.stdout
+    assert "Traceback" not in done.stderr
+
+
+def test_numpy_scalars_are_real_numbers_and_keep_the_contract(tmp_path: Path) -> None:
+    done = rei_run(tmp_path, "SendsNumpyScalars", "--no-monitor", "--quiet")
+    assert done.returncode == 0, done.stderr
+    assert summary_of(tmp_path)["outcome"] == "timeout"
+    rows = list(read_trace(tmp_path / "trace.jsonl")[1])
+    assert rows[-1].belief.cmd == (pytest.approx(0.1), 0.0)
+
+
+def test_a_controller_that_writes_into_its_scan_copy_changes_nothing_recorded(
+        tmp_path: Path) -> None:
+    """It works around the read-only flag; the trace still holds what the laser measured:
+    byte for byte the trace of its honest twin (same commands, no writing)."""
+    honest, faking = tmp_path / "honest", tmp_path / "faking"
+    assert rei_run(honest, "StopsAtTwenty", "--quiet").returncode == 1
+    assert rei_run(faking, "FalsifiesScanCopy", "--quiet").returncode == 1
+    trace = (faking / "trace.jsonl").read_bytes()
+    assert trace == (honest / "trace.jsonl").read_bytes()
+    assert (faking / "events.csv").read_bytes() == (honest / "events.csv").read_bytes()
+    scans = [s.belief.scan for s in read_trace(faking / "trace.jsonl")[1]]
+    assert all(s is None or s.ranges.min() > 0.0 for s in scans)  # it wrote zeros
+
+
+def test_a_hang_after_the_trace_began_leaves_the_partial_trace_and_a_log_line(
+        tmp_path: Path) -> None:
+    done = rei_run(tmp_path, "KillsProcess")
+    assert done.returncode == 3
+    assert not (tmp_path / "trace.jsonl").exists()  # a trace that exists is complete
+    assert (tmp_path / "trace.jsonl.partial").exists()
+    assert read_trace_end(tmp_path / "trace.jsonl.partial") is None
+    log = (tmp_path / "run.log").read_text(encoding="utf-8").splitlines()
+    assert log[-1].startswith("t=    1.900  error: the simulation process was killed")
+
+
+def test_a_stale_summary_of_an_earlier_run_never_survives_a_dead_run(tmp_path: Path) -> None:
+    assert rei_run(tmp_path, "Idle", "--quiet").returncode == 1
+    assert summary_of(tmp_path)["outcome"] == "timeout"
+    assert rei_run(tmp_path, "ExitsProcess", "--quiet").returncode == 3
+    assert summary_of(tmp_path)["outcome"] == "error"
+    assert not (tmp_path / "events.csv").exists() and not (tmp_path / "report.html").exists()
+
+
+@pytest.mark.parametrize(("command", "message"), [
+    (VelocityCommand(0.1, 1j), "command.angular: expected a finite real number, found "  # type: ignore[arg-type]
+                               "complex 1j"),
+    (VelocityCommand(float("inf"), 0.0), "found inf"),
+    (VelocityCommand(10**5000, 0.0), "int of about 5001 digits"),
+    (None, "command: expected a VelocityCommand, found NoneType None"),
+])
+def test_checked_command_names_the_field(command: object, message: str) -> None:
+    with pytest.raises(ContractViolation) as caught:
+        checked_command(command)
+    assert message in str(caught.value)
+
+
+def test_checked_answers_are_plain_floats_and_states() -> None:
+    import numpy as np
+
+    from rei.runtime.messages import NavState
+
+    cmd = checked_command(VelocityCommand(np.float32(0.25), 1))  # type: ignore[arg-type]
+    assert type(cmd.linear) is float and type(cmd.angular) is float
+    fb = checked_feedback(GoalFeedback(NavState.ACTIVE, "g", float("inf")))
+    assert fb.distance_remaining == float("inf")
+    with pytest.raises(ContractViolation, match="expected metres >= 0"):
+        checked_feedback(GoalFeedback(NavState.ACTIVE, "g", -1.0))
+    with pytest.raises(ContractViolation, match="feedback.message: expected a string"):
+        checked_feedback(GoalFeedback(NavState.ACTIVE, "g", None, 3))  # type: ignore[arg-type]
+
+
+def _start(out: Path, controller: str) -> subprocess.Popen[bytes]:
+    """`rei run` with a slow controller, once its run is under way (a few samples traced)."""
+    process = subprocess.Popen(
+        [sys.executable, "-m", "rei.runtime.cli", "run", str(NAVIGATION), "-o", str(out),
+         "--controller", f"tests.runtime.faulty:{controller}", "--quiet"],
+        cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    partial = out / "trace.jsonl.partial"
+    started = time.monotonic()
+    while process.poll() is None and (not partial.exists() or partial.stat().st_size < 20000):
+        assert time.monotonic() - started < SAFETY_LIMIT
+        time.sleep(0.05)
+    return process
+
+
+def test_sigterm_is_passed_on_and_ends_the_run_interrupted(tmp_path: Path) -> None:
+    process = _start(tmp_path, "Slow")
+    process.terminate()
+    assert process.wait(timeout=SAFETY_LIMIT) == 130
+    summary = summary_of(tmp_path)
+    assert summary["outcome"] == "interrupted"
+    end = read_trace_end(tmp_path / "trace.jsonl")
+    assert end is not None and end[1] == "interrupted"
+
+
+def test_the_simulation_dies_with_its_supervisor(tmp_path: Path) -> None:
+    """kill -9 of `rei run` (a campaign's watchdog does it) leaves no simulation behind."""
+    psutil = pytest.importorskip("psutil")
+    process = _start(tmp_path, "Slow")
+    children = psutil.Process(process.pid).children()
+    assert len(children) == 1
+    process.kill()
+    process.wait()
+    gone, alive = psutil.wait_procs(children, timeout=SAFETY_LIMIT)
+    assert not alive
+
+
+def test_a_thread_left_running_does_not_cost_the_run_its_result(tmp_path: Path) -> None:
+    done = rei_run(tmp_path, "LeavesAThread", "--quiet")
+    assert done.returncode == 1, done.stderr  # timeout: inconclusive, as its honest twin
+    assert summary_of(tmp_path)["outcome"] == "timeout"
+
+
+def test_the_conformance_checker_reports_what_would_end_a_run_in_error() -> None:
+    from rei.runtime.robot import check_controller
+    from tests.runtime import faulty
+
+    assert "step() broke the contract: command.linear: expected a finite real number, " \
+           "found str 'abc'" in check_controller(faulty.SendsStr())
+    assert "feedback() broke the contract: feedback.state: expected a NavState, found str " \
+           "'active'" in check_controller(faulty.BadFeedback())
+    assert "raised ValueError: assignment destination is read-only" in \
+           check_controller(faulty.MutatesScan())
+
+
+def test_a_second_ctrl_c_stops_a_simulation_that_cannot_end_cleanly(tmp_path: Path) -> None:
+    """The first Ctrl-C is passed on; a controller holding the interpreter cannot hear it,
+    so the second one kills the simulation and the run ends interrupted all the same."""
+    process = subprocess.Popen(
+        [sys.executable, "-m", "rei.runtime.cli", "run", str(NAVIGATION), "-o", str(tmp_path),
+         "--controller", "tests.runtime.faulty:HangsInC", "--watchdog", "60", "--quiet"],
+        cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    log = tmp_path / "run.log"
+    started = time.monotonic()
+    # the controller is stuck once the log shows the first task (t = 0) and a while has passed
+    while process.poll() is None and (not log.exists() or "task_start" not in log.read_text()):
+        assert time.monotonic() - started < SAFETY_LIMIT
+        time.sleep(0.05)
+    time.sleep(3.0)  # past its 20th step (t = 1.9 s simulated, well under a second of wall time)
+    process.send_signal(signal.SIGINT)
+    time.sleep(1.0)
+    process.send_signal(signal.SIGINT)
+    out, _ = process.communicate(timeout=SAFETY_LIMIT)
+    assert process.returncode == 130
+    assert summary_of(tmp_path)["outcome"] == "interrupted"
+    assert out.splitlines()[-1].startswith("verdict: INTERRUPTED (interrupted by the user")
