@@ -8,7 +8,7 @@ separation) and two frictionless casters, Gazebo's differential-drive system on
 ``cmd_vel`` (odometry on ``odom``), and, when the type has a laser, a ``gpu_lidar`` with the
 catalogue's beams, field of view, range, rate, mount and noise on ``scan``. Humans with a
 trajectory are ``<actor>``s walking a scripted trajectory whose waypoints are sampled from the
-same Catmull-Rom spline REI's animator walks (rei.runtime.animator.spline), facing their
+same Catmull-Rom spline REI's animator walks (rei.lang.room.spline), facing their
 direction of motion; humans without one stand as models. Dynamic objects stand at their start
 pose (Gazebo has no scripted motion for a plain model). Option ``robot=none`` leaves the robot
 out. The text is checked to be well-formed XML here; tests check it with ``ign sdf -k``. This
@@ -36,7 +36,7 @@ from rei.generators.templating import (
     render,
     template_loader,
 )
-from rei.runtime.animator.spline import CatmullRom
+from rei.lang.room.spline import CatmullRom
 
 OUTPUT = "world.sdf"
 ROBOT_MODES = ("model", "none")
