@@ -13,6 +13,7 @@ from rei.catalogue import Catalogue, ObjectType, Tile
 from rei.lang.errors import Diagnostic
 from rei.lang.room.layout import Layout
 from rei.lang.room.model import PlacedObject, Room
+from rei.lang.room.motion import walkable
 from rei.lang.room.spline import CatmullRom, vertex_times, walked_path
 from rei.lang.suggest import did_you_mean
 
@@ -163,6 +164,8 @@ def check_trajectories(room: Room, layout: Layout, catalogue: Catalogue) -> list
         cells = [layout.cells[v.floor.name] for v in vertices]
         times, points = vertex_times([(i * tile, j * tile) for i, j in cells],
                                      [v.time for v in vertices], traj.total_time, traj.loop)
+        if not walkable(times, points):
+            continue  # TRAJ-SPEED says which segment the animator cannot walk
         try:
             spline = CatmullRom(np.array(times), np.array(points), traj.loop)
         except ValueError:

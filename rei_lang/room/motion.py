@@ -12,7 +12,7 @@ no spline can pass through). This module must never import the generators or the
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from itertools import pairwise
 
 from rei.lang.errors import Diagnostic
@@ -25,6 +25,14 @@ MAX_BODY_SPEED = 10.0
 MIN_SEGMENT_TIME = 0.01
 """s between two consecutive vertices: one physics step at the default 100 Hz."""
 
+
+def walkable(times: Sequence[float], points: Sequence[tuple[float, float]]) -> bool:
+    """Whether the animator can walk these timed control points: each segment takes at least
+    MIN_SEGMENT_TIME and asks at most MAX_BODY_SPEED (what TRAJ-SPEED reports otherwise).
+    Checks that sample the spline skip a trajectory that is not: its curve is not defined
+    to any useful precision (a nanosecond segment swings it kilometres wide)."""
+    return all(t1 - t0 >= MIN_SEGMENT_TIME and math.dist(p0, p1) / (t1 - t0) <= MAX_BODY_SPEED
+               for (t0, t1), (p0, p1) in zip(pairwise(times), pairwise(points), strict=True))
 
 
 def check_motion(room: Room, cells: Mapping[str, tuple[int, int]]) -> list[Diagnostic]:

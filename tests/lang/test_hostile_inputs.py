@@ -74,7 +74,10 @@ def test_a_condition_too_long_to_compile_is_a_located_limit() -> None:
 
 
 @pytest.mark.parametrize("trajectory", ["{ c at 0 d at 1e-9 }", "total 1e-6 { c d c }",
-                                        "total 0.2 { c d b a }", "total 4 { c d d }"])
+                                        "total 0.2 { c d b a }", "total 4 { c d d }",
+                                        # found by test_check_then_run: TRAJ-CROSSES sampled
+                                        # the spline of a nanosecond segment (56 GiB)
+                                        "{ c at 0 c at 0.3 d at 0.30000000099999996 }"])
 def test_trajectories_the_animator_cannot_walk_are_refused(write, trajectory: str  # type: ignore[no-untyped-def]
                                                           ) -> None:
     path = write("fast.room", "room fast {\n  floor a { right b }\n  floor b { right c }\n"
