@@ -245,7 +245,8 @@ def supervise(request: RunRequest) -> SupervisedRun:
     if not failure:
         if watch.crash:
             failure = (f"the simulation process failed {watch.at()}: {watch.crash} (an "
-                       f"internal error of REI: please report it with the command line)")
+                       f"internal error of REI: please report it with {INTERNAL_ERROR_LOG} "
+                       f"and the command line)")
         elif code < 0:
             failure = f"the simulation process was killed by {_signal_name(-code)} {watch.at()}"
         else:
@@ -303,6 +304,24 @@ class _Channel:
         self.send({"end": time})
 
 
+INTERNAL_ERROR_LOG = "internal-error.txt"
+
+
+def _save_traceback(out_dir: Path, exc: BaseException) -> str:
+    """Write the traceback of an internal error beside the outputs (for a bug report); what
+    to tell the user about it."""
+    import traceback  # noqa: PLC0415
+
+    from rei.generators.output import open_output  # noqa: PLC0415
+
+    try:
+        with open_output(out_dir / INTERNAL_ERROR_LOG) as log:
+            log.write("".join(traceback.format_exception(exc)))
+    except OSError as err:
+        return f"its traceback could not be saved ({err.strerror})"
+    return f"please report it with {out_dir / INTERNAL_ERROR_LOG} and the command line"
+
+
 def child_main(argv: list[str]) -> int:
     """The child: run the request, report to the supervisor, return the exit status."""
     fd, text = int(argv[0]), argv[1]
@@ -325,12 +344,15 @@ def child_main(argv: list[str]) -> int:
         if not channel.broken:
             print("rei run: interrupted", file=sys.stderr)
         status = EXIT_INTERRUPTED
-    except BaseException as exc:
+    except BaseException as exc:  # noqa: BLE001  (an internal error: reported, never a traceback)
+        saved = _save_traceback(Path(request.output), exc)
+        print(f"rei run: internal error: {type(exc).__name__}: {exc}; {saved}",
+              file=sys.stderr)
         try:
             channel.send({"crash": f"{type(exc).__name__}: {exc}"})
         except KeyboardInterrupt:
             pass
-        raise
+        return EXIT_RUN_ERROR
     try:
         channel.send({"exit": status, **result})
     except KeyboardInterrupt:

@@ -115,9 +115,16 @@ def _finite(name: str, value: float | None) -> None:
         raise RunError(f"{name}: expected a finite number, found {value}")
 
 
+MAX_SEED = 2**64 - 1
+"""The largest seed: numpy's generators take whole numbers from 0; the trace records it."""
+
+
 def check_options(mission_path: Path, duration: float | None, watchdog: float | None,
-                  physics_rate: float, odom_drift: float, laser_noise: float | None) -> None:
+                  physics_rate: float, odom_drift: float, laser_noise: float | None,
+                  seed: int = 0) -> None:
     """RunError for an option out of range, before anything is generated or started."""
+    if not 0 <= seed <= MAX_SEED:
+        raise RunError(f"--seed: expected a whole number from 0 to 2**64-1, found {seed}")
     for name, value in (("--duration", duration), ("--watchdog", watchdog),
                         ("--physics-rate", physics_rate), ("--odom-drift", odom_drift),
                         ("--laser-noise", laser_noise)):
@@ -166,7 +173,7 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
     from rei.runtime.world import load_manifest  # noqa: PLC0415
     from rei.runtime.world.start_jitter import START_JITTER  # noqa: PLC0415
 
-    check_options(mission_path, duration, watchdog, physics_rate, odom_drift, laser_noise)
+    check_options(mission_path, duration, watchdog, physics_rate, odom_drift, laser_noise, seed)
     _make_folder(out_dir)
     # The specification is checked and generated first: a bad .vepl is reported (exit 2)
     # before any world is built.
@@ -244,11 +251,11 @@ def run(args: argparse.Namespace) -> int:
     args = apply_run_config(args)
     out: Path = args.output
     check_options(args.mission, args.duration, args.watchdog, args.physics_rate,
-                  args.odom_drift, args.laser_noise)
+                  args.odom_drift, args.laser_noise, args.seed)
     _make_folder(out)
     # Outputs of an earlier run into the same folder go now: a run that dies must not leave
     # them beside its own error summary.
-    for stale in (SUMMARY, TRACE, TRACE + ".partial", EVENTS, PAGE):
+    for stale in (SUMMARY, TRACE, TRACE + ".partial", EVENTS, PAGE, "internal-error.txt"):
         (out / stale).unlink(missing_ok=True)
     request = RunRequest(
         str(args.mission), str(out), args.controller, args.seed, args.duration, args.watchdog,
