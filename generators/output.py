@@ -110,6 +110,28 @@ def open_output(path: str | Path, *, binary: bool = False, newline: str | None =
     return os.fdopen(fd, "w", encoding="utf-8", newline=newline)
 
 
+def append_output(path: str | Path) -> IO[str]:
+    """Open the regular file at ``path`` to append UTF-8 text (created if missing). Only a
+    regular file with a single name is appended to; a link (symbolic or hard), FIFO or
+    anything else at that name is replaced by a new, empty file, never written through."""
+    try:
+        fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_NOFOLLOW | os.O_NONBLOCK)
+    except FileNotFoundError:
+        fd = _new_file(path)
+    except OSError as exc:
+        if exc.errno not in (errno.ELOOP, errno.ENXIO):  # a symbolic link; a FIFO
+            raise
+        fd = _new_file(path)
+    else:
+        info = os.fstat(fd)
+        if not stat.S_ISREG(info.st_mode) or info.st_nlink != 1:
+            os.close(fd)
+            fd = _new_file(path)
+        else:
+            os.set_blocking(fd, True)
+    return os.fdopen(fd, "a", encoding="utf-8", newline="\n")
+
+
 def write_atomic(path: str | Path, data: bytes) -> None:
     """Write ``data`` to ``path`` so that readers see the old file or the whole new one; a
     link at ``path`` is replaced by the file, never followed."""

@@ -34,6 +34,7 @@ cost there is an interpreter start-up, not a second copy of REI's heavy imports.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import os
@@ -234,10 +235,11 @@ def supervise(request: RunRequest) -> SupervisedRun:
         code = stop_child(process)  # ended already, or stopping it is all that is left
     if not failure and watch.end is not None:
         end = watch.end
-        status = end.get("exit")
-        return SupervisedRun(status if isinstance(status, int) else EXIT_RUN_ERROR, True, "",
-                             float(end.get("wall", 0.0)), float(end.get("cpu", 0.0)),
-                             end.get("page") if isinstance(end.get("page"), str) else None)
+        failure = _doubt(request, watch)
+        if not failure:
+            page = end.get("page")
+            return SupervisedRun(end["exit"], True, "", _seconds(end.get("wall")),
+                                 _seconds(end.get("cpu")), page if isinstance(page, str) else None)
     if failure == "interrupted" or (interrupted and code in (EXIT_INTERRUPTED, -signal.SIGINT)):
         reason = "interrupted by the user (output incomplete)"
         _write_failure(request, watch, "interrupted", reason)
@@ -256,8 +258,43 @@ def supervise(request: RunRequest) -> SupervisedRun:
     return SupervisedRun(EXIT_RUN_ERROR, False, failure)
 
 
+def _seconds(value: Any) -> float:
+    return float(value) if isinstance(value, int | float) and math.isfinite(value) else 0.0
+
+
+def _doubt(request: RunRequest, watch: _Watch) -> str:
+    """Why the end the child reported cannot be taken as the run's result ("" when it can).
+
+    The report comes over a pipe and summary.json from a folder the process under test could
+    reach, so neither is taken on trust: the status must be one `rei run` gives, invalid input
+    can only be found before the run starts, and a run that ran must leave exactly the
+    summary.json whose digest it reported — a missing or rewritten one is a run error, never
+    the verdict it claims."""
+    assert watch.end is not None
+    status = watch.end.get("exit")
+    if not isinstance(status, int) or isinstance(status, bool) or status not in (0, 1, 2, 3, 130):
+        return (f"the simulation process reported an exit status `rei run` never gives "
+                f"{watch.at()}: {status!r}")
+    if status == 2:
+        return "" if watch.phase == "setup" else (
+            f"the simulation process reported invalid input {watch.at()}, after the run had "
+            f"started")
+    if status == EXIT_INTERRUPTED and watch.phase == "setup":
+        return ""  # stopped before anything ran: there is no summary to check
+    digest = watch.end.get("summary_sha256")
+    try:
+        written = (Path(request.output) / "summary.json").read_bytes()
+    except OSError:
+        return f"the simulation process ended {watch.at()} without leaving its summary.json"
+    if not isinstance(digest, str) or hashlib.sha256(written).hexdigest() != digest:
+        return (f"summary.json is not the one the run wrote {watch.at()} (changed or replaced "
+                f"after it was written)")
+    return ""
+
+
 def _write_failure(request: RunRequest, watch: _Watch, outcome: str, reason: str) -> None:
     """summary.json for a child that could not write its own, and the end of run.log."""
+    from rei.generators.output import append_output  # noqa: PLC0415
     from rei.runtime.evaluator.summary import write_summary  # noqa: PLC0415  (heavy package)
     from rei.runtime.results import RESULTS_VERSION, RunSummary  # noqa: PLC0415
 
@@ -270,7 +307,7 @@ def _write_failure(request: RunRequest, watch: _Watch, outcome: str, reason: str
     out.mkdir(parents=True, exist_ok=True)
     write_summary(summary, out)
     try:
-        with open(out / "run.log", "a", encoding="utf-8", newline="\n") as log:
+        with append_output(out / "run.log") as log:
             log.write(f"t={when:9.3f}  {outcome}: {reason}\n")
     except OSError:
         pass  # the summary says it; the log is a courtesy

@@ -19,7 +19,9 @@ simulation's process died or hung), 130 interrupted (the outputs are then marked
 from __future__ import annotations
 
 import argparse
+import hashlib
 import math
+import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -115,6 +117,10 @@ def _finite(name: str, value: float | None) -> None:
         raise RunError(f"{name}: expected a finite number, found {value}")
 
 
+MAX_PHYSICS_RATE = 10_000.0
+"""Physics steps per simulated second: beyond it a run takes hours per simulated second."""
+MAX_WATCHDOG = 86_400.0
+"""Wall-clock seconds a controller call may take, at most (the supervisor adds its margin)."""
 MAX_SEED = 2**64 - 1
 """The largest seed: numpy's generators take whole numbers from 0; the trace records it."""
 
@@ -123,6 +129,12 @@ def check_options(mission_path: Path, duration: float | None, watchdog: float | 
                   physics_rate: float, odom_drift: float, laser_noise: float | None,
                   seed: int = 0) -> None:
     """RunError for an option out of range, before anything is generated or started."""
+    if physics_rate > MAX_PHYSICS_RATE:
+        raise RunError(f"--physics-rate: expected at most {MAX_PHYSICS_RATE:g} steps per "
+                       f"simulated second, found {physics_rate:g}")
+    if watchdog is not None and watchdog > MAX_WATCHDOG:
+        raise RunError(f"--watchdog: expected at most {MAX_WATCHDOG:g} s (a day), found "
+                       f"{watchdog:g}")
     if not 0 <= seed <= MAX_SEED:
         raise RunError(f"--seed: expected a whole number from 0 to 2**64-1, found {seed}")
     for name, value in (("--duration", duration), ("--watchdog", watchdog),
@@ -240,9 +252,12 @@ def execute_request(request: RunRequest, probe: RunProbe) -> tuple[int, dict[str
         variation=request.variation, probe=probe,
         echo=sys.stderr if request.echo_events else None, functions=request.functions)
     page = write_page(Path(request.output)) if request.monitor else None
+    written = (Path(request.output) / SUMMARY).read_bytes()
     return exit_code(summary, request.monitor), {
         "wall": record.wall_seconds, "cpu": record.cpu_seconds,
-        "page": str(page) if page is not None else None}
+        "page": str(page) if page is not None else None,
+        # The supervisor accepts summary.json only as written here (see supervise).
+        "summary_sha256": hashlib.sha256(written).hexdigest()}
 
 
 def run(args: argparse.Namespace) -> int:
@@ -258,8 +273,9 @@ def run(args: argparse.Namespace) -> int:
     for stale in (SUMMARY, TRACE, TRACE + ".partial", EVENTS, PAGE, "internal-error.txt"):
         (out / stale).unlink(missing_ok=True)
     request = RunRequest(
-        str(args.mission), str(out), args.controller, args.seed, args.duration, args.watchdog,
-        args.physics_rate, args.odom_drift, args.laser_noise,
+        # absolute: the process under test may change its working folder
+        str(args.mission), os.path.abspath(out), args.controller, args.seed, args.duration,
+        args.watchdog, args.physics_rate, args.odom_drift, args.laser_noise,
         str(args.vepl) if args.vepl is not None else None, not args.no_monitor,
         not args.no_variation, progress=not args.quiet and sys.stderr.isatty(),
         echo_events=args.verbose, functions=args.functions)
@@ -275,7 +291,8 @@ def run(args: argparse.Namespace) -> int:
         cpu_rtf = summary.duration / ended.cpu_seconds if ended.cpu_seconds > 0 else math.inf
         print(f"  {rtf:.0f}x real time ({cpu_rtf:.0f}x per CPU second)", file=sys.stderr)
     return print_results(summary, out, monitored=not args.no_monitor,
-                         page=Path(ended.page) if ended.page else None, quiet=args.quiet,
+                         page=out / Path(ended.page).name if ended.page else None,
+                         quiet=args.quiet,
                          verbose=args.verbose)
 
 
