@@ -147,6 +147,26 @@ def read_bounded(path: str | Path, limit: int = MAX_SOURCE_BYTES) -> bytes | Dia
         return Diagnostic(Span.point(shown), "INPUT-READ", f"cannot read the file: {exc}")
 
 
+class UnreadableInput(Exception):
+    """A small input file (an index, a run configuration) that cannot be read as text;
+    ``str(error)`` says why, without the file's name (the caller names it)."""
+
+
+def bounded_text(path: str | Path, limit: int = MAX_SOURCE_BYTES) -> str:
+    """The UTF-8 text of a regular file of at most ``limit`` bytes, read as ``read_bounded``
+    reads (never blocking on a FIFO, never reading /dev/zero without end)."""
+    raw = read_bounded(path, limit)
+    if isinstance(raw, Diagnostic):
+        raise UnreadableInput(raw.message)
+    if len(raw) > limit:
+        raise UnreadableInput(f"expected at most {limit} bytes, found more")
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise UnreadableInput(f"expected UTF-8 text, found the bytes "
+                              f"{raw[exc.start:exc.start + 8]!r} at byte {exc.start}") from None
+
+
 def read_source(path: str | Path) -> SourceText | Diagnostic:
     """The file's text, or one diagnostic saying why it cannot be read."""
     data = read_bounded(path)

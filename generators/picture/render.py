@@ -23,6 +23,7 @@ from rei.generators.concrete import ConcreteMission, ConcreteWorld
 from rei.generators.errors import GenerationError
 from rei.generators.picture.draw import draw_world
 from rei.lang.errors import Diagnostic, LanguageError, Span
+from rei.lang.source import UnreadableInput, bounded_text
 from rei.lang.workspace import Workspace
 
 FORMATS = ("png", "svg")
@@ -104,11 +105,10 @@ def sheet_entries(path: Path) -> list[SheetEntry]:
 
 def _csv_entries(path: Path) -> list[SheetEntry]:
     try:
-        with path.open(newline="", encoding="utf-8") as handle:
-            reader = csv.DictReader(handle)
-            rows = list(reader)
-            columns = list(reader.fieldnames or ())
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        reader = csv.DictReader(io.StringIO(bounded_text(path), newline=""))
+        rows = list(reader)
+        columns = list(reader.fieldnames or ())
+    except (UnreadableInput, csv.Error) as exc:
         raise GenerationError(f"cannot read the index '{path}': {exc}") from None
     if not {"room", "mission"} & set(columns):
         raise LanguageError([Diagnostic(Span.point(str(path)), "INDEX-COLUMNS",

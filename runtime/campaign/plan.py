@@ -11,12 +11,14 @@ from __future__ import annotations
 
 import csv
 import hashlib
+import io
 import math
 import re
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+from rei.lang.source import UnreadableInput, bounded_text
 from rei.runtime.campaign.errors import CampaignError
 from rei.runtime.monitor.functions import load_functions
 
@@ -136,12 +138,11 @@ def _cell(text: str) -> Any:
 
 def _read_index(path: Path) -> list[_MissionEntry]:
     try:
-        with path.open(newline="", encoding="utf-8") as handle:
-            reader = csv.DictReader(handle)
-            fields = reader.fieldnames or []
-            rows = list(reader)
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:
-        raise CampaignError(f"{path}: cannot read the suite index: {exc}") from exc
+        reader = csv.DictReader(io.StringIO(bounded_text(path), newline=""))
+        fields = reader.fieldnames or []
+        rows = list(reader)
+    except (UnreadableInput, csv.Error) as exc:
+        raise CampaignError(f"{path}: cannot read the suite index: {exc}") from None
     if "mission" not in fields:
         raise CampaignError(f"{path}:1: expected an index CSV with a 'mission' column "
                             f"(as written by `rei-gen rooms`), found columns {fields}")

@@ -23,6 +23,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import sys
 from collections.abc import Iterator
 from pathlib import Path
@@ -32,6 +33,7 @@ import numpy as np
 
 from rei.catalogue import Box, Cylinder, Footprint, Polygon, Tile
 from rei.generators.output import open_output
+from rei.lang.source import file_kind
 from rei.runtime.errors import RunError
 from rei.runtime.messages import (
     FAILURE_CAUSES,
@@ -632,20 +634,61 @@ def _load(raw: bytes, where: str) -> Any:
     if not text.strip():
         raise TraceError(f"{where}: expected a JSON object, found an empty line")
     try:
-        return json.loads(text)
+        value = json.loads(text, object_pairs_hook=_unique_fields)
+    except _RepeatedField as exc:
+        raise TraceError(f"{where}: expected each field once, found {_show(exc.key)} "
+                         f"{exc.count} times") from None
     except json.JSONDecodeError as exc:
         raise TraceError(f"{where}: expected a JSON object, found {_show(text.strip())} "
                          f"({exc.msg} at column {exc.colno})") from None
     except (ValueError, RecursionError) as exc:  # a 5000-digit number, [[[[... nested
         raise TraceError(f"{where}: expected a JSON object, found a line JSON cannot hold "
                          f"({type(exc).__name__}: {_show(str(exc))})") from None
+    if _ESCAPED_SURROGATE.search(text):
+        try:
+            json.dumps(value, ensure_ascii=False).encode("utf-8")
+        except UnicodeEncodeError:
+            raise TraceError(f"{where}: expected text, found a lone surrogate escape "
+                             f"(\\ud800-\\udfff without its pair), which no file or "
+                             f"terminal can show") from None
+    return value
+
+
+class _RepeatedField(ValueError):
+    def __init__(self, key: str, count: int) -> None:
+        super().__init__(key)
+        self.key, self.count = key, count
+
+
+def _unique_fields(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    """A JSON object's fields, each named once: with a repeated field JSON keeps the last
+    value, so `"contacts": [1], "contacts": []` would hide a contact."""
+    data = dict(pairs)
+    if len(data) != len(pairs):
+        keys = [k for k, _ in pairs]
+        repeated = next(k for k in keys if keys.count(k) > 1)
+        raise _RepeatedField(repeated, keys.count(repeated))
+    return data
+
+
+_ESCAPED_SURROGATE = re.compile(r"\\[uU][dD][89a-fA-F]")
 
 
 def _open(path: Path) -> BinaryIO:
+    """The trace opened for reading: a regular file only (a FIFO would block, /dev/zero never
+    ends a line), checked before it is opened and again through the descriptor."""
     try:
-        return open(path, "rb")  # noqa: SIM115  (closed by the caller)
+        kind = file_kind(os.stat(path).st_mode)
+        if kind is None:
+            fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
+            kind = file_kind(os.fstat(fd).st_mode)
+            if kind is None:
+                os.set_blocking(fd, True)
+                return os.fdopen(fd, "rb")
+            os.close(fd)
     except OSError as exc:
-        raise TraceError(f"cannot read the trace '{path}': {exc.strerror}") from None
+        raise TraceError(f"cannot read the trace '{path}': {exc.strerror or exc}") from None
+    raise TraceError(f"cannot read the trace '{path}': expected a regular file, found {kind}")
 
 
 def _is_partial(path: Path) -> bool:

@@ -37,6 +37,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from rei.lang.source import UnreadableInput, bounded_text
 from rei.lang.suggest import did_you_mean
 from rei.runtime.errors import RunError
 
@@ -105,20 +106,38 @@ FIELDS: Mapping[str, Field] = {
 """Every field but ``format``, by name."""
 
 
+MAX_CONFIG_BYTES = 1024 * 1024
+"""A run.json is a few hundred bytes; a megabyte is no run configuration."""
+
+
+def _unique(path: Path, pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    data = dict(pairs)
+    if len(data) != len(pairs):
+        keys = [k for k, _ in pairs]
+        repeated = next(k for k in keys if keys.count(k) > 1)
+        raise RunError(f"{path}: field {_text(repeated)}: expected once, found "
+                       f"{keys.count(repeated)} times")
+    return data
+
+
 def load_run_config(path: Path) -> dict[str, Any]:
     """The file's fields as `rei run` arguments (by ``dest``), checked; RunError names the
     file, the field, what was expected and what was found."""
+    if not path.exists() and not path.is_symlink():
+        raise RunError(f"{path}: --config: expected a run.json file, found none")
     try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise RunError(f"{path}: --config: expected a run.json file, found none") from None
-    except (OSError, UnicodeDecodeError) as exc:
+        text = bounded_text(path, MAX_CONFIG_BYTES)
+    except UnreadableInput as exc:
         raise RunError(f"{path}: cannot read the run configuration: {exc}") from None
     try:
-        data = json.loads(text, parse_constant=lambda name: _reject_constant(path, name))
+        data = json.loads(text, parse_constant=lambda name: _reject_constant(path, name),
+                          object_pairs_hook=lambda pairs: _unique(path, pairs))
     except json.JSONDecodeError as exc:
         raise RunError(f"{path}:{exc.lineno}:{exc.colno}: expected JSON, found an error: "
                        f"{exc.msg}") from None
+    except RecursionError:
+        raise RunError(f"{path}: expected a run.json object of fields, found JSON nested "
+                       f"too deep to read") from None
     if not isinstance(data, dict):
         raise RunError(f"{path}: expected a JSON object of run fields, found "
                        f"{type(data).__name__}")

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 from pathlib import Path
 
 import pytest
@@ -105,6 +106,10 @@ def test_bad_fields_name_the_file_the_field_and_what_was_found(
     ("[1, 2]", "expected a JSON object of run fields, found list"),
     ('{"format": "rei-run/1"}', "field 'mission': expected a path to a .mission file, found "
                                 "nothing"),
+    # found by an attacker: a repeated field (JSON keeps the last) and deep nesting
+    ('{"format": "rei-run/1", "seed": 0, "seed": 5}', "field 'seed': expected once, found 2 "
+                                                      "times"),
+    ("[" * 100_000 + "]" * 100_000, "found JSON nested too deep to read"),
 ])
 def test_broken_files_are_located_errors(tmp_path: Path, text: str, message: str) -> None:
     config = tmp_path / "run.json"
@@ -119,3 +124,17 @@ def test_bad_config_exits_2_with_one_line(tmp_path: Path, capsys: pytest.Capture
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"rei: error: {tmp_path / 'missing.json'}: --config: expected a run.json "
                    f"file, found none"]
+
+
+@pytest.mark.parametrize("kind", ["fifo", "zero"])
+def test_only_a_small_regular_file_is_read_as_a_config(tmp_path: Path, kind: str) -> None:
+    # /dev/zero grew `rei run --config` to 4.6 GB; a FIFO blocked it for ever
+    import os
+
+    config = Path("/dev/zero")
+    if kind == "fifo":
+        config = tmp_path / "run.json"
+        os.mkfifo(config)
+    found = "a FIFO (named pipe)" if kind == "fifo" else "a character device"
+    with pytest.raises(RunError, match=re.escape(f"expected a regular file, found {found}")):
+        parsed("--config", str(config))

@@ -644,3 +644,41 @@ def test_the_reader_refuses_damage_only_with_located_errors(
     except TraceError as exc:
         assert re.match(f"^{re.escape(str(trace))}:[0-9]+: .*expected .*found", str(exc)), exc
         assert "damaged line" not in str(exc)
+
+
+# ---- found by an independent attacker after the first round ---------------------------------
+
+def test_a_repeated_field_cannot_hide_a_contact(failing: Path, tmp_path: Path,
+                                                capsys: pytest.CaptureFixture[str]) -> None:
+    # JSON keeps the last of two equal keys: `"contacts": [1], "contacts": []` hid the wall.
+    lines = (failing / "trace.jsonl").read_text(encoding="utf-8").splitlines()
+    touched = next(i for i, line in enumerate(lines) if json.loads(line).get("contacts"))
+    lines[touched] = lines[touched][:-1] + ', "contacts": []}'
+    trace = tmp_path / "trace.jsonl"
+    trace.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    status, err = _replay_cli(trace, tmp_path / "out", capsys)
+    assert status == 2
+    assert f"{trace}:{touched + 1}: expected each field once, found 'contacts' 2 times" in err
+
+
+def test_a_lone_surrogate_is_a_located_error_not_a_traceback(
+        failing: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    lines = (failing / "trace.jsonl").read_text(encoding="utf-8").splitlines()
+    lines[0] = lines[0].replace('"to_the_wall"', '"to_the\\ud800wall"', 1)
+    assert "\\ud800" in lines[0]
+    trace = tmp_path / "trace.jsonl"
+    trace.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    status, err = _replay_cli(trace, tmp_path / "out", capsys)
+    assert status == 2 and "Traceback" not in err
+    assert f"{trace}:1: expected text, found a lone surrogate escape" in err
+
+
+def test_only_a_regular_file_is_read_as_a_trace(tmp_path: Path) -> None:
+    import os
+
+    fifo = tmp_path / "trace.jsonl"
+    os.mkfifo(fifo)
+    for path, kind in ((fifo, "a FIFO (named pipe)"), (Path("/dev/zero"), "a character device"),
+                       (tmp_path, "a folder")):
+        with pytest.raises(TraceError, match=re.escape(f"expected a regular file, found {kind}")):
+            read_trace(path)
