@@ -142,13 +142,9 @@ def _monitor(item: Any, span: Any, number: Any, diagnostics: list[Diagnostic]
                                               f"monitor data: expected '{required}' among the "
                                               f"collected data (every sample is built around "
                                               f"the bodies' poses), found "
-                                              f"{', '.join(setting_names(setting))}"))
+                                              f"{', '.join(e.name for e in setting.names)}"))
         data = tuple(d for d in COLLECTED_DATA if d in named)
     return rate, data
-
-
-def setting_names(setting: Any) -> list[str]:
-    return [entry.name for entry in setting.names]
 
 
 def _goal(item: Any, index: int, span: Any, number: Any, diagnostics: list[Diagnostic],

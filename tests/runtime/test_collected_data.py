@@ -15,6 +15,7 @@ from rei.generators.pipeline import plan
 from rei.lang.errors import LanguageError
 from rei.lang.lsp.completion import mission_completions
 from rei.lang.mission.model import COLLECTED_DATA
+from rei.lang.printer import print_mission
 from rei.lang.vepl.document import load_vepl
 from rei.lang.workspace import Workspace
 from rei.runtime.collector import load_monitor_config, read_trace
@@ -78,6 +79,19 @@ def test_the_monitor_block_is_read_in_the_collectors_order(tmp_path: Path) -> No
     config = json.loads(plan(path, "monitor", {"rate": "20"}).tree.files["monitor.json"].decode())
     assert config["rate"] == 20.0 and config["data"] == ["ground_truth", "laser",
                                                          "mission_events"]
+
+
+def test_the_monitor_block_prints_back(tmp_path: Path) -> None:
+    path = _mission(tmp_path, "monitor { data laser, ground_truth rate 0.5 }")
+    first = Workspace().mission(path).mission
+    assert first is not None
+    printed = tmp_path / "printed.mission"
+    printed.write_text(print_mission(first, "simple_wall.room"), encoding="utf-8")
+    second = Workspace().mission(printed).mission
+    assert second is not None and (second.sample_rate, second.data) == (0.5, ("ground_truth",
+                                                                               "laser"))
+    assert "monitor" not in print_mission(Workspace().mission(_mission(tmp_path / "d", ""))
+                                          .mission, "r.room")  # type: ignore[arg-type]
 
 
 def test_without_a_monitor_block_everything_is_collected_at_10_hz(tmp_path: Path) -> None:
@@ -176,6 +190,14 @@ def test_the_trace_holds_only_the_collected_data_at_the_missions_rate(
     header, rows = read_trace(out / "trace.jsonl")
     assert header.data == ("ground_truth", "mission_events") and header.rate == 4.0
     assert all(r.belief.scan is None for r in rows)
+
+
+def test_the_subset_run_is_deterministic(subset_run: tuple[Path, Path], tmp_path: Path) -> None:
+    out, vepl = subset_run
+    again = tmp_path / "again"
+    run_into(out.parent / "wall.mission", again, vepl=vepl)
+    for name in ("trace.jsonl", "events.csv", "summary.json", "world/monitor.json"):
+        assert (again / name).read_bytes() == (out / name).read_bytes(), name
 
 
 def test_the_default_mission_collects_everything(tmp_path: Path) -> None:
