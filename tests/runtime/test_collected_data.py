@@ -24,6 +24,7 @@ from rei.runtime.collector.trace import TraceError, read_trace_end
 from rei.runtime.commands.replay import replay
 from rei.runtime.commands.run import run_into
 from rei.runtime.errors import RunError
+from rei.runtime.monitor import MonitorSink
 from tests.runtime.test_cli_streams import rei
 
 EXAMPLE = Path(__file__).parents[2] / "examples" / "simple_wall"
@@ -244,6 +245,18 @@ def test_a_replay_needing_data_the_trace_lacks_is_refused(subset_run: tuple[Path
     # so is the default specification (it reads the laser, the command and the nav state)
     done = rei("replay", str(out / "trace.jsonl"), "-o", str(tmp_path / "default"))
     assert done.returncode == 2 and "VEPL-DATA" in done.stderr
+
+
+def test_the_monitor_sink_refuses_a_stream_without_the_data_it_reads(
+        subset_run: tuple[Path, Path], tmp_path: Path) -> None:
+    """A library user feeding the monitor a stream of their own is refused as well."""
+    header, rows = read_trace(subset_run[0] / "trace.jsonl")
+    list(rows)
+    vepl = tmp_path / "laser.vepl"
+    vepl.write_text(LASER_VEPL, encoding="utf-8")
+    with pytest.raises(LanguageError, match="expected the stream to carry it"):
+        MonitorSink(vepl, tmp_path / "monitor").start(header)
+    MonitorSink(subset_run[1], tmp_path / "geometry").start(header)  # reads what is there
 
 
 def test_a_replay_of_the_subset_gives_the_live_verdicts(subset_run: tuple[Path, Path],
