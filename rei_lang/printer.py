@@ -8,7 +8,13 @@ mission is printed as written. Numbers are printed with repr, so they read back 
 
 from __future__ import annotations
 
-from rei.lang.mission.model import DEFAULT_HEADING_TOLERANCE, DEFAULT_TOLERANCE, Mission
+from rei.lang.mission.model import (
+    COLLECTED_DATA,
+    DEFAULT_HEADING_TOLERANCE,
+    DEFAULT_SAMPLE_RATE,
+    DEFAULT_TOLERANCE,
+    Mission,
+)
 from rei.lang.room.model import DEFAULT_TILE_SIZE, PlacedObject, Room
 
 _KEYWORD = {"static": "object", "dynamic": "dynamic", "human": "human", "robot": "robot"}
@@ -71,6 +77,9 @@ def print_mission(mission: Mission, room_path: str) -> str:
         lines.append(f"    time_limit {_num(mission.time_limit)}")
     if mission.max_speed is not None:
         lines.append(f"    max_speed {_num(mission.max_speed)}")
+    if mission.sample_rate != DEFAULT_SAMPLE_RATE or mission.data != COLLECTED_DATA:
+        lines.append(f"    monitor {{ rate {_num(mission.sample_rate)} Hz  data "
+                     f"{', '.join(mission.data)} }}")
     for goal in mission.goals:
         line = f"    goal {goal.name} at {goal.floor.name}"
         if goal.tolerance != DEFAULT_TOLERANCE:

@@ -88,6 +88,12 @@ RULES: tuple[Rule, ...] = (
          "thesis 4.1.2, 4.3.1"),
     Rule("GOAL-UNREACHABLE", "mission", "the robot's footprint can reach every goal from its "
          "start (path search on the floor graph without blocked floors)"),
+    Rule("MONITOR-DATA", "mission", "the monitor block names known data (ground_truth, "
+         "odometry, laser, nav_state, mission_events), each once, ground_truth among them; its "
+         "rate is more than 0 and at most 1000 samples per second", "thesis 3.2.2.2, 6.1.2"),
+    Rule("VEPL-DATA", "vepl", "`rei run` and `rei replay` refuse a specification whose queries "
+         "read data the mission does not collect or the trace does not carry (laser_min without "
+         "laser, ...)", "thesis 6.1.2"),
     Rule("VEPL-UNKNOWN", "vepl", "every referenced name is declared (queries, events, signals, "
          "parameters, functions, states) and every kind in object[...] is a role or a "
          "catalogue type, with 'did you mean'"),

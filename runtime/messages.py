@@ -9,19 +9,21 @@ pybullet or anything of the simulator.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from enum import StrEnum
 from typing import Literal, get_args
 
 import numpy as np
 
 from rei.catalogue import Footprint
+from rei.lang.mission.model import COLLECTED_DATA
 
-SCHEMA_VERSION = 3
-"""Bumped whenever a field changes meaning; readers refuse other versions (2: the header
-carries the laser's mount point; 3: the header carries the mission's facts, a sample the
-bodies touched since the previous one and the robot's raw velocity command, a failed task
-its cause)."""
+SCHEMA_VERSION = 4
+"""Bumped whenever a field changes meaning; readers refuse older versions unless they say
+otherwise (2: the header carries the laser's mount point; 3: the header carries the
+mission's facts, a sample the bodies touched since the previous one and the robot's raw
+velocity command, a failed task its cause; 4: the header names the collected data, and a
+sample carries only those)."""
 
 
 class NavState(StrEnum):
@@ -136,6 +138,9 @@ class StreamHeader:
     robot footprint's boundary (issue 6: the TurtleBot3 Waffle's laser sits 6.4 cm back)."""
     mission_facts: MissionFacts | None = None
     """The goals and limits of the mission run; None for streams not made by a mission run."""
+    data: tuple[str, ...] = COLLECTED_DATA
+    """What the data collector forwards (thesis 6.1.2), in COLLECTED_DATA's order: the
+    samples carry these and nothing of the others (see ``BELIEF_DATA``)."""
 
 
 @dataclass(frozen=True)
@@ -166,6 +171,29 @@ class RobotBelief:
     """(linear m/s, angular rad/s) the controller last returned, before the motor model
     clipped it to the drive limits: requirements on what the software *asked* for (a
     controller commanding 2 m/s to a 0.26 m/s drive) cannot be read from the motion."""
+
+
+BELIEF_DATA: dict[str, tuple[str, ...]] = {
+    "odometry": ("odom", "odom_twist"),
+    "laser": ("laser_min", "scan"),
+    "nav_state": ("nav_state", "task", "cmd"),
+}
+"""The fields of ``RobotBelief`` each kind of collected data fills. A stream that does not
+collect a kind carries ``UNCOLLECTED``'s values there (the trace omits them): no consumer may
+read them, and the monitor refuses a specification that would (``rei.runtime.collector.
+needs``). Ground truth (the poses, velocities and contacts) is always collected;
+``mission_events`` fills ``Sample.events``."""
+
+UNCOLLECTED = RobotBelief((0.0, 0.0, 0.0), (0.0, 0.0), 0.0, None, NavState.IDLE, None,
+                          (0.0, 0.0))
+"""The belief of a stream that collects none of BELIEF_DATA."""
+
+
+def collected_belief(belief: RobotBelief, data: tuple[str, ...]) -> RobotBelief:
+    """``belief`` with the fields of the data not in ``data`` set to ``UNCOLLECTED``'s."""
+    dropped = {key: getattr(UNCOLLECTED, key) for kind, keys in BELIEF_DATA.items()
+               if kind not in data for key in keys}
+    return replace(belief, **dropped) if dropped else belief
 
 
 @dataclass(frozen=True, eq=False)

@@ -151,7 +151,8 @@ def stream_header(manifest: WorldManifest, monitor: MonitorConfig,
     name = mission if isinstance(mission, str) else mission.name
     return StreamHeader(SCHEMA_VERSION, manifest.world, name, seed, monitor.rate,
                         monitor.robot, monitor.objects, manifest.tile_size, manifest.floors,
-                        (manifest.laser.mount_x, manifest.laser.mount_y), facts)
+                        (manifest.laser.mount_x, manifest.laser.mount_y), facts,
+                        monitor.data)
 
 
 class RunProbe(Protocol):

@@ -83,7 +83,8 @@ def concretise_mission(doc: MissionDocument) -> ConcreteMission:
         goals.append(ConcreteGoal(goal.name, floor.name, floor.x, floor.y, yaw, goal.tolerance,
                                   goal.timeout, math.radians(goal.heading_tolerance_deg)))
     return ConcreteMission(mission.name, mission.path, world, tuple(goals), mission.cycles,
-                           mission.effective_time_limit(), mission.max_speed)
+                           mission.effective_time_limit(), mission.max_speed,
+                           mission.sample_rate, mission.data)
 
 
 def load_concrete_mission(path: str | Path, workspace: Workspace | None = None) -> ConcreteMission:

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 from rei.catalogue import ObjectType
-from rei.lang.mission.model import DEFAULT_HEADING_TOLERANCE
+from rei.lang.mission.model import COLLECTED_DATA, DEFAULT_HEADING_TOLERANCE, DEFAULT_SAMPLE_RATE
 from rei.lang.room.model import DEFAULT_BEHAVIOUR, Behaviour
 
 Role = Literal["static", "dynamic", "human", "robot"]
@@ -139,6 +139,10 @@ class ConcreteMission:
     cycles: int
     time_limit: float
     max_speed: float | None
+    sample_rate: float = DEFAULT_SAMPLE_RATE
+    """Samples per second of simulation time the data collector takes."""
+    data: tuple[str, ...] = COLLECTED_DATA
+    """What the data collector forwards (the mission's ``monitor`` block)."""
 
     def tasks(self) -> tuple[ConcreteGoal, ...]:
         """The goals in the order they are sent (the sequence repeated ``cycles`` times)."""

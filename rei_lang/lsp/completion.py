@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from importlib import resources
 
 from rei.catalogue import Catalogue, default_catalogue
+from rei.lang.mission.model import COLLECTED_DATA
 from rei.lang.room.model import BEHAVIOURS, Room
 
 _TOKEN = re.compile(r"//[^\n]*|/\*.*?(?:\*/|$)|\"[^\"\n]*\"?|'[^'\n]*'?|[A-Za-z_]\w*|"
@@ -28,7 +29,9 @@ instant in a 2 MB file, and no REI statement is longer."""
 SIDES = ("top", "right", "bottom", "left")
 ROLE_OF_KEYWORD = {"object": "static", "dynamic": "dynamic", "human": "human",
                    "robot": "robot", "floor": "floor", "wall": "wall"}
-BLOCK_OPENERS = ("room", "grid", "legend", "floor", "trajectory", "mission")
+BLOCK_OPENERS = ("room", "grid", "legend", "floor", "trajectory", "mission", "monitor")
+MONITOR_KEYWORDS = ("rate", "data", "Hz")
+"""Words of a mission's monitor block, offered only inside it."""
 
 
 @functools.cache
@@ -158,10 +161,15 @@ def mission_completions(text_before: str, room: Room | None,
     if prev == "in":
         return [Candidate(f'"{name}"', "file", "room file") for name in room_files]
     if prev in ("cycles", "time_limit", "max_speed", "tolerance", "heading",
-                "heading_tolerance", "timeout"):
+                "heading_tolerance", "timeout", "rate"):
         return []
+    if ctx.blocks and ctx.blocks[-1] == "monitor":
+        if prev in ("data", ","):
+            return [Candidate(d, "keyword", "collected data") for d in COLLECTED_DATA]
+        return _keywords(("rate", "data"))
     if ctx.blocks:
-        return _keywords(w for w in grammar_keywords("mission") if w not in ("mission", "in"))
+        return _keywords(w for w in grammar_keywords("mission")
+                         if w not in ("mission", "in", *MONITOR_KEYWORDS))
     return _keywords(("mission", "in"))
 
 

@@ -2,7 +2,8 @@
 
 Rules: the imported room exists and is valid, each goal names a floor of that room that
 the robot can reach, at least two goals (thesis 4.1.2: start and final place), unique goal
-names, options given once, and every number finite and in range.
+names, options given once, and every number finite and in range. The optional ``monitor``
+block names known data (each once, ground truth among them) and a sampling rate in range.
 """
 
 from __future__ import annotations
@@ -12,9 +13,13 @@ from typing import Any
 
 from rei.lang.errors import Diagnostic, Span
 from rei.lang.mission.model import (
+    COLLECTED_DATA,
     DEFAULT_HEADING_TOLERANCE,
+    DEFAULT_SAMPLE_RATE,
     DEFAULT_TIMEOUT,
     DEFAULT_TOLERANCE,
+    MAX_SAMPLE_RATE,
+    REQUIRED_DATA,
     Goal,
     Mission,
 )
@@ -49,6 +54,8 @@ def link_mission(textx_mission: Any, source: SourceText, room_doc: RoomDocument
     cycles: float | None = None
     time_limit: float | None = None
     max_speed: float | None = None
+    sample_rate: float | None = None
+    data: tuple[str, ...] = COLLECTED_DATA
     seen: set[str] = set()
     goals: list[Goal] = []
     goal_names: dict[str, Span] = {}
@@ -69,6 +76,8 @@ def link_mission(textx_mission: Any, source: SourceText, room_doc: RoomDocument
         elif kind == "MaxSpeed":
             max_speed = number(item.value, item, "max_speed (m/s)", low=0.0, high=100.0,
                                low_open=True)
+        elif kind == "Monitor":
+            sample_rate, data = _monitor(item, span, number, diagnostics)
         else:
             goals.append(_goal(item, len(goals) + 1, span, number, diagnostics, goal_names))
 
@@ -82,6 +91,8 @@ def link_mission(textx_mission: Any, source: SourceText, room_doc: RoomDocument
         time_limit=time_limit,
         max_speed=max_speed,
         goals=tuple(goals),
+        sample_rate=sample_rate if sample_rate is not None else DEFAULT_SAMPLE_RATE,
+        data=data,
     )
     if len(goals) < 2:
         diagnostics.append(Diagnostic(mission.span, "MISSION-GOALS",
@@ -89,6 +100,51 @@ def link_mission(textx_mission: Any, source: SourceText, room_doc: RoomDocument
                                       f"(start and final place), found {len(goals)}"))
     diagnostics.extend(_check_against_room(mission, room_doc))
     return mission, diagnostics
+
+
+def _monitor(item: Any, span: Any, number: Any, diagnostics: list[Diagnostic]
+             ) -> tuple[float | None, tuple[str, ...]]:
+    """The ``monitor`` block: (sampling rate or None, the collected data in COLLECTED_DATA's
+    order); every data name known and given once, the required ones present."""
+    rate: float | None = None
+    data: tuple[str, ...] = COLLECTED_DATA
+    given: set[str] = set()
+    for setting in item.settings:
+        kind = type(setting).__name__
+        word = "rate" if kind == "SampleRate" else "data"
+        if kind in given:
+            diagnostics.append(Diagnostic(span(setting), "OPTION-REPEAT",
+                                          f"monitor: expected one '{word}', found another"))
+            continue
+        given.add(kind)
+        if kind == "SampleRate":
+            rate = number(setting.hz, setting, "monitor rate (samples per second)", low=0.0,
+                          high=MAX_SAMPLE_RATE, low_open=True)
+            continue
+        named: dict[str, Span] = {}
+        for entry in setting.names:
+            name, where = entry.name, span(entry)
+            if name not in COLLECTED_DATA:
+                diagnostics.append(Diagnostic(where, "MONITOR-DATA",
+                                              f"monitor data: expected one of "
+                                              f"{', '.join(COLLECTED_DATA)}, found '{name}'"
+                                              + did_you_mean(name, COLLECTED_DATA)))
+            elif name in named:
+                diagnostics.append(Diagnostic(where, "MONITOR-DATA",
+                                              f"monitor data: expected each name once, found "
+                                              f"'{name}' again (first at line "
+                                              f"{named[name].line})"))
+            else:
+                named[name] = where
+        for required in REQUIRED_DATA:
+            if required not in named:
+                diagnostics.append(Diagnostic(span(setting), "MONITOR-DATA",
+                                              f"monitor data: expected '{required}' among the "
+                                              f"collected data (every sample is built around "
+                                              f"the bodies' poses), found "
+                                              f"{', '.join(e.name for e in setting.names)}"))
+        data = tuple(d for d in COLLECTED_DATA if d in named)
+    return rate, data
 
 
 def _goal(item: Any, index: int, span: Any, number: Any, diagnostics: list[Diagnostic],

@@ -13,6 +13,18 @@ DEFAULT_TIMEOUT = 120.0
 """Seconds per goal."""
 DEFAULT_HEADING_TOLERANCE = 15.0
 """Degrees; how far the final heading may be off a goal's heading (ignored without one)."""
+DEFAULT_SAMPLE_RATE = 10.0
+"""Samples per second of simulation time: twice the default laser rate, so no scan is lost."""
+MAX_SAMPLE_RATE = 1000.0
+"""Samples per second at most (the run's physics rate, default 100, must be a multiple)."""
+COLLECTED_DATA = ("ground_truth", "odometry", "laser", "nav_state", "mission_events")
+"""What the data collector can forward, in the order monitor.json and the trace list them:
+the bodies' ground truth (poses, velocities, contacts: always collected), the robot's
+odometry, its laser scans, its navigation state (with the task and the velocity command),
+and the mission executor's events. A mission collects all of them unless its ``monitor``
+block names a subset."""
+REQUIRED_DATA = ("ground_truth",)
+"""Data every collection includes: each sample is built around the bodies' poses."""
 
 
 @dataclass(frozen=True)
@@ -37,6 +49,10 @@ class Mission:
     time_limit: float | None
     max_speed: float | None
     goals: tuple[Goal, ...]
+    sample_rate: float = DEFAULT_SAMPLE_RATE
+    """Samples per second the data collector takes (the ``monitor`` block's ``rate``)."""
+    data: tuple[str, ...] = COLLECTED_DATA
+    """What the data collector forwards, a subset of COLLECTED_DATA in its order."""
 
     def task_sequence(self) -> tuple[Goal, ...]:
         """The goals in the order they are sent: the sequence repeated ``cycles`` times."""

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from rei.catalogue import Footprint
+from rei.lang.mission.model import COLLECTED_DATA, REQUIRED_DATA
 from rei.runtime.artifacts import footprint, read_artifact
 from rei.runtime.errors import RunError
 from rei.runtime.messages import ObservedObject
@@ -21,6 +22,7 @@ class MonitorConfig:
     robot: ObservedObject
     objects: tuple[ObservedObject, ...]
     data: tuple[str, ...]
+    """What the collector forwards: a subset of COLLECTED_DATA in its order."""
     laser_scans: str
     """'when_new': a sample carries a scan only when a new one was taken since the last."""
 
@@ -34,6 +36,17 @@ def _observed(data: dict[str, Any]) -> ObservedObject:
                           _footprint(data["footprint"]), float(data["height"]))
 
 
+def _data(path: Path, value: Any) -> tuple[str, ...]:
+    names = value if isinstance(value, list) else None
+    if names is None or not all(isinstance(n, str) for n in names) \
+            or len(set(names)) != len(names) or not set(names) <= set(COLLECTED_DATA) \
+            or not set(REQUIRED_DATA) <= set(names):
+        raise RunError(f"{path}: data: expected a list of distinct names of "
+                       f"{', '.join(COLLECTED_DATA)} with {', '.join(REQUIRED_DATA)} among "
+                       f"them, found {value!r:.200}")
+    return tuple(d for d in COLLECTED_DATA if d in names)
+
+
 def load_monitor_config(folder: str | Path) -> MonitorConfig:
     path = Path(folder) / "monitor.json"
     data = read_artifact(path, "monitor configuration", "monitor", CONFIG_VERSION)
@@ -43,6 +56,6 @@ def load_monitor_config(folder: str | Path) -> MonitorConfig:
             raise RunError(f"{path}: rate: expected a positive number, found {data['rate']!r}")
         return MonitorConfig(rate, _observed(data["robot"]),
                              tuple(_observed(o) for o in data["objects"]),
-                             tuple(str(d) for d in data["data"]), str(data["laser_scans"]))
+                             _data(path, data["data"]), str(data["laser_scans"]))
     except (KeyError, IndexError, TypeError, ValueError) as exc:
         raise RunError(f"{path}: missing or malformed field ({exc})") from None

@@ -11,11 +11,14 @@ complete; a killed run leaves only the partial file.
 A recording is input like any other: the reader checks every field of every line (JSON
 types, with a bool never a number; finite numbers in their ranges; sequence numbers 0, 1, 2,
 ... without gaps; times that never go back; known event kinds, outcomes and causes; object
-indices within the header's table; exactly one end line, last) and refuses the first
+indices within the header's table; a sample carrying exactly the data the header names as
+collected; exactly one end line, last) and refuses the first
 violation with a ``TraceError`` naming ``path:line: field: expected ..., found ...``. The
 reader stays lazy: a damaged line 5000 is found when line 5000 is read. The writer applies
 the same rules to what it is about to write, so whatever it writes reads back and it never
-writes what the reader would refuse. This module must never import pybullet.
+writes what the reader would refuse. Traces of sample schema 3 (before the header named
+the collected data) are still read: they carry every kind of data. This module must never
+import pybullet.
 """
 
 from __future__ import annotations
@@ -33,14 +36,17 @@ import numpy as np
 
 from rei.catalogue import Box, Cylinder, Footprint, Polygon, Tile
 from rei.generators.output import open_output
+from rei.lang.mission.model import COLLECTED_DATA, REQUIRED_DATA
 from rei.lang.source import file_kind
 from rei.runtime.errors import RunError
 from rei.runtime.messages import (
+    BELIEF_DATA,
     FAILURE_CAUSES,
     MISSION_EVENT_KINDS,
     OBJECT_ROLES,
     SCHEMA_VERSION,
     TASK_EVENT_KINDS,
+    UNCOLLECTED,
     GoalFacts,
     LaserScan,
     MissionEvent,
@@ -57,6 +63,8 @@ FORMAT = "rei-trace"
 TRACE_VERSION = 1
 OUTCOMES: tuple[str, ...] = get_args(Outcome)
 NAV_STATES: tuple[str, ...] = tuple(s.value for s in NavState)
+PREVIOUS_SCHEMA = 3
+"""The sample schema before the header named the collected data: read as collecting all."""
 
 
 class TraceError(RunError):
@@ -88,7 +96,8 @@ def header_json(h: StreamHeader) -> dict[str, Any]:
             "robot": _object_json(h.robot), "objects": [_object_json(o) for o in h.objects],
             "tile_size": h.tile_size, "floors": [list(f) for f in h.floors],
             "laser_mount": list(h.laser_mount),
-            "mission_facts": _facts_json(h.mission_facts) if h.mission_facts else None}
+            "mission_facts": _facts_json(h.mission_facts) if h.mission_facts else None,
+            "data": list(h.data)}
 
 
 def _facts_json(f: MissionFacts) -> dict[str, Any]:
@@ -105,32 +114,39 @@ def _event_json(e: MissionEvent) -> dict[str, Any]:
             "cause": e.cause}
 
 
-def _sample_json(sample: Sample, poses: list[list[Any]],
-                 twists: list[list[Any]]) -> dict[str, Any]:
+def _sample_json(sample: Sample, poses: list[list[Any]], twists: list[list[Any]],
+                 data: tuple[str, ...] = COLLECTED_DATA) -> dict[str, Any]:
+    """A sample's line, with only the ``data`` collected (the header's)."""
     b = sample.belief
-    scan = None
-    if b.scan is not None:
-        s = b.scan
-        scan = {"angle_min": s.angle_min, "angle_increment": s.angle_increment,
-                "range_min": s.range_min, "range_max": s.range_max,
-                "ranges": np.asarray(s.ranges, dtype=float).tolist()}
-    return {
+    belief: dict[str, Any] = {}
+    if "odometry" in data:
+        belief.update(odom=list(b.odom), odom_twist=list(b.odom_twist))
+    if "laser" in data:
+        scan = None
+        if b.scan is not None:
+            s = b.scan
+            scan = {"angle_min": s.angle_min, "angle_increment": s.angle_increment,
+                    "range_min": s.range_min, "range_max": s.range_max,
+                    "ranges": np.asarray(s.ranges, dtype=float).tolist()}
+        belief.update(laser_min=b.laser_min, scan=scan)
+    if "nav_state" in data:
+        belief.update(nav_state=b.nav_state.value, task=b.task, cmd=list(b.cmd))
+    line: dict[str, Any] = {
         "seq": sample.seq, "time": sample.time,
         "robot_pose": list(sample.robot_pose), "robot_twist": list(sample.robot_twist),
-        "poses": poses, "twists": twists,
-        "belief": {"odom": list(b.odom), "odom_twist": list(b.odom_twist),
-                   "laser_min": b.laser_min, "scan": scan, "nav_state": b.nav_state.value,
-                   "task": b.task, "cmd": list(b.cmd)},
-        "events": [_event_json(e) for e in sample.events],
-        "contacts": list(sample.contacts),
+        "poses": poses, "twists": twists, "belief": belief,
     }
+    if "mission_events" in data:
+        line["events"] = [_event_json(e) for e in sample.events]
+    line["contacts"] = list(sample.contacts)
+    return line
 
 
 # ---- the rules: one set for the reader and the writer ----------------------------------------
 
 _HEADER_KEYS = frozenset(("format", "trace_version", "version", "world", "mission", "seed",
                           "rate", "robot", "objects", "tile_size", "floors", "laser_mount",
-                          "mission_facts"))
+                          "mission_facts", "data"))
 _OBJECT_KEYS = frozenset(("name", "role", "type", "footprint", "height"))
 _FOOTPRINT_KEYS = {"box": frozenset(("shape", "size")),
                    "cylinder": frozenset(("shape", "radius")),
@@ -141,8 +157,7 @@ _GOAL_KEYS = frozenset(("name", "x", "y", "heading", "tolerance", "heading_toler
                         "timeout"))
 _SAMPLE_KEYS = frozenset(("seq", "time", "robot_pose", "robot_twist", "poses", "twists",
                           "belief", "events", "contacts"))
-_BELIEF_KEYS = frozenset(("odom", "odom_twist", "laser_min", "scan", "nav_state", "task",
-                          "cmd"))
+"""A sample of a stream collecting everything; ``events`` only with mission_events."""
 _SCAN_KEYS = frozenset(("angle_min", "angle_increment", "range_min", "range_max", "ranges"))
 _EVENT_KEYS = frozenset(("kind", "time", "task", "index", "reason", "cause"))
 _END_KEYS = frozenset(("end", "outcome", "reason"))
@@ -228,9 +243,9 @@ class _Fields:
                 raise TraceError(f"{_at(where, prefix)}: expected {what} with the field "
                                  f"'{missing[0]}', found none")
             unknown = sorted(data.keys() - keys)
-            raise TraceError(f"{_at(where, prefix)}: expected only the fields "
-                             f"{', '.join(sorted(keys))}, found the unknown field "
-                             f"{_show(unknown[0])}")
+            allowed = f"only the fields {', '.join(sorted(keys))}" if keys else "no fields"
+            raise TraceError(f"{_at(where, prefix)}: expected {allowed}, found the unknown "
+                             f"field {_show(unknown[0])}")
         self.data: dict[str, Any] = data
         self.where = where
         self.prefix = prefix
@@ -368,11 +383,16 @@ def _header(data: Any, where: str) -> StreamHeader:
     if data.get("format") != FORMAT:
         raise TraceError(f"{where}: format: expected a REI trace ('{FORMAT}'), found "
                          f"{_show(data.get('format'))}")
-    if data.get("trace_version") != TRACE_VERSION or data.get("version") != SCHEMA_VERSION:
+    schema = data.get("version")
+    if data.get("trace_version") != TRACE_VERSION or not (
+            schema in (SCHEMA_VERSION, PREVIOUS_SCHEMA) and _is_whole(schema)):
         raise TraceError(f"{where}: expected trace version {TRACE_VERSION} with sample schema "
-                         f"{SCHEMA_VERSION}, found {data.get('trace_version')!r} with schema "
-                         f"{data.get('version')!r} (record it again with this REI)")
-    h = _Fields(data, where, "", _HEADER_KEYS, "a REI trace header")
+                         f"{SCHEMA_VERSION} (or {PREVIOUS_SCHEMA}), found "
+                         f"{data.get('trace_version')!r} with schema {schema!r} (record it "
+                         f"again with this REI)")
+    previous = schema == PREVIOUS_SCHEMA
+    h = _Fields(data, where, "", _HEADER_KEYS - {"data"} if previous else _HEADER_KEYS,
+                "a REI trace header")
     objects = h.array("objects", "observed objects")
     floors = h.array("floors", "floors")
     laser_mount = h.numbers("laser_mount", 2, "[x, y]")
@@ -382,7 +402,25 @@ def _header(data: Any, where: str) -> StreamHeader:
         tuple(_object(o, where, f"objects[{i}]") for i, o in enumerate(objects)),
         h.number("tile_size", low=0.0, low_open=True),
         tuple(_floor(f, where, f"floors[{i}]") for i, f in enumerate(floors)),
-        (laser_mount[0], laser_mount[1]), _mission_facts(data["mission_facts"], where))
+        (laser_mount[0], laser_mount[1]), _mission_facts(data["mission_facts"], where),
+        COLLECTED_DATA if previous else _data(data["data"], where))
+
+
+def _data(value: Any, where: str) -> tuple[str, ...]:
+    """The header's collected data: known names, each once, the required ones among them."""
+    if not (isinstance(value, list) and all(isinstance(n, str) for n in value)):
+        raise TraceError(f"{where}: data: expected a list of the names "
+                         f"{', '.join(COLLECTED_DATA)}, found {_show(value)}")
+    for i, name in enumerate(value):
+        if name not in COLLECTED_DATA or name in value[:i]:
+            which = "another" if name in value[:i] else "one"
+            raise TraceError(f"{where}: data[{i}]: expected {which} of "
+                             f"{', '.join(COLLECTED_DATA)}, found {_show(name)}")
+    for name in REQUIRED_DATA:
+        if name not in value:
+            raise TraceError(f"{where}: data: expected {name!r} among the collected data, "
+                             f"found {_show(value)}")
+    return tuple(d for d in COLLECTED_DATA if d in value)
 
 
 def _end(data: Any, where: str, last_time: float | None) -> tuple[float, str, str]:
@@ -396,8 +434,13 @@ class _StreamRules:
     """What holds between the lines of one trace: sequence numbers without gaps, times that
     never go back, mission events in order, rows within the header's object table."""
 
-    def __init__(self, n_objects: int) -> None:
+    def __init__(self, n_objects: int, data: tuple[str, ...] = COLLECTED_DATA) -> None:
         self.n = n_objects
+        self.data = data
+        self.belief_keys = frozenset(k for kind, keys in BELIEF_DATA.items() if kind in data
+                                     for k in keys)
+        self.with_events = "mission_events" in data
+        self.sample_keys = _SAMPLE_KEYS if self.with_events else _SAMPLE_KEYS - {"events"}
         self.poses = np.zeros((n_objects, 3))
         self.twists = np.zeros((n_objects, 3))
         self.seq = 0
@@ -410,7 +453,7 @@ class _StreamRules:
         """When the mission's 'end' event happened; nothing may follow it."""
 
     def sample(self, data: Any, where: str) -> Sample:
-        d = _Fields(data, where, "", _SAMPLE_KEYS, "a sample line (a JSON object)")
+        d = _Fields(data, where, "", self.sample_keys, "a sample line (a JSON object)")
         seq = data["seq"]
         if not (_is_whole(seq) and seq == self.seq):
             raise TraceError(f"{where}: seq: expected {self.seq} (samples are numbered 0, 1, "
@@ -423,9 +466,11 @@ class _StreamRules:
         first = previous is None
         self._rows(d, "poses", self.poses, first)
         self._rows(d, "twists", self.twists, first)
-        belief = self._belief(d.fields("belief", _BELIEF_KEYS,
-                                       "the robot's belief (a JSON object)"))
-        events = self._events(d, time, 0.0 if previous is None else previous)
+        belief = self._belief(d.fields("belief", self.belief_keys,
+                                       "the robot's belief of the collected data (a JSON "
+                                       "object)"))
+        events = self._events(d, time, 0.0 if previous is None else previous) \
+            if self.with_events else ()
         contacts = self._contacts(data["contacts"], where)
         self.seq, self.time = seq + 1, time
         return Sample(seq, time, robot_pose, robot_twist,  # type: ignore[arg-type]
@@ -455,18 +500,24 @@ class _StreamRules:
                              f"objects in the first sample, found {len(rows)}")
 
     def _belief(self, b: _Fields) -> RobotBelief:
-        odom = b.numbers("odom", 3, "[x, y, yaw]")
-        odom_twist = b.numbers("odom_twist", 2, "[linear, angular]")
-        laser_min = b.number("laser_min", low=0.0)
-        scan = None
-        if b.data["scan"] is not None:
-            scan = self._scan(b.fields("scan", _SCAN_KEYS, "a laser scan (a JSON object, or "
-                                                           "null)"))
-        nav_state = NavState(b.choice("nav_state", NAV_STATES))
-        task = b.optional_text("task")
-        cmd = b.numbers("cmd", 2, "[linear, angular]")
-        return RobotBelief(odom, odom_twist, laser_min, scan,  # type: ignore[arg-type]
-                           nav_state, task, cmd)  # type: ignore[arg-type]
+        """The belief of the collected data; ``UNCOLLECTED``'s values for the rest."""
+        u = UNCOLLECTED
+        odom, odom_twist = u.odom, u.odom_twist
+        laser_min, scan = u.laser_min, u.scan
+        nav_state, task, cmd = u.nav_state, u.task, u.cmd
+        if "odometry" in self.data:
+            odom = b.numbers("odom", 3, "[x, y, yaw]")  # type: ignore[assignment]
+            odom_twist = b.numbers("odom_twist", 2, "[linear, angular]")  # type: ignore[assignment]
+        if "laser" in self.data:
+            laser_min = b.number("laser_min", low=0.0)
+            if b.data["scan"] is not None:
+                scan = self._scan(b.fields("scan", _SCAN_KEYS, "a laser scan (a JSON object, "
+                                                               "or null)"))
+        if "nav_state" in self.data:
+            nav_state = NavState(b.choice("nav_state", NAV_STATES))
+            task = b.optional_text("task")
+            cmd = b.numbers("cmd", 2, "[linear, angular]")  # type: ignore[assignment]
+        return RobotBelief(odom, odom_twist, laser_min, scan, nav_state, task, cmd)
 
     @staticmethod
     def _scan(s: _Fields) -> LaserScan:
@@ -571,7 +622,7 @@ class TraceWriter:
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._file = open_output(self.partial)  # never written through a link
         self._file.write(_dumps(data) + "\n")
-        self._rules = _StreamRules(len(header.objects))
+        self._rules = _StreamRules(len(header.objects), header.data)
         self._line = 1
 
     @staticmethod
@@ -585,7 +636,7 @@ class TraceWriter:
     def feed(self, sample: Sample) -> None:
         assert self._file is not None and self._rules is not None, "start() first"
         line = _sample_json(sample, self._changed(sample.poses, self._poses),
-                            self._changed(sample.twists, self._twists))
+                            self._changed(sample.twists, self._twists), self._rules.data)
         try:
             self._rules.sample(line, f"{self.partial}:{self._line + 1}")
         except TraceError as exc:
@@ -743,7 +794,7 @@ def read_trace(path: str | Path) -> tuple[StreamHeader, Iterator[Sample]]:
     except BaseException:
         handle.close()
         raise
-    return header, _samples(handle, _StreamRules(len(header.objects)), path)
+    return header, _samples(handle, _StreamRules(len(header.objects), header.data), path)
 
 
 def read_trace_end(path: str | Path) -> tuple[float, str, str] | None:

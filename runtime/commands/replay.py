@@ -6,8 +6,9 @@ DIR/events.csv, DIR/summary.json, DIR/automata/automata.py and DIR/report.html (
 page, drawn from the trace; its map needs the run's world/ folder beside the trace). Prints
 the results on stdout as `rei run` does (``print_results``: the same lines, --quiet and
 --verbose), diagnostics on stderr. Exit status: 0 every requirement passed, 1 one failed or
-was inconclusive, 2 invalid input (a bad .vepl or an unreadable trace), 3 a monitor error or a
-recorded run error, 130 a recorded interrupted run.
+was inconclusive, 2 invalid input (a bad .vepl, an unreadable trace, or a .vepl whose queries
+read data the trace does not carry: VEPL-DATA), 3 a monitor error or a recorded run error, 130
+a recorded interrupted run.
 """
 
 from __future__ import annotations
@@ -32,7 +33,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                     "Results go to stdout, diagnostics to stderr.")
     parser.add_argument("trace", type=Path, metavar="TRACE", help="a trace.jsonl file")
     parser.add_argument("--vepl", type=Path, default=None, metavar="FILE",
-                        help="the specification (default: REI's default.vepl)")
+                        help="the specification (default: REI's default.vepl); its queries "
+                             "may read only the data the trace carries (its header's "
+                             "\"data\"), else exit 2")
     parser.add_argument("--functions", default=None, metavar="MODULE",
                         help="Python module (dotted name or .py file) defining the user "
                              "functions the specification declares with 'function'")
@@ -45,6 +48,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 def replay(trace: Path, vepl: Path | None, out_dir: Path,
            functions: str | None = None) -> RunSummary:
     """Monitor ``trace`` into ``out_dir``; the summary (also written as summary.json)."""
+    from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
+    from rei.runtime.collector.needs import check_needs  # noqa: PLC0415
     from rei.runtime.collector.trace import read_trace, read_trace_end  # noqa: PLC0415
     from rei.runtime.evaluator.summary import merge_summary, write_summary  # noqa: PLC0415
     from rei.runtime.monitor import MonitorSink, generate_automata  # noqa: PLC0415
@@ -55,6 +60,16 @@ def replay(trace: Path, vepl: Path | None, out_dir: Path,
     automata = generate_automata(vepl, Path(out_dir) / "automata", replace=True)
     user = load_functions(functions, vepl)
     header, samples = read_trace(trace)
+    try:
+        # Never judge on data the recording does not carry (a false PASS): refuse first.
+        check_needs(load_vepl(vepl), header.data, f"the trace '{trace}' to carry",
+                    "record it again with a mission whose monitor block collects that data, or "
+                    "drop the query")
+    except BaseException:
+        close = getattr(samples, "close", None)
+        if close is not None:
+            close()
+        raise
     sink = MonitorSink(vepl, out_dir, functions=user, automata=automata)
     last = 0.0
     try:

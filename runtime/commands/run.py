@@ -101,7 +101,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                              "repeats explore)")
     parser.add_argument("--vepl", type=Path, default=None, metavar="FILE",
                         help="monitoring specification: queries, event patterns, signals with "
-                             "utilities and requirements (default: REI's default.vepl)")
+                             "utilities and requirements (default: REI's default.vepl); its "
+                             "queries may read only the data the mission collects (its "
+                             "monitor block), else exit 2")
     parser.add_argument("--functions", default=None, metavar="MODULE",
                         help="Python module (dotted name or .py file) defining the user "
                              "functions the specification declares with 'function'")
@@ -176,7 +178,9 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
     the caller too. `rei run` supervises it instead (``rei.runtime.supervisor.supervise``).
     """
     from rei.generators.output import open_output  # noqa: PLC0415
+    from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
     from rei.runtime.collector import TraceWriter, load_monitor_config  # noqa: PLC0415
+    from rei.runtime.collector.needs import check_needs  # noqa: PLC0415
     from rei.runtime.evaluator import merge_summary, write_summary  # noqa: PLC0415
     from rei.runtime.monitor import MonitorSink, generate_automata  # noqa: PLC0415
     from rei.runtime.monitor.functions import load_functions  # noqa: PLC0415
@@ -199,6 +203,10 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
         probe.begin(mission.name, mission.world.name)
     manifest = load_manifest(world_dir)
     monitor_config = load_monitor_config(world_dir)
+    if monitor:
+        # Never judge on data the collector will not forward (a false PASS): refuse first.
+        check_needs(load_vepl(vepl), monitor_config.data, f"the mission '{mission.name}' to "
+                    f"collect", "name that data in the mission's monitor block, or drop the query")
     robot = make_controller(controller)
     config = RunConfig(seed=seed, physics_rate=physics_rate, duration=duration,
                        watchdog=watchdog, odom_drift=odom_drift, laser_noise=laser_noise,

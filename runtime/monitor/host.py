@@ -250,8 +250,9 @@ class MonitorSink:
     """A sample sink that monitors a run with the automata of a .vepl file.
 
     ``MonitorSink(vepl, out_dir)``: ``vepl`` None means the default specification; the
-    automata are generated into ``out_dir/automata/`` and loaded at ``start``; ``finish``
-    writes ``out_dir/events.csv`` and keeps the result (``self.result``).
+    automata are generated into ``out_dir/automata/`` and loaded at ``start``, which refuses
+    (``LanguageError``, VEPL-DATA) a specification reading data the header does not name;
+    ``finish`` writes ``out_dir/events.csv`` and keeps the result (``self.result``).
     """
 
     def __init__(self, vepl: str | Path | None, out_dir: str | Path,
@@ -265,6 +266,13 @@ class MonitorSink:
         self.result: MonitorResult | None = None
 
     def start(self, header: StreamHeader) -> None:
+        from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
+        from rei.runtime.collector.needs import check_needs  # noqa: PLC0415
+
+        # `rei run` and `rei replay` refuse this earlier; a stream from elsewhere is refused
+        # here, before any verdict: never judged on data it does not carry.
+        check_needs(load_vepl(self.vepl), header.data, "the stream to carry",
+                    "collect that data, or drop the query")
         self.out_dir.mkdir(parents=True, exist_ok=True)
         path = self.automata or generate_automata(self.vepl, self.out_dir / "automata")
         self.host = AutomataHost(load_generated(path), header, self.functions)

@@ -20,9 +20,10 @@ CORPUS_FILES = sorted(p for folder in (CORPUS, VEPL_CORPUS) for p in folder.iter
 
 # Rules whose inputs cannot be written as a corpus file; tests/lang/test_input_edges.py covers
 # them (INTERNAL: tests/lsp/test_lsp_robustness.py), and tests/monitor/test_user_functions.py
-# VEPL-FUNCTION (it needs a Python module).
+# VEPL-FUNCTION (it needs a Python module), tests/runtime/test_collected_data.py VEPL-DATA (it
+# needs a mission or a trace beside the .vepl).
 COVERED_ELSEWHERE = {"INPUT-READ", "INPUT-KIND", "INPUT-EMPTY", "INPUT-SIZE", "INPUT-ENCODING",
-                     "SYNTAX-DEPTH", "INTERNAL", "VEPL-FUNCTION"}
+                     "SYNTAX-DEPTH", "INTERNAL", "VEPL-FUNCTION", "VEPL-DATA"}
 
 
 def expectation(path: Path) -> tuple[str, int]:

@@ -122,11 +122,11 @@ def test_the_laser_mount_travels_in_the_header_and_a_bad_one_is_refused(tmp_path
         read_trace(path)
 
 
-def test_the_new_fields_of_schema_3_roundtrip(tmp_path: Path) -> None:
+def test_the_new_fields_of_schema_3_and_4_roundtrip(tmp_path: Path) -> None:
     path = tmp_path / "trace.jsonl"
     write(path, _header(), _samples(), 0.4)
     header, rows = read_trace(path)
-    assert header.mission_facts == FACTS and header.version == SCHEMA_VERSION == 3
+    assert header.mission_facts == FACTS and header.version == SCHEMA_VERSION == 4
     samples = list(rows)
     assert [s.contacts for s in samples] == [(), (), (1,), (0, 1), ()]
     assert samples[4].belief.cmd == (2.0 / 3 * 4, -0.1 * 4)
@@ -231,6 +231,6 @@ def test_a_schema_2_trace_is_refused_with_a_hint(tmp_path: Path) -> None:
     path = tmp_path / "trace.jsonl"
     write(path, _header(), _samples(), 0.4)
     _corrupt_sample(path, 1, _set("version", 2))
-    with pytest.raises(TraceError, match="sample schema 3, found 1 with schema 2 .*record it "
-                                         "again"):
+    with pytest.raises(TraceError, match=r"sample schema 4 \(or 3\), found 1 with schema 2 "
+                                         r".*record it again"):
         read_trace(path)
