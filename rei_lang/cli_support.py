@@ -14,7 +14,7 @@ import pkgutil
 import sys
 from collections.abc import Callable, Sequence
 
-from rei.lang.errors import LanguageError, ReiError
+from rei.lang.errors import LanguageError, ReiError, printable_lines
 
 EXIT_OK = 0
 EXIT_FAILED = 1
@@ -51,7 +51,8 @@ def run_main(parser: argparse.ArgumentParser, argv: Sequence[str] | None) -> int
             print(diagnostic, file=sys.stderr)
         return EXIT_BAD_INPUT
     except ReiError as exc:
-        print(f"{parser.prog}: error: {exc}", file=sys.stderr)
+        # a message may quote the user's input (a path, a name): shown, never interpreted
+        print(f"{parser.prog}: error: {printable_lines(str(exc))}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         print(f"{parser.prog}: interrupted", file=sys.stderr)

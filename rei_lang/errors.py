@@ -31,6 +31,11 @@ def printable(text: str) -> str:
         else f"\\u{ord(m.group(0)):04x}", text)
 
 
+def printable_lines(text: str) -> str:
+    """``printable`` line by line: the line breaks of a message stay line breaks."""
+    return "\n".join(map(printable, text.split("\n")))
+
+
 class Severity(StrEnum):
     ERROR = "error"
     WARNING = "warning"

@@ -363,7 +363,7 @@ def child_main(argv: list[str]) -> int:
     """The child: run the request, report to the supervisor, return the exit status."""
     fd, text = int(argv[0]), argv[1]
     channel = _Channel(fd)
-    from rei.lang.errors import LanguageError, ReiError  # noqa: PLC0415
+    from rei.lang.errors import LanguageError, ReiError, printable_lines  # noqa: PLC0415
     from rei.runtime.commands.run import execute_request  # noqa: PLC0415
 
     request = RunRequest.from_json(text)
@@ -375,7 +375,7 @@ def child_main(argv: list[str]) -> int:
             print(diagnostic, file=sys.stderr)
         status = 2
     except ReiError as exc:
-        print(f"rei run: error: {exc}", file=sys.stderr)
+        print(f"rei run: error: {printable_lines(str(exc))}", file=sys.stderr)
         status = 2
     except KeyboardInterrupt:
         if not channel.broken:

@@ -48,3 +48,28 @@ def test_a_fifo_or_a_device_is_refused_unread(tmp_path: Path, module: str, argv:
     done = command(module, *(a.format(**fill) for a in argv))
     assert done.returncode == 2, done.stderr
     assert done.stderr.strip().splitlines() == [said.format(**fill)]
+
+
+def test_control_characters_from_the_input_are_shown_not_interpreted(tmp_path: Path) -> None:
+    # An ESC sequence in a controller name reached the terminal raw (it can recolour or
+    # clear it, or hide a line of a CI log).
+    done = command("rei.runtime.cli", "run", "examples/simple_wall/simple_wall.mission",
+                   "-o", str(tmp_path / "out"), "--controller", "\x1b[2Jevil:X")
+    assert done.returncode == 2
+    assert "\x1b" not in done.stderr and "\\x1b[2Jevil" in done.stderr
+
+
+def test_a_recordings_texts_are_shown_not_interpreted(tmp_path: Path) -> None:
+    from rei.runtime.commands.run import run_into
+
+    run = tmp_path / "run"
+    run_into(REPO / "examples/simple_wall/simple_wall.mission", run, controller="teleop",
+             duration=2.0)
+    lines = (run / "trace.jsonl").read_text(encoding="utf-8").splitlines()
+    lines[-1] = lines[-1].replace('"reason":"', '"reason":"\\u001b[31m', 1)
+    assert "\\u001b[31m" in lines[-1]
+    trace = tmp_path / "trace.jsonl"
+    trace.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    done = command("rei.runtime.cli", "replay", str(trace), "-o", str(tmp_path / "replay"))
+    assert done.returncode in (0, 1), done.stderr
+    assert "\x1b" not in done.stdout and "\\x1b[31m" in done.stdout

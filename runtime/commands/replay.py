@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import cast
 
 from rei.lang.cli_support import EXIT_RUN_ERROR
+from rei.lang.errors import printable_lines
 from rei.runtime.commands.run import add_verbosity, print_results, write_page
 from rei.runtime.results import RESULTS_VERSION, Outcome, RunSummary
 
@@ -100,7 +101,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         summary = replay(args.trace, args.vepl, args.output, args.functions)
     except MonitorError as exc:
-        print(f"rei replay: error: {exc}", file=sys.stderr)
+        print(f"rei replay: error: {printable_lines(str(exc))}", file=sys.stderr)
         return EXIT_RUN_ERROR
     page = write_page(args.output, args.trace)
     # the one pass rule of `rei run`; a recorded run error stays an error

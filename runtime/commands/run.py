@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any, TextIO
 
 from rei.lang.cli_support import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_RUN_ERROR
+from rei.lang.errors import printable_lines
 from rei.runtime.commands.run_config import apply_run_config, defer_defaults
 from rei.runtime.errors import RunError
 from rei.runtime.results import RunSummary, judge
@@ -375,19 +376,23 @@ def print_results(summary: RunSummary, out_dir: Path, *, monitored: bool = True,
     """Print the run's results on stdout and return its exit status (``exit_code``):
     the outcome, the requirements (``verdict_lines``), the page and the final verdict line;
     with ``quiet`` the final line alone."""
-    out = stream if stream is not None else sys.stdout
+    target = stream if stream is not None else sys.stdout
+
+    def say(line: str) -> None:
+        # names and reasons come from the run (or a recording): shown, never interpreted
+        print(printable_lines(line), file=target)
+
     if not quiet:
         m = summary.measurements
         if "tasks_succeeded" in m:
-            print(f"{summary.mission}: {summary.outcome} ({summary.reason}) after "
-                  f"{summary.duration:.1f} s simulated, {m['tasks_succeeded']} task(s) "
-                  f"succeeded, {m['tasks_failed']} failed, {m['collisions']} collision(s)",
-                  file=out)
+            say(f"{summary.mission}: {summary.outcome} ({summary.reason}) after "
+                f"{summary.duration:.1f} s simulated, {m['tasks_succeeded']} task(s) "
+                f"succeeded, {m['tasks_failed']} failed, {m['collisions']} collision(s)")
         else:
-            print(f"{summary.mission}: {summary.outcome} ({summary.reason})", file=out)
+            say(f"{summary.mission}: {summary.outcome} ({summary.reason})")
         for line in verdict_lines(summary, verbose):
-            print(line, file=out)
+            say(line)
         if page is not None:
-            print(f"  run page: {page}", file=out)
-    print(final_line(summary, out_dir, monitored), file=out)
+            say(f"  run page: {page}")
+    say(final_line(summary, out_dir, monitored))
     return exit_code(summary, monitored)
