@@ -57,7 +57,8 @@ def add_verbosity(parser: argparse.ArgumentParser) -> None:
                        help="no progress; print only the final verdict line (on stdout)")
     group.add_argument("-v", "--verbose", action="store_true",
                        help="more detail: every requirement with its reason, passed ones "
-                            "too, and the mission's events as they happen (on stderr)")
+                            "too (rei run also shows the mission's events as they happen, "
+                            "on stderr)")
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:

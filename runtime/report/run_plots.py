@@ -160,7 +160,7 @@ def timeline(events: Sequence[MissionEvent], signals: Sequence[SignalRow], end: 
                                label="positive utility" if positive else "negative utility")
     ax_signals.set_yticks(range(len(names)), [n.removeprefix("SIG_") for n in names],
                           fontsize=7)
-    ax_signals.set_ylim(len(names) - 0.5, -0.5)
+    ax_signals.set_ylim(max(len(names), 1) - 0.5, -0.5)  # no signal: one empty lane
     ax_signals.set_ylabel("signals", fontsize=8)
     ax_signals.grid(axis="y", color="#e9ecef", linewidth=0.6)
     _mark_failures(ax_signals, failures, False, end)

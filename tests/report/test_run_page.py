@@ -129,6 +129,17 @@ def test_replay_writes_the_page_and_no_monitor_does_not(run_dir: Path, tmp_path:
     assert (bare / "trace.jsonl").is_file() and not (bare / "report.html").exists()
 
 
+def test_a_specification_without_signals_draws_its_page_without_a_warning(
+        run_dir: Path, tmp_path: Path) -> None:
+    # No signal lane made matplotlib warn about identical y limits (warnings are errors here).
+    vepl = tmp_path / "quiet.vepl"
+    vepl.write_text("specification quiet\nquery near() { laser_min < 0.1 }\n", encoding="utf-8")
+    out = tmp_path / "replayed"
+    assert main(["replay", str(run_dir / "trace.jsonl"), "--vepl", str(vepl), "-o", str(out),
+                 "--quiet"]) == 1  # nothing to judge: unjudged is never a pass
+    assert (out / "report.html").is_file()
+
+
 @pytest.mark.slow
 def test_campaign_report_links_a_failed_run_to_its_page(run_dir: Path, tmp_path: Path
                                                         ) -> None:
