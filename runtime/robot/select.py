@@ -27,8 +27,8 @@ def make_controller(spec: str, folder: str | None = None) -> HostedController:
     """A fresh controller for ``spec`` running in its own process (stop it with ``close``;
     a user's module is imported from ``folder``, default the current one); RunError naming
     the choices when unknown, the same as ``load_controller``'s."""
-    if spec in BUILT_IN or ":" not in spec or spec.startswith("teleop:"):
-        load_controller(spec)  # our own controllers: a mistyped name is said without a process
+    if spec not in BUILT_IN and (":" not in spec or spec.startswith("teleop:")):
+        load_controller(spec)  # a mistyped built-in name is said without starting a process
     return HostedController(spec, folder)
 
 
