@@ -53,7 +53,7 @@ os.environ["PYTHONPATH"] = os.pathsep.join(
 
 from bench.defects import DEFECTS  # noqa: E402
 from rei.runtime.campaign import LocalEngine, RunRecord, plan_campaign, run_campaign  # noqa: E402
-from rei.runtime.robot import make_controller  # noqa: E402
+from rei.runtime.robot import load_controller  # noqa: E402
 
 REFERENCE = "reference"
 TASK = "task:"
@@ -121,7 +121,7 @@ class CampaignOutcome:
 def navigators(only: list[str] | None) -> list[Navigator]:
     found = [Navigator(REFERENCE, "correct", REFERENCE, "nothing (the correct navigator)")]
     for d in DEFECTS:
-        doc = type(make_controller(d.spec)).__doc__ or ""
+        doc = type(load_controller(d.spec)).__doc__ or ""
         expected = " ".join(doc.split("Expected catcher:", 1)[-1].split("\n\n")[0].split())
         found.append(Navigator(d.name, d.kind, d.spec, expected))
     if only:

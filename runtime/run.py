@@ -369,6 +369,9 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
             reason = (f"{len(failed)} of {len(executor.results)} tasks failed" if failed
                       else f"all {len(executor.results)} tasks succeeded")
         say(f"t={now:9.3f}  outcome {outcome}: {reason}")
+        # The robot under test is stopped (a hosted one's processes killed and reaped) before
+        # any output is finished: nothing it started can write after the outputs are.
+        guard.close()
         if probe is not None:
             probe.end(now)
         collector.finish(now, outcome, reason)

@@ -1,6 +1,7 @@
 """The robot under test: controller protocol, built-in controllers, conformance checker."""
 
 from rei.runtime.robot.conformance import check_controller
+from rei.runtime.robot.host import HostedController
 from rei.runtime.robot.protocol import (
     Controller,
     ControllerContext,
@@ -11,8 +12,8 @@ from rei.runtime.robot.protocol import (
     Observation,
     VelocityCommand,
 )
-from rei.runtime.robot.select import BUILT_IN, make_controller
+from rei.runtime.robot.select import BUILT_IN, load_controller, make_controller
 
 __all__ = ["BUILT_IN", "Controller", "ControllerContext", "GoalFeedback", "GoalTracker",
-           "MapObstacle", "NavGoal", "Observation", "VelocityCommand", "check_controller",
-           "make_controller"]
+           "HostedController", "MapObstacle", "NavGoal", "Observation", "VelocityCommand",
+           "check_controller", "load_controller", "make_controller"]

@@ -1,4 +1,11 @@
-"""Choosing the robot under test: `reference`, `teleop`, `teleop:circle`, or `module:Class`."""
+"""Choosing the robot under test: `reference`, `teleop`, `teleop:circle`, or `module:Class`.
+
+``make_controller`` starts the robot under test in its own process (``HostedController``,
+see ``rei.runtime.robot.host``): `rei run` and campaigns use it, so a controller cannot end,
+stall or falsify its own test. ``load_controller`` makes the same controller in this process
+(the host itself uses it; so may a library caller that trusts the controller, e.g. to read
+its class or to call it without the cost of messages).
+"""
 
 from __future__ import annotations
 
@@ -8,6 +15,7 @@ import sys
 
 from rei.lang.suggest import did_you_mean
 from rei.runtime.errors import RunError
+from rei.runtime.robot.host import HostedController
 from rei.runtime.robot.protocol import Controller
 from rei.runtime.robot.reference import ReferenceNavigator
 from rei.runtime.robot.teleop import SCRIPTS, TeleopController
@@ -15,8 +23,18 @@ from rei.runtime.robot.teleop import SCRIPTS, TeleopController
 BUILT_IN = ("reference", "teleop", *(f"teleop:{s}" for s in sorted(SCRIPTS)))
 
 
-def make_controller(spec: str) -> Controller:
-    """A fresh controller for ``spec``; RunError naming the choices when unknown."""
+def make_controller(spec: str, folder: str | None = None) -> HostedController:
+    """A fresh controller for ``spec`` running in its own process (stop it with ``close``;
+    a user's module is imported from ``folder``, default the current one); RunError naming
+    the choices when unknown, the same as ``load_controller``'s."""
+    if spec not in BUILT_IN and (":" not in spec or spec.startswith("teleop:")):
+        load_controller(spec)  # a mistyped built-in name is said without starting a process
+    return HostedController(spec, folder)
+
+
+def load_controller(spec: str, folder: str | None = None) -> Controller:
+    """A fresh controller for ``spec`` in this process (a user's module imported from
+    ``folder``, default the current one); RunError naming the choices when unknown."""
     if spec == "reference":
         return ReferenceNavigator()
     if spec == "teleop":
@@ -32,8 +50,9 @@ def make_controller(spec: str) -> Controller:
         module_name, _, attr = spec.partition(":")
         # Like `python -m`, a user's controller module is found from the current folder too
         # (the `rei` console script alone would only search the installed packages).
-        if os.getcwd() not in sys.path:
-            sys.path.append(os.getcwd())
+        home = os.getcwd() if folder is None else folder
+        if home not in sys.path:
+            sys.path.append(home)
         try:
             module = importlib.import_module(module_name)
         except ImportError as exc:

@@ -1,18 +1,25 @@
 """Calling the robot under test safely: a hang, an exception or a malformed answer is a fault.
 
-Every call goes to one daemon worker thread and the run waits for its answer at most
+A ``HostedController`` (what ``make_controller`` gives, and so what `rei run` and campaigns
+run) lives in its own process (``rei.runtime.robot.host``): the guard hands it the timeout
+and passes its faults on; a hang, even in C, or the death of that process is then a fault
+with its precise reason, and the controller cannot touch the simulation's memory. Any other
+controller object (a library caller's, ``check_controller``'s) runs in this process: every
+call goes to one daemon worker thread and the run waits for its answer at most
 ``timeout`` seconds of wall time. A call that does not return in time leaves its thread
 behind (a daemon, so it never keeps the process alive) and raises ``ControllerFault``, as does
 a call that raises (``sys.exit()`` included: in the worker it is an exception like any other)
 and an answer that breaks the contract (``checked_command``, ``checked_feedback``: a string, a
 complex number, an array, an int beyond float range, a non-finite number, a feedback of the
 wrong types). The fault is raised where the answer is received, so its reason names the call.
-The run loop turns a fault into the outcome ``error`` with its reason.
+A KeyboardInterrupt raised in the worker is the controller's own (the user's Ctrl-C reaches
+the main thread), so it is a fault too. The run loop turns a fault into the outcome ``error``
+with its reason.
 
-What this thread cannot catch is a call that never gives the interpreter back (a loop in C
-holding the GIL) or that ends the process (``os._exit``, a signal): the main thread is then
-stopped too, so those are caught one level up, by the process that supervises the run
-(``rei.runtime.supervisor``). This module must never import pybullet.
+What this in-process thread cannot catch is a call that never gives the interpreter back (a
+loop in C holding the GIL) or that ends the process (``os._exit``, a signal): the main thread
+is then stopped too, so those are caught one level up, by the process that supervises the
+run (``rei.runtime.supervisor``). This module must never import pybullet.
 """
 
 from __future__ import annotations
@@ -35,7 +42,7 @@ from rei.runtime.robot.protocol import (
 )
 
 
-def _raised(what: str, exc: BaseException) -> str:
+def raised(what: str, exc: BaseException) -> str:
     """The reason for a call that raised; never raises itself (a user's __str__ may)."""
     try:
         text = str(exc)
@@ -52,14 +59,20 @@ class ControllerFault(Exception):
 
 class GuardedController:
     def __init__(self, controller: Controller, timeout: float | None) -> None:
+        from rei.runtime.robot.host import HostedController  # noqa: PLC0415  (it imports us)
+
         self.controller = controller
         self.timeout = timeout
+        self._hosted: HostedController | None = None
+        if isinstance(controller, HostedController):
+            self._hosted = controller
+            controller.timeout = timeout  # it waits for its own answers
         self._jobs: queue.SimpleQueue[tuple[Callable[..., Any], tuple[Any, ...]] | None] = \
             queue.SimpleQueue()
         self._answers: queue.SimpleQueue[tuple[bool, Any]] = queue.SimpleQueue()
         self._broken: str | None = None
         self._worker: threading.Thread | None = None
-        if timeout is not None:
+        if timeout is not None and self._hosted is None:
             self._worker = threading.Thread(target=self._serve, name="rei-controller",
                                             daemon=True)
             self._worker.start()
@@ -78,13 +91,15 @@ class GuardedController:
     def _call(self, what: str, fn: Callable[..., Any], *args: Any) -> Any:
         if self._broken is not None:
             raise ControllerFault(self._broken)
+        if self._hosted is not None:  # its faults are ControllerFaults already
+            return fn(*args)
         if self._worker is None:
             try:
                 return fn(*args)
             except KeyboardInterrupt:
                 raise
             except BaseException as exc:  # noqa: BLE001  (SystemExit too: a fault, not an exit)
-                self._broken = _raised(what, exc)
+                self._broken = raised(what, exc)
                 raise ControllerFault(self._broken) from None
         self._jobs.put((fn, args))
         try:
@@ -93,10 +108,8 @@ class GuardedController:
             self._broken = (f"controller {what}() did not return within the watchdog's "
                             f"{self.timeout:g} s")
             raise ControllerFault(self._broken) from None
-        if not ok:
-            if isinstance(value, KeyboardInterrupt):
-                raise value
-            self._broken = _raised(what, value)
+        if not ok:  # a KeyboardInterrupt here is the controller's own: a fault too
+            self._broken = raised(what, value)
             raise ControllerFault(self._broken)
         return value
 
@@ -107,7 +120,10 @@ class GuardedController:
         return ControllerFault(self._broken)
 
     def close(self) -> None:
-        if self._worker is not None and self._broken is None:
+        """End the controller (once): a hosted one's process group is killed and reaped."""
+        if self._hosted is not None:
+            self._hosted.close()
+        if self._worker is not None and self._broken is None and self._worker.is_alive():
             self._jobs.put(None)
             self._worker.join(timeout=1.0)
 
@@ -127,7 +143,7 @@ class GuardedController:
         except ContractViolation as problem:
             raise self._violated("feedback", problem) from None
         except Exception as exc:  # noqa: BLE001  (a user's subclass whose fields raise)
-            self._broken = _raised("feedback", exc) + " while its answer was read"
+            self._broken = raised("feedback", exc) + " while its answer was read"
             raise ControllerFault(self._broken) from None
 
     def step(self, observation: Observation) -> VelocityCommand:
@@ -137,5 +153,5 @@ class GuardedController:
         except ContractViolation as problem:
             raise self._violated("step", problem) from None
         except Exception as exc:  # noqa: BLE001  (a user's subclass whose fields raise)
-            self._broken = _raised("step", exc) + " while its answer was read"
+            self._broken = raised("step", exc) + " while its answer was read"
             raise ControllerFault(self._broken) from None

@@ -5,10 +5,12 @@ They are importable as `tests.runtime.faulty:NAME`, the way a user names their o
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import sys
 import threading
+from typing import Any
 
 import numpy as np
 
@@ -265,3 +267,122 @@ class LeavesAThread(StopsAtTwenty):
     def reset(self, context: ControllerContext) -> None:
         super().reset(context)
         threading.Thread(target=threading.Event().wait, name="forever").start()
+
+
+class InterruptsItself(_Base):
+    """Raises KeyboardInterrupt from its own code: a fault of the controller, not a Ctrl-C."""
+
+    def fault(self) -> VelocityCommand:
+        raise KeyboardInterrupt
+
+
+class AnswersHugeString(StopsAtTwenty):
+    """Puts 2 MiB of text into its feedback's message: more than one answer may hold."""
+
+    def feedback(self) -> GoalFeedback:
+        fb = self.tracker.feedback()
+        if self.calls >= 19:  # asked before its 20th step
+            return GoalFeedback(fb.state, fb.goal, None, "x" * (2 << 20))
+        return fb
+
+
+class KillsTheSimulation(_Base):
+    """Kills the process that runs the simulation (its host's parent): only the supervisor
+    can report it. A deliberate attack, which running as the same OS user allows."""
+
+    def fault(self) -> VelocityCommand:
+        os.kill(os.getppid(), signal.SIGKILL)
+        return VelocityCommand(0.0, 0.0)
+
+
+class StopsTheSimulation(_Base):
+    """Stops the process that runs the simulation (SIGSTOP to its host's parent): a run
+    that makes no progress, which only the supervisor sees."""
+
+    def fault(self) -> VelocityCommand:
+        os.kill(os.getppid(), signal.SIGSTOP)
+        threading.Event().wait()
+        return VelocityCommand(0.0, 0.0)
+
+
+# The robots that try to falsify their own verdict (issue 13): each drives into the east wall
+# of examples/simple_wall as WallDriver, its honest twin, does, so each must end with the
+# same verdict (FAIL), never a pass.
+
+
+class WallDriver(_Base):
+    """Accepts every goal and drives straight ahead at 0.2 m/s, into the wall."""
+
+    def step(self, observation: Observation) -> VelocityCommand:
+        if self.tracker.state.value == "pending":
+            self.tracker.accept()
+        return VelocityCommand(0.2, 0.0)
+
+
+def _passed(data: dict[str, Any]) -> dict[str, Any]:
+    """A summary's JSON as if the run had gone well and every requirement had passed."""
+    data.update(verdict="pass", outcome="completed", reason="all tasks succeeded")
+    for verdict in data.get("verdicts", []):
+        if isinstance(verdict, dict):
+            verdict["status"] = "pass"
+    return data
+
+
+def _all_pass(path: str) -> None:
+    """Rewrite a summary.json as if every requirement had passed."""
+    try:
+        with open(path, encoding="utf-8") as stream:
+            data = json.load(stream)
+    except (OSError, ValueError):
+        data = {}
+    with open(path, "w", encoding="utf-8") as stream:
+        json.dump(_passed(data), stream)
+
+
+class PatchesTheEvaluator(WallDriver):
+    """In reset(), patches REI's evaluator and verdicts in memory so that every one passes."""
+
+    def reset(self, context: ControllerContext) -> None:
+        super().reset(context)
+        import rei.runtime.evaluator.summary as summary  # noqa: PLC0415
+        import rei.runtime.results as results  # noqa: PLC0415
+
+        original = summary.summary_text
+
+        def passing(value: Any) -> str:
+            return json.dumps(_passed(json.loads(original(value))))
+
+        summary.summary_text = passing
+        results.judge = lambda *args, **kwargs: "pass"
+
+
+class RewritesSummaryAtExit(WallDriver):
+    """Registers an atexit hook, and starts a thread, that rewrite OUT/summary.json as all
+    pass (OUT from $REI_TEST_ATTACK_OUT, as a real attacker would find it)."""
+
+    def reset(self, context: ControllerContext) -> None:
+        super().reset(context)
+        import atexit  # noqa: PLC0415
+
+        target = os.path.join(os.environ.get("REI_TEST_ATTACK_OUT", "."), "summary.json")
+        atexit.register(_all_pass, target)
+
+        def watch() -> None:
+            while not os.path.exists(target):
+                threading.Event().wait(0.005)
+            threading.Event().wait(0.05)
+            _all_pass(target)
+
+        threading.Thread(target=watch, daemon=True).start()
+
+
+class WritesExitEverywhere(WallDriver):
+    """Writes the supervisor's "exit 0" report into every file descriptor it can find."""
+
+    def reset(self, context: ControllerContext) -> None:
+        super().reset(context)
+        for name in os.listdir("/proc/self/fd"):
+            try:
+                os.write(int(name), b'{"exit": 0}\n')
+            except OSError:
+                pass

@@ -9,6 +9,7 @@ breaks the contract at its 20th control step (t = 1.9 s).
 from __future__ import annotations
 
 import json
+import os
 import signal
 import subprocess
 import sys
@@ -63,12 +64,19 @@ MISBEHAVIOURS = [
     ("NaNFeedback", "feedback.distance_remaining: expected a finite real number, found nan"),
     ("Hanging", "step() did not return within the watchdog's 0.5 s"),
     ("SpinsInPython", "step() did not return within the watchdog's 0.5 s"),
-    ("HangsInC", "the simulation stopped responding at t≈1.9 s: no progress for 5.5 s"),
-    ("ExitsProcess", "the simulation process exited with status 0 at t≈1.9 s without a "
-                     "result"),
-    ("KillsProcess", "the simulation process was killed by signal 9 (SIGKILL) at t≈1.9 s"),
+    # A hang in C holding the interpreter lock stalls only the controller's process now.
+    ("HangsInC", "step() did not return within the watchdog's 0.5 s"),
+    ("ExitsProcess", "the controller's process exited with status 0 during step()"),
+    ("KillsProcess", "the controller's process was killed by signal 9 (SIGKILL) during step()"),
     ("CallsSysExit", "controller step() tried to end the process (SystemExit: 0)"),
     ("MutatesScan", "step() raised ValueError: assignment destination is read-only"),
+    ("InterruptsItself", "controller step() raised KeyboardInterrupt"),
+    ("AnswersHugeString", "controller feedback() sent an answer longer than 1048576 bytes"),
+    # Deliberate attacks on the simulation's process: the supervisor still reports them.
+    ("KillsTheSimulation", "the simulation process was killed by signal 9 (SIGKILL) at "
+                           "t≈1.9 s"),
+    ("StopsTheSimulation", "the simulation stopped responding at t≈1.9 s: no progress for "
+                           "5.5 s"),
 ]
 
 
@@ -112,7 +120,7 @@ def test_a_controller_that_writes_into_its_scan_copy_changes_nothing_recorded(
 
 def test_a_hang_after_the_trace_began_leaves_the_partial_trace_and_a_log_line(
         tmp_path: Path) -> None:
-    done = rei_run(tmp_path, "KillsProcess")
+    done = rei_run(tmp_path, "KillsTheSimulation")
     assert done.returncode == 3
     assert not (tmp_path / "trace.jsonl").exists()  # a trace that exists is complete
     assert (tmp_path / "trace.jsonl.partial").exists()
@@ -124,7 +132,7 @@ def test_a_hang_after_the_trace_began_leaves_the_partial_trace_and_a_log_line(
 def test_a_stale_summary_of_an_earlier_run_never_survives_a_dead_run(tmp_path: Path) -> None:
     assert rei_run(tmp_path, "Idle", "--quiet").returncode == 1
     assert summary_of(tmp_path)["outcome"] == "timeout"
-    assert rei_run(tmp_path, "ExitsProcess", "--quiet").returncode == 3
+    assert rei_run(tmp_path, "KillsTheSimulation", "--quiet").returncode == 3
     assert summary_of(tmp_path)["outcome"] == "error"
     assert not (tmp_path / "events.csv").exists() and not (tmp_path / "report.html").exists()
 
@@ -212,11 +220,12 @@ def test_the_conformance_checker_reports_what_would_end_a_run_in_error() -> None
 
 
 def test_a_second_ctrl_c_stops_a_simulation_that_cannot_end_cleanly(tmp_path: Path) -> None:
-    """The first Ctrl-C is passed on; a controller holding the interpreter cannot hear it,
+    """The first Ctrl-C is passed on; a simulation stopped by its controller cannot hear it,
     so the second one kills the simulation and the run ends interrupted all the same."""
     process = subprocess.Popen(
         [sys.executable, "-m", "rei.runtime.cli", "run", str(NAVIGATION), "-o", str(tmp_path),
-         "--controller", "tests.runtime.faulty:HangsInC", "--watchdog", "60", "--quiet"],
+         "--controller", "tests.runtime.faulty:StopsTheSimulation", "--watchdog", "60",
+         "--quiet"],
         cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     log = tmp_path / "run.log"
     started = time.monotonic()
@@ -232,3 +241,97 @@ def test_a_second_ctrl_c_stops_a_simulation_that_cannot_end_cleanly(tmp_path: Pa
     assert process.returncode == 130
     assert summary_of(tmp_path)["outcome"] == "interrupted"
     assert out.splitlines()[-1].startswith("verdict: INTERRUPTED (interrupted by the user")
+
+
+WALL = EXAMPLES / "simple_wall" / "simple_wall.mission"
+
+
+def rei_run_wall(out: Path, controller: str) -> subprocess.CompletedProcess[str]:
+    """`rei run` of the wall example, with $REI_TEST_ATTACK_OUT naming the output folder."""
+    return subprocess.run(
+        [sys.executable, "-m", "rei.runtime.cli", "run", str(WALL), "-o", str(out),
+         "--duration", "20", "--controller", f"tests.runtime.faulty:{controller}", "--quiet"],
+        cwd=REPO, capture_output=True, text=True, timeout=SAFETY_LIMIT, check=False,
+        env={**os.environ, "REI_TEST_ATTACK_OUT": str(out)})
+
+
+@pytest.fixture(scope="module")
+def honest_wall_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The honest twin: drives into the wall and fails."""
+    out = tmp_path_factory.mktemp("honest")
+    done = rei_run_wall(out, "WallDriver")
+    assert done.returncode == 1, done.stderr
+    assert summary_of(out)["verdict"] == "fail"
+    return out
+
+
+@pytest.mark.parametrize("controller", ["PatchesTheEvaluator", "RewritesSummaryAtExit"])
+def test_a_controller_cannot_falsify_its_own_verdict(controller: str, honest_wall_run: Path,
+                                                     tmp_path: Path) -> None:
+    """It runs in its own process: patching REI's memory or hooking its own exit changes
+    nothing the simulation writes. Same commands as its honest twin: the same bytes."""
+    done = rei_run_wall(tmp_path, controller)
+    assert done.returncode == 1, done.stderr
+    assert done.stdout.startswith("verdict: FAIL")
+    summary = summary_of(tmp_path)
+    honest = summary_of(honest_wall_run)
+    assert summary["verdict"] == "fail"
+    assert summary["verdicts"] == honest["verdicts"]
+    for name in ("trace.jsonl", "events.csv"):
+        assert (tmp_path / name).read_bytes() == (honest_wall_run / name).read_bytes(), name
+
+
+def test_a_controller_cannot_report_an_exit_status_for_the_simulation(tmp_path: Path) -> None:
+    """Its process holds no descriptor of the supervisor's pipe; what it writes into its own
+    answer pipe is nonsense to the simulation: a run error, never a pass."""
+    done = rei_run_wall(tmp_path, "WritesExitEverywhere")
+    assert done.returncode == 3, done.stderr
+    summary = summary_of(tmp_path)
+    assert summary["verdict"] == "error"
+    assert "reset() answered nonsense" in str(summary["reason"]), summary["reason"]
+
+
+def test_the_controllers_process_is_gone_when_the_run_ends(tmp_path: Path) -> None:
+    """A hosted controller's whole process group is killed and reaped by close()."""
+    from rei.runtime.robot import make_controller
+
+    controller = make_controller("tests.runtime.faulty:LeavesAThread", folder=str(REPO))
+    pid = controller.pid
+    controller.close()
+    with pytest.raises(ProcessLookupError):
+        os.killpg(pid, 0)
+
+
+@pytest.mark.parametrize(("line", "message"), [
+    (b'{"ok": [NaN, 0.0]}', "NaN is not a number"),
+    (b'{"ok": [Infinity, 0.0]}', "Infinity is not a number"),
+    (b'{"ok": 1, "raised": "x"}', "expected a JSON object with one key"),
+    (b"\x80\x05K\x01.", "not a JSON answer"),  # a pickle is never read
+    (b"[" * 100000, "not a JSON answer"),
+    (b'{"ok": ' + b"1" * 5000 + b"}", "not a JSON answer"),
+])
+def test_answers_from_the_host_are_plain_json(line: bytes, message: str) -> None:
+    from rei.runtime.robot.host import decode_answer
+
+    with pytest.raises(ValueError, match=message):
+        decode_answer(line)
+
+
+def test_answers_are_decoded_into_what_the_contract_checks() -> None:
+    from rei.runtime.messages import NavState
+    from rei.runtime.robot.host import command_of, feedback_of
+
+    fb = feedback_of({"state": "active", "goal": "g", "distance": "inf", "message": ""})
+    assert fb == GoalFeedback(NavState.ACTIVE, "g", float("inf"), "")
+    assert checked_feedback(fb) == fb
+    assert command_of([0.1, 0]) == VelocityCommand(0.1, 0)
+    for bad in ([True, 0.0], ["0.1", 0.0], [0.1], {"linear": 0.1}):
+        with pytest.raises(ValueError, match="expected"):
+            command_of(bad)
+    for answer in ({"state": "flying", "goal": None, "distance": None, "message": ""},
+                   {"state": ["active"], "goal": None, "distance": None, "message": ""},
+                   {"state": "active", "goal": 3, "distance": None, "message": ""},
+                   {"state": "active", "goal": None, "distance": "far", "message": ""},
+                   {"state": "active"}):
+        with pytest.raises(ValueError):
+            feedback_of(answer)

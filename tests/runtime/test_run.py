@@ -112,12 +112,16 @@ def test_the_cli_reports_a_run_error_with_exit_status_3(tmp_path: Path) -> None:
     assert status == 3
 
 
-def test_an_interrupted_run_leaves_consistent_outputs_marked_incomplete(tmp_path: Path) -> None:
+def test_a_controller_raising_keyboardinterrupt_is_a_run_error_not_a_ctrl_c(
+        tmp_path: Path) -> None:
+    """Its own KeyboardInterrupt is the controller's fault (Ctrl-C reaches the simulation,
+    never the controller's process); the outputs end consistently, with the error."""
     status = main(["run", str(NAVIGATION), "-o", str(tmp_path), "--controller",
                    "tests.runtime.faulty:Interrupting", "--duration", "10", "--quiet"])
-    assert status == 130
+    assert status == 3
     summary = json.loads((tmp_path / "summary.json").read_text())
-    assert summary["outcome"] == "interrupted" and summary["measurements"]["incomplete"] is True
+    assert summary["outcome"] == "error" and summary["measurements"]["incomplete"] is False
+    assert "step() raised KeyboardInterrupt" in summary["reason"]
     header, rows = read_trace(tmp_path / "trace.jsonl")
     assert [e.kind for s in rows for e in s.events][-1] == "end"
 
