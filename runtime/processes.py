@@ -35,6 +35,23 @@ PR_SET_PDEATHSIG = 1
 Stream = int | IO[bytes] | None
 
 
+PR_SET_DUMPABLE = 4
+"""From <linux/prctl.h>."""
+
+
+def keep_private() -> None:
+    """Make this process non-dumpable (Linux): other processes of the same user — a robot
+    under test among them — can then neither trace it nor open its descriptors through
+    /proc/PID/fd (the supervisor's pipe), and it leaves no core file. Elsewhere nothing."""
+    if not sys.platform.startswith("linux"):
+        return
+    prctl = ctypes.CDLL(None, use_errno=True).prctl
+    prctl.argtypes = [ctypes.c_int, ctypes.c_ulong, ctypes.c_ulong, ctypes.c_ulong,
+                      ctypes.c_ulong]
+    prctl.restype = ctypes.c_int
+    prctl(PR_SET_DUMPABLE, 0, 0, 0, 0)
+
+
 def die_with_parent() -> Callable[[], None] | None:
     """A ``preexec_fn`` that has the kernel SIGKILL the child when the thread that started it
     ends; None where there is no such request (not Linux: stop children yourself)."""

@@ -49,7 +49,7 @@ from subprocess import Popen
 from types import FrameType
 from typing import Any
 
-from rei.runtime.processes import child_status, start_child, stop_child
+from rei.runtime.processes import child_status, keep_private, start_child, stop_child
 
 SETUP_LIMIT = 120.0
 """Wall-clock seconds REI's own set-up or output writing may go without a report."""
@@ -362,6 +362,7 @@ def _save_traceback(out_dir: Path, exc: BaseException) -> str:
 def child_main(argv: list[str]) -> int:
     """The child: run the request, report to the supervisor, return the exit status."""
     fd, text = int(argv[0]), argv[1]
+    keep_private()  # the robot under test cannot reach this pipe through /proc
     channel = _Channel(fd)
     from rei.lang.errors import LanguageError, ReiError, printable_lines  # noqa: PLC0415
     from rei.runtime.commands.run import execute_request  # noqa: PLC0415

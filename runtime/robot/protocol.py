@@ -180,6 +180,18 @@ def checked_command(value: Any) -> VelocityCommand:
                            real_number(value.angular, "command.angular"))
 
 
+def _is_text(value: Any) -> bool:
+    """A string that can be written to a log, a trace and a terminal: a lone surrogate
+    ('\\ud800') cannot, and used to end the run as an internal error of REI."""
+    if not isinstance(value, str):
+        return False
+    try:
+        value.encode("utf-8")
+    except UnicodeEncodeError:
+        return False
+    return True
+
+
 def checked_feedback(value: Any) -> GoalFeedback:
     """A plain ``GoalFeedback`` with fields of the promised types, or ContractViolation."""
     if not isinstance(value, GoalFeedback):
@@ -187,7 +199,7 @@ def checked_feedback(value: Any) -> GoalFeedback:
     if not isinstance(value.state, NavState):
         raise ContractViolation(f"feedback.state: expected a NavState, found "
                                 f"{_shown(value.state)}")
-    if value.goal is not None and not isinstance(value.goal, str):
+    if value.goal is not None and not _is_text(value.goal):
         raise ContractViolation(f"feedback.goal: expected a goal name or None, found "
                                 f"{_shown(value.goal)}")
     distance = value.distance_remaining
@@ -202,8 +214,8 @@ def checked_feedback(value: Any) -> GoalFeedback:
         if distance < 0:
             raise ContractViolation(f"feedback.distance_remaining: expected metres >= 0, inf "
                                     f"or None, found {distance}")
-    if not isinstance(value.message, str):
-        raise ContractViolation(f"feedback.message: expected a string, found "
+    if not _is_text(value.message):
+        raise ContractViolation(f"feedback.message: expected a string of text, found "
                                 f"{_shown(value.message)}")
     return GoalFeedback(NavState(value.state), None if value.goal is None else str(value.goal),
                         distance, str(value.message))

@@ -185,6 +185,16 @@ class BadFeedback(StopsAtTwenty):
         return fb
 
 
+class SurrogateFeedback(StopsAtTwenty):
+    """Reports a message no file or terminal can hold (a lone surrogate)."""
+
+    def feedback(self) -> GoalFeedback:
+        fb = self.tracker.feedback()
+        if self.calls >= 19:
+            return GoalFeedback(fb.state, fb.goal, fb.distance_remaining, "lost \ud800 map")
+        return fb
+
+
 class NaNFeedback(StopsAtTwenty):
     def feedback(self) -> GoalFeedback:
         fb = self.tracker.feedback()

@@ -47,6 +47,7 @@ def summary_of(out: Path) -> dict[str, object]:
 
 
 MISBEHAVIOURS = [
+    ("SurrogateFeedback", "feedback.message: expected a string of text, found str"),
     ("Raising", "step() raised ValueError: the planner lost its map"),
     ("SendsStr", "command.linear: expected a finite real number, found str 'abc'"),
     ("SendsNone", "command.angular: expected a finite real number, found NoneType None"),
@@ -335,3 +336,15 @@ def test_answers_are_decoded_into_what_the_contract_checks() -> None:
                    {"state": "active"}):
         with pytest.raises(ValueError):
             feedback_of(answer)
+
+
+def test_the_simulation_process_is_not_dumpable() -> None:
+    # Other processes of the user (the robot under test among them) cannot open its
+    # descriptors through /proc/PID/fd: the supervisor's pipe stays out of reach.
+    if not sys.platform.startswith("linux"):
+        pytest.skip("PR_SET_DUMPABLE is Linux's")
+    code = ("import ctypes; from rei.runtime.processes import keep_private; keep_private(); "
+            "print(ctypes.CDLL(None).prctl(3, 0, 0, 0, 0))")  # PR_GET_DUMPABLE
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=SAFETY_LIMIT, check=True)
+    assert done.stdout.strip() == "0"
