@@ -147,6 +147,16 @@ def read_bounded(path: str | Path, limit: int = MAX_SOURCE_BYTES) -> bytes | Dia
         return Diagnostic(Span.point(shown), "INPUT-READ", f"cannot read the file: {exc}")
 
 
+def repeated_key(pairs: list[tuple[str, object]]) -> tuple[str, int] | None:
+    """The first key a JSON object names more than once, and how often (None: each once).
+    JSON readers keep the last value of a repeated key, so a repeated field can hide one."""
+    keys = [k for k, _ in pairs]
+    if len(set(keys)) == len(keys):
+        return None
+    first = next(k for k in keys if keys.count(k) > 1)
+    return first, keys.count(first)
+
+
 class UnreadableInput(Exception):
     """A small input file (an index, a run configuration) that cannot be read as text;
     ``str(error)`` says why, without the file's name (the caller names it)."""

@@ -37,7 +37,7 @@ import numpy as np
 from rei.catalogue import Box, Cylinder, Footprint, Polygon, Tile
 from rei.generators.output import open_output
 from rei.lang.mission.model import COLLECTED_DATA, REQUIRED_DATA
-from rei.lang.source import file_kind
+from rei.lang.source import file_kind, repeated_key
 from rei.runtime.errors import RunError
 from rei.runtime.messages import (
     BELIEF_DATA,
@@ -714,12 +714,10 @@ class _RepeatedField(ValueError):
 def _unique_fields(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
     """A JSON object's fields, each named once: with a repeated field JSON keeps the last
     value, so `"contacts": [1], "contacts": []` would hide a contact."""
-    data = dict(pairs)
-    if len(data) != len(pairs):
-        keys = [k for k, _ in pairs]
-        repeated = next(k for k in keys if keys.count(k) > 1)
-        raise _RepeatedField(repeated, keys.count(repeated))
-    return data
+    repeated = repeated_key(pairs)
+    if repeated is not None:
+        raise _RepeatedField(*repeated)
+    return dict(pairs)
 
 
 _ESCAPED_SURROGATE = re.compile(r"\\[uU][dD][89a-fA-F]")

@@ -37,7 +37,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from rei.lang.source import UnreadableInput, bounded_text
+from rei.lang.source import UnreadableInput, bounded_text, repeated_key
 from rei.lang.suggest import did_you_mean
 from rei.runtime.errors import RunError
 
@@ -111,13 +111,11 @@ MAX_CONFIG_BYTES = 1024 * 1024
 
 
 def _unique(path: Path, pairs: list[tuple[str, Any]]) -> dict[str, Any]:
-    data = dict(pairs)
-    if len(data) != len(pairs):
-        keys = [k for k, _ in pairs]
-        repeated = next(k for k in keys if keys.count(k) > 1)
-        raise RunError(f"{path}: field {_text(repeated)}: expected once, found "
-                       f"{keys.count(repeated)} times")
-    return data
+    repeated = repeated_key(pairs)
+    if repeated is not None:
+        raise RunError(f"{path}: field {_text(repeated[0])}: expected once, found "
+                       f"{repeated[1]} times")
+    return dict(pairs)
 
 
 def load_run_config(path: Path) -> dict[str, Any]:

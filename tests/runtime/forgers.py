@@ -9,6 +9,7 @@ from __future__ import annotations
 import atexit
 import json
 import os
+import signal
 import sys
 from pathlib import Path
 
@@ -53,11 +54,13 @@ def _claim_pass(path: Path) -> None:
     path.write_text(json.dumps(data), encoding="utf-8")
 
 
-class DiesWhenMade(_Base):
-    """Ends the process while REI makes it, before the run writes anything of its own."""
+class KillsTheSimulationWhenMade(_Base):
+    """Kills the simulation process (its parent: it runs in a process of its own) while REI
+    makes it, before the run has written anything of its own."""
 
     def __init__(self) -> None:
-        os._exit(0)
+        os.kill(os.getppid(), signal.SIGKILL)
+        super().__init__()
 
 
 class ChangesFolder(_Base):

@@ -61,7 +61,7 @@ def test_the_error_log_line_never_follows_a_link_in_the_output_folder(tmp_path: 
     out = tmp_path / "out"
     out.mkdir()
     (out / "run.log").symlink_to(victim)
-    done = rei_run(out, "DiesWhenMade")
+    done = rei_run(out, "KillsTheSimulationWhenMade")
     assert done.returncode == 3, done.stdout + done.stderr
     assert victim.read_text(encoding="utf-8") == "precious\n"
     log = out / "run.log"
