@@ -6,12 +6,11 @@ from __future__ import annotations
 
 import json
 import math
-import os
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from rei.generators.output import open_output
+from rei.generators.output import write_atomic
 from rei.runtime.results import RunSummary, Verdict
 
 
@@ -48,12 +47,8 @@ def summary_text(summary: RunSummary) -> str:
 
 
 def write_summary(summary: RunSummary, out_dir: str | Path) -> Path:
-    """Write summary.json through a temporary file, so a kill never leaves it torn."""
+    """Write summary.json through a temporary file, so a kill never leaves it torn (and a
+    link at its name is replaced, never followed)."""
     path = Path(out_dir) / "summary.json"
-    tmp = path.with_name(".summary.json.tmp")
-    with open_output(tmp) as handle:  # never written through a link
-        handle.write(summary_text(summary))
-        handle.flush()
-        os.fsync(handle.fileno())
-    os.replace(tmp, path)
+    write_atomic(path, summary_text(summary).encode("utf-8"))
     return path
