@@ -27,7 +27,7 @@ import signal
 import subprocess
 import sys
 from collections.abc import Callable, Mapping, Sequence
-from typing import IO
+from typing import IO, Any
 
 PR_SET_PDEATHSIG = 1
 """From <linux/prctl.h>."""
@@ -39,17 +39,22 @@ PR_SET_DUMPABLE = 4
 """From <linux/prctl.h>."""
 
 
+def _prctl() -> Any:
+    """libc's prctl(2) with its argument types (Linux)."""
+    prctl = ctypes.CDLL(None, use_errno=True).prctl
+    prctl.argtypes = [ctypes.c_int, ctypes.c_ulong, ctypes.c_ulong, ctypes.c_ulong,
+                      ctypes.c_ulong]
+    prctl.restype = ctypes.c_int
+    return prctl
+
+
 def keep_private() -> None:
     """Make this process non-dumpable (Linux): other processes of the same user — a robot
     under test among them — can then neither trace it nor open its descriptors through
     /proc/PID/fd (the supervisor's pipe), and it leaves no core file. Elsewhere nothing."""
     if not sys.platform.startswith("linux"):
         return
-    prctl = ctypes.CDLL(None, use_errno=True).prctl
-    prctl.argtypes = [ctypes.c_int, ctypes.c_ulong, ctypes.c_ulong, ctypes.c_ulong,
-                      ctypes.c_ulong]
-    prctl.restype = ctypes.c_int
-    prctl(PR_SET_DUMPABLE, 0, 0, 0, 0)
+    _prctl()(PR_SET_DUMPABLE, 0, 0, 0, 0)
 
 
 def die_with_parent() -> Callable[[], None] | None:
@@ -59,10 +64,7 @@ def die_with_parent() -> Callable[[], None] | None:
         return None
     # Resolved here, in the parent: between fork and exec the child may only call what is
     # ready (no imports, no locks another thread could have held at the fork).
-    prctl = ctypes.CDLL(None, use_errno=True).prctl
-    prctl.argtypes = [ctypes.c_int, ctypes.c_ulong, ctypes.c_ulong, ctypes.c_ulong,
-                      ctypes.c_ulong]
-    prctl.restype = ctypes.c_int
+    prctl = _prctl()
     parent = os.getpid()
     kill = int(signal.SIGKILL)
 
