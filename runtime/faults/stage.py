@@ -1,0 +1,76 @@
+"""The contract between the run loop and the fault stage (issue 17).
+
+The loop calls the stage at every control tick, in this order: ``scan`` (the latest measured
+scan and when it was measured: what does the robot see now?), ``odometry`` (what does odometry
+report now?), then, after the robot under test answered, ``command`` (what reaches the
+motors?). ``signal`` is called when a ``.vepl`` signal fires (the monitor runs at the sample
+rate, so a signal fired at a sample acts from the next control tick on); event-triggered faults
+start or stop on it. A stage is per run: it is built with the run's seed and draws from its own
+random stream, so a run without faults and a run with them share every other draw.
+
+What the stage returns is what the robot under test receives and what the collector records
+as the robot's belief (scan, odometry); the ground truth (poses, velocities, contacts) never
+passes through it. ``timeline`` says which fault was active when, for the summary, events.csv
+and the report. This module must never import pybullet.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+from rei.runtime.messages import LaserScan
+
+Pose = tuple[float, float, float]
+Twist = tuple[float, float]
+Command = tuple[float, float]
+
+
+class FaultStage(Protocol):
+    def scan(self, time: float, measured: LaserScan | None,
+             measured_at: float | None) -> tuple[LaserScan | None, float | None]:
+        """The scan the robot sees at ``time`` and its stamp, given the latest measured one
+        (None before the first). Called every control tick with the same object until a new
+        scan is measured: a stage that changes a scan does so once per measured scan and
+        returns the same object on later calls."""
+        ...
+
+    def odometry(self, time: float, pose: Pose, twist: Twist) -> tuple[Pose, Twist]:
+        """What odometry reports at ``time``, given what the odometry sensor measured."""
+        ...
+
+    def command(self, time: float, command: Command) -> Command:
+        """What reaches the motors at ``time``, given what the robot under test asked for
+        (before the drive limits clip it)."""
+        ...
+
+    def signal(self, time: float, name: str) -> None:
+        """The ``.vepl`` signal ``name`` fired at simulation ``time``."""
+        ...
+
+    def timeline(self) -> tuple[tuple[str, float, float | None], ...]:
+        """(fault, start, end) of every interval a fault was active, in start order; end
+        None while it still is."""
+        ...
+
+
+class NoFaults:
+    """The empty stage: the robot receives exactly what the sensors measured."""
+
+    def scan(self, time: float, measured: LaserScan | None,
+             measured_at: float | None) -> tuple[LaserScan | None, float | None]:
+        return measured, measured_at
+
+    def odometry(self, time: float, pose: Pose, twist: Twist) -> tuple[Pose, Twist]:
+        return pose, twist
+
+    def command(self, time: float, command: Command) -> Command:
+        return command
+
+    def signal(self, time: float, name: str) -> None:
+        return None
+
+    def timeline(self) -> tuple[tuple[str, float, float | None], ...]:
+        return ()
+
+
+NO_FAULTS: FaultStage = NoFaults()
