@@ -260,6 +260,9 @@ class BodyStates:
     """(N, 3) (x, y, yaw) of the world's objects (walls excluded), in declaration order."""
     twists: np.ndarray
     """(N, 3) (vx, vy, wz), aligned with ``poses``."""
+    touched: tuple[int, ...] = ()
+    """Sorted indices into ``StreamHeader.objects`` of every body the robot touched at any
+    physics step since the previous sample's ``BodyStates`` (empty in the others)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -277,13 +280,14 @@ class TrackedBodies:
 
 @dataclass(frozen=True, slots=True)
 class BodyVelocities:
-    """Planar velocities the animator sets on its bodies for the next physics step."""
+    """Planar velocities the animator sets on its bodies for the physics steps from the one
+    at ``time`` on: ``steps[j]`` is for the step ``j`` steps later (one control period)."""
 
     TOPIC: ClassVar[str] = "animator/velocities"
     seq: int
     time: float
-    velocities: tuple[tuple[int, float, float, float], ...]
-    """(pybullet body id, vx, vy, wz) per animated body."""
+    steps: tuple[tuple[tuple[int, float, float, float], ...], ...]
+    """Per step, (pybullet body id, vx, vy, wz) per animated body."""
 
 
 @dataclass(frozen=True, slots=True, eq=False)

@@ -1,7 +1,9 @@
 """The run loop: pybullet, animator, sensors, robot under test, mission executor and collector.
 
-One fixed physics step drives everything; the controller, the laser and the collector run
-every n-th step at their own rates (each rate must divide the physics rate). All randomness
+``run_mission`` assembles the components of ``rei.runtime.loop`` (world, laser, odometry,
+faults, mission, robot, collector, animator) on one scheduler (docs/run-loop.md). One fixed
+physics step drives everything; the controller, the laser and the collector run every n-th
+step at their own rates (each rate must divide the physics rate). All randomness
 comes from ``numpy.random.Generator``s seeded from the run's seed (the main stream from
 ``default_rng(seed)``, each variation such as the start-pose jitter from its own
 ``default_rng([seed, k])``, so adding one never shifts another), iteration is in
@@ -9,8 +11,9 @@ declaration order and no wall-clock time enters the outputs, so the same inputs 
 the same bytes. A controller that raises, hangs past the watchdog or answers outside its
 contract (a malformed command or feedback) ends the run with outcome ``error``; Ctrl-C ends it
 ``interrupted``; in both cases the sinks are finished, so what was written stays consistent.
-The controller sees the sensors through read-only copies: the sinks record what the sensors
-measured, whatever the controller does with its view. A ``RunProbe`` hears the loop's
+The controller sees the sensors through read-only copies: the sinks record what it received
+(what the sensors measured, through the fault stage when one is given), whatever the
+controller does with its view; the ground truth never passes through the fault stage. A ``RunProbe`` hears the loop's
 progress (each control tick), so a supervising process can tell a hung or dead run from a
 slow one. This module must never judge the run beyond task outcomes (the monitor and the
 evaluator do that, as sinks).
@@ -199,7 +202,7 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
     laser = Laser(manifest, manifest.laser.noise if config.laser_noise is None
                   else config.laser_noise)
     world = World(manifest, rate, tuple(o.name for o in header.objects),
-                  ((every_laser,) if laser.moving_seen else ()) + (every_sample,), every_control)
+                  every_laser if laser.moving_seen else None, every_sample, every_control)
 
     board = Board()
     wall_start = wallclock.perf_counter()
@@ -216,9 +219,10 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
         laser_run = laser.start(board, rng)
         odometry = Odometry(start, config.odom_drift, every_control / rate).start(board, rng)
         faults_run = Faults(stage).start(board)
-        for sink in sinks:
-            if isinstance(sink, SignalSource):
-                sink.listen(faults_run.heard)
+        if stage is not NO_FAULTS:  # the empty stage ignores signals: nobody listens
+            for sink in sinks:
+                if isinstance(sink, SignalSource):
+                    sink.listen(faults_run.heard)
         mission_run = Mission(mission, start, end_reason, end_cause).start(
             board, robot, probe, say)
         collector = Collector(header, manifest, tuple(sinks), every_sample, start).start(board)
@@ -231,15 +235,17 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
             Stage("mission", mission_run.step, every_control),
             Stage("robot", robot.step, every_control),
             Stage("mission", mission_run.deadline, None),
-            Stage("faults", faults_run.refresh, every_sample, at_end=True),
-            Stage("collector", collector.step, 1, at_end=True),
-            Stage("faults", faults_run.deliver, every_sample, at_end=True),
         ]
+        if every_laser % every_control:  # a scan can come between control ticks
+            stages.append(Stage("faults", faults_run.refresh, every_sample, at_end=True))
+        stages.append(Stage("collector", collector.step, every_sample, at_end=True))
+        if stage is not NO_FAULTS:
+            stages.append(Stage("faults", faults_run.deliver, every_sample, at_end=True))
         if progress is not None:
             stages.append(Stage("progress", _Progress(progress, end_time).step,
                                 max(1, round(rate)), at_end=True))
         if animator.items:
-            stages.append(Stage("animator", animator.step, 1))
+            stages.append(Stage("animator", animator.step, every_control))
         scheduler = Scheduler(stages, clock)
         collector.open()
         try:

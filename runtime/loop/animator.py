@@ -1,9 +1,11 @@
 """The animator component: humans and dynamic objects moving along their trajectories
 (``rei.runtime.animator``), on the physics clock.
 
-Every physics step (after the robot and the collector) it publishes the velocities its
-bodies take for the next step; every control tick it first corrects them from their true
-poses and the robot's (the world's ``TrackedBodies``). Each body's start delay and speed
+Every control tick (after the robot and the collector) it corrects its bodies' velocities
+from their true poses and the robot's (the world's ``TrackedBodies``) and publishes the
+velocities they take at each physics step until the next control tick (between two
+corrections nothing else changes them, so they are computed together: one message, and one
+stage, per control period rather than per step). Each body's start delay and speed
 scale are drawn from the run's seed (their own stream) unless the run walks every
 trajectory exactly as written.
 """
@@ -47,12 +49,13 @@ class AnimatorRun:
 
     def step(self, clock: Clock) -> None:
         k = clock.k
-        if k % self.spec.control_every == 0:
-            tracked = self.board.tracked
-            assert tracked is not None and tracked.time == clock.now
-            self.paths.correct(k, list(tracked.poses), tracked.robot_pose, tracked.robot_twist)
-        self.board.velocities = BodyVelocities(self._seq, clock.now,
-                                               tuple(self.paths.commands(k)))
+        tracked = self.board.tracked
+        assert tracked is not None and tracked.time == clock.now
+        self.paths.correct(k, list(tracked.poses), tracked.robot_pose, tracked.robot_twist)
+        commands = self.paths.commands
+        self.board.velocities = BodyVelocities(
+            self._seq, clock.now,
+            tuple(tuple(commands(j)) for j in range(k, k + self.spec.control_every)))
         self._seq += 1
 
     def variations(self) -> dict[str, dict[str, Any]]:

@@ -1,8 +1,8 @@
 """The collector component: the data collector (thesis 6.1.2) feeding the run's sinks.
 
-Every physics step it notes the bodies touching the robot (a sample carries every body
-touched since the previous one) and takes the mission's events; at its sample rate, and in
-the tick the run ends, it builds a ``Sample`` of the ground truth (the world's states) and
+At its sample rate, and in the tick the run ends, it takes the mission's events since the
+previous sample and builds a ``Sample`` of the ground truth (the world's states, with the
+bodies touched since the previous sample) and
 the robot's belief (the robot's view, its navigation state and the command it asked for)
 and hands it to the sinks: the trace, the live monitor, any other.
 """
@@ -51,22 +51,15 @@ class CollectorRun:
         self.collector.start()
 
     def step(self, clock: Clock) -> None:
-        board, collector = self.board, self.collector
-        truth = board.truth
-        if truth is not None and truth.contacts:
-            collector.touch(truth.contacts)
-        if board.events:
-            for status in board.events:
-                collector.event(status.events)
-            board.events.clear()
-        if clock.k % self.spec.every == 0 or clock.stopped:
-            self._sample(clock.now)
-
-    def _sample(self, now: float) -> None:
-        board = self.board
+        board, collector, now = self.board, self.collector, clock.now
+        for queued in board.events:
+            collector.event(queued.events)
+        board.events.clear()
         truth, bodies, view, status, command = (board.truth, board.bodies, board.view,
                                                 board.status, board.command)
         assert truth is not None and bodies is not None and bodies.time == now
+        if bodies.touched:
+            collector.touch(bodies.touched)
         if len(self.rows):
             self.poses[self.rows] = bodies.poses[self.moving]
             self.twists[self.rows] = bodies.twists[self.moving]
@@ -76,9 +69,9 @@ class CollectorRun:
                                               view.scan_time))
         nav, task = (NavState.IDLE, None) if status is None else (status.nav_state, status.task)
         # Each sample owns its arrays: sinks may keep samples (the monitor's windows).
-        self.collector.sample(now, truth.pose, bodies.robot_twist, self.poses.copy(),
-                              self.twists.copy(), odom, odom_twist, scan, scan_time, nav, task,
-                              (0.0, 0.0) if command is None else command.raw)
+        collector.sample(now, truth.pose, bodies.robot_twist, self.poses.copy(),
+                         self.twists.copy(), odom, odom_twist, scan, scan_time, nav, task,
+                         (0.0, 0.0) if command is None else command.raw)
 
     def finish(self, now: float, outcome: str, reason: str) -> None:
         self.collector.finish(now, outcome, reason)

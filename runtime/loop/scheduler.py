@@ -81,8 +81,9 @@ class Scheduler:
     def __init__(self, stages: Sequence[Stage], clock: Clock) -> None:
         self.stages = tuple(stages)
         self.clock = clock
-        self.cpu_ns: dict[str, int] = dict.fromkeys((s.component for s in stages), 0)
         n = len(self.stages)
+        self._ns = [0] * n
+        """Processor nanoseconds per stage (summed per component by ``cpu_seconds``)."""
         # The stages due at each phase of the rates' common period, precomputed (positions
         # in declared order): the loop only indexes, it allocates nothing per step.
         self._period = 1
@@ -90,68 +91,71 @@ class Scheduler:
             if stage.every is not None:
                 self._period = math.lcm(self._period, stage.every)
         self._due: list[tuple[int, ...]] | None = None
-        if self._period <= 10_000:
-            self._due = [self._due_positions(k) for k in range(self._period)]
-        self._last = tuple(i for i in range(n) if self.stages[i].every is None
-                           or self.stages[i].at_end)
+        if self._period <= 100_000:  # else rates without a small common period: no table
+            self._due = [_due_at(self.stages, k) for k in range(self._period)]
         self._at_end = tuple(i for i in range(n) if self.stages[i].at_end)
-        self._ran: set[int] = set()
-
-    def _due_positions(self, k: int) -> tuple[int, ...]:
-        return tuple(i for i, s in enumerate(self.stages)
-                     if s.every is not None and k % s.every == 0)
-
-    def _tick_positions(self, k: int) -> tuple[int, ...]:
-        due = self._due[k % self._period] if self._due is not None else self._due_positions(k)
-        if k != self.clock.last:
-            return due
-        return tuple(sorted(set(due) | set(self._last)))
+        self._before = 0
 
     def run(self) -> None:
         """Tick until a stage stops the run or the last tick ran."""
         clock = self.clock
-        stages = self.stages
-        cpu = self.cpu_ns
-        ns = cputime.process_time_ns
-        rate = clock.rate
-        for k in range(clock.last + 1):
+        last, rate, period, due = clock.last, clock.rate, self._period, self._due
+        self._before = cputime.process_time_ns()
+        for k in range(last):
             clock.k = k
             clock.now = k / rate
-            before = ns()
-            ran = self._ran
-            for i in self._tick_positions(k):
-                stage = stages[i]
-                try:
-                    stage.run(clock)
-                finally:
-                    after = ns()
-                    cpu[stage.component] += after - before
-                    before = after
-                    ran.add(i)
-                if clock.stopped:
-                    self._end(ran)
-                    return
-            ran.clear()
-        clock.stop("final tick")
+            if self._tick(due[k % period] if due is not None else _due_at(self.stages, k)):
+                return
+        clock.k = last
+        clock.now = last / rate
+        ends = {i for i, s in enumerate(self.stages) if s.every is None or s.at_end}
+        if not self._tick(tuple(sorted(set(_due_at(self.stages, last)) | ends))):
+            clock.stop("final tick")
+
+    def _tick(self, positions: tuple[int, ...]) -> bool:
+        """Run one tick's stages; True when one of them stopped the run. The processor
+        clock is read once per stage, between stages (the reading that ends one stage, or
+        one tick, starts the next): the clock costs a system call."""
+        stages, spent, clock = self.stages, self._ns, self.clock
+        ns = cputime.process_time_ns
+        for n, i in enumerate(positions):
+            try:
+                stages[i].run(clock)
+            finally:
+                after = ns()
+                spent[i] += after - self._before
+                self._before = after
+            if clock.stopped:
+                self._end(positions[:n + 1])
+                return True
+        return False
 
     def end(self) -> None:
         """End the run in the current tick from outside (a controller fault, an
         interruption): every ``at_end`` stage runs, in order."""
         self.clock.stop("ended from outside")
-        self._end(set())
+        self._end(())
 
-    def _end(self, ran: set[int]) -> None:
+    def _end(self, ran: tuple[int, ...]) -> None:
         for i in self._at_end:
             if i not in ran:
-                self._timed(self.stages[i])
+                self._timed(i)
 
-    def _timed(self, stage: Stage) -> None:
+    def _timed(self, i: int) -> None:
         before = cputime.process_time_ns()
         try:
-            stage.run(self.clock)
+            self.stages[i].run(self.clock)
         finally:
-            self.cpu_ns[stage.component] += cputime.process_time_ns() - before
+            self._ns[i] += cputime.process_time_ns() - before
 
     def cpu_seconds(self) -> dict[str, float]:
         """Processor seconds per component, in declaration order."""
-        return {name: ns / 1e9 for name, ns in self.cpu_ns.items()}
+        out: dict[str, float] = {}
+        for stage, spent in zip(self.stages, self._ns, strict=True):
+            out[stage.component] = out.get(stage.component, 0.0) + spent / 1e9
+        return out
+
+
+def _due_at(stages: Sequence[Stage], k: int) -> tuple[int, ...]:
+    """Positions of the stages due at tick ``k`` by their rates, in declared order."""
+    return tuple(i for i, s in enumerate(stages) if s.every is not None and k % s.every == 0)

@@ -1,10 +1,12 @@
 """The world component: pybullet physics and the ground truth read from it.
 
 Every physics step it first applies what the previous tick decided (the animator's body
-velocities, then the robot's motor command at its heading) and steps pybullet, then
+velocities for that step, then the robot's motor command at its heading) and steps pybullet,
+then
 publishes the robot's true pose and the bodies touching it. It publishes the objects'
 states when a reader needs them (the laser's ticks when it sees moving bodies, the
-collector's samples, the end of the run) and the animated bodies' poses every control tick.
+collector's samples and the end of the run, with every body touched since the previous
+sample) and the animated bodies' poses every control tick.
 It also counts contact episodes (a new one starts when a body starts touching the robot).
 """
 
@@ -26,8 +28,11 @@ class World:
     physics_rate: float
     names: tuple[str, ...]
     """Names of the stream's objects (walls, then objects), for the contact record."""
-    bodies_every: tuple[int, ...]
-    """Steps between the readers' needs of the objects' states (laser, collector)."""
+    laser_every: int | None
+    """Steps between the laser's scans when it needs the objects' states (None: it never
+    does: nothing moving crosses its plane)."""
+    sample_every: int
+    """Steps between the collector's samples."""
     control_every: int
 
     def start(self, board: Board) -> WorldRun:
@@ -47,6 +52,10 @@ class WorldRun:
         self._touching: set[str] = set()
         self._seq = [0, 0, 0]
         self._yaw = spec.manifest.robot.yaw
+        self._touched: set[int] = set()
+        """Bodies touched since the previous sample."""
+        self._sampled: float | None = None
+        """When the latest states for a sample went out."""
 
     def track(self, bodies: tuple[int, ...]) -> None:
         self.tracked = bodies
@@ -54,8 +63,11 @@ class WorldRun:
     def step(self, clock: Clock) -> None:
         world, board, k = self.world, self.board, clock.k
         if k > 0:
-            if board.velocities is not None:
-                for body, vx, vy, wz in board.velocities.velocities:
+            velocities = board.velocities
+            if velocities is not None:
+                # the previous step's row: the message starts at a control tick
+                row = k - 1 - round(velocities.time * self.spec.physics_rate)
+                for body, vx, vy, wz in velocities.steps[row]:
                     world.set_planar_velocity(body, vx, vy, wz)
             linear, angular = board.command.motor if board.command is not None else (0.0, 0.0)
             world.drive_robot(linear, angular, self._yaw)
@@ -67,8 +79,11 @@ class WorldRun:
             self._contacts(touching, clock.now)
         board.truth = RobotTruth(self._seq[0], clock.now, pose, tuple(touching))
         self._seq[0] += 1
-        if any(k % n == 0 for n in self.spec.bodies_every):
-            self._bodies(clock.now)
+        spec = self.spec
+        if k % spec.sample_every == 0:
+            self._bodies(clock.now, sample=True)
+        elif spec.laser_every is not None and k % spec.laser_every == 0:
+            self._bodies(clock.now, sample=False)
         if self.tracked and k % self.spec.control_every == 0:
             board.tracked = TrackedBodies(self._seq[2], clock.now,
                                           tuple(world.pose(b) for b in self.tracked), pose,
@@ -83,17 +98,23 @@ class WorldRun:
             self.board.truth = RobotTruth(self._seq[0], clock.now, pose,
                                           tuple(self.world.robot_contact_indices()))
             self._seq[0] += 1
-        bodies = self.board.bodies
-        if bodies is None or bodies.time != clock.now:
-            self._bodies(clock.now)
+        if self._sampled != clock.now:
+            self._bodies(clock.now, sample=True)
 
-    def _bodies(self, now: float) -> None:
+    def _bodies(self, now: float, sample: bool) -> None:
         poses, twists = self.world.object_states()
+        touched: tuple[int, ...] = ()
+        if sample:
+            self._sampled = now
+            if self._touched:
+                touched = tuple(sorted(self._touched))
+                self._touched = set()
         self.board.bodies = BodyStates(self._seq[1], now, self.world.twist(self.world.robot_id),
-                                       poses, twists)
+                                       poses, twists, touched)
         self._seq[1] += 1
 
     def _contacts(self, touching: list[int], now: float) -> None:
+        self._touched.update(touching)
         names = self.spec.names
         current = {names[i] for i in touching}
         new = current - self._touching
