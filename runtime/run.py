@@ -15,8 +15,8 @@ The controller sees the sensors through read-only copies: the sinks record what 
 (what the sensors measured, through the fault stage when one is given), whatever the
 controller does with its view; the ground truth never passes through the fault stage. A
 ``RunProbe`` hears the loop's progress (each control tick), so a supervising process can
-tell a hung or dead run from a slow one. This module must never judge the run beyond task outcomes (the monitor and the
-evaluator do that, as sinks).
+tell a hung or dead run from a slow one. This module must never judge the run beyond task
+outcomes (the monitor and the evaluator do that, as sinks).
 """
 
 from __future__ import annotations
