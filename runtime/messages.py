@@ -445,6 +445,8 @@ def _decode(hint: Any, value: Any) -> Any:  # noqa: PLR0911  (one branch per typ
             raise ValueError("expected finite numbers")
         return array
     if hint is LaserScan:
+        if not isinstance(value, dict):
+            raise TypeError(f"expected a scan object, found {value!r}")
         ranges = np.array(value["ranges"], dtype=float)
         if ranges.ndim != 1 or not np.isfinite(ranges).all():
             raise ValueError("expected a list of finite ranges")
@@ -452,11 +454,18 @@ def _decode(hint: Any, value: Any) -> Any:  # noqa: PLR0911  (one branch per typ
         return LaserScan(_number(value["angle_min"]), _number(value["angle_increment"]),
                          _number(value["range_min"]), _number(value["range_max"]), ranges)
     if hint is MissionEvent:
+        if not isinstance(value, dict):
+            raise TypeError(f"expected a mission event object, found {value!r}")
         if value.get("kind") not in MISSION_EVENT_KINDS:
             raise ValueError(f"expected a mission event kind, found {value.get('kind')!r}")
-        return MissionEvent(value["kind"], _number(value["time"]), value.get("task"),
-                            value.get("index"), str(value.get("reason", "")),
-                            str(value.get("cause", "")))
+        task, index = value.get("task"), value.get("index")
+        reason, cause = value.get("reason", ""), value.get("cause", "")
+        if task is not None and not isinstance(task, str) or not isinstance(reason, str) \
+                or not isinstance(cause, str):
+            raise TypeError("expected a mission event's task, reason and cause as strings")
+        if index is not None and (isinstance(index, bool) or not isinstance(index, int)):
+            raise TypeError(f"expected a mission event's index as an integer, found {index!r}")
+        return MissionEvent(value["kind"], _number(value["time"]), task, index, reason, cause)
     if hint is NavState:
         return NavState(value)
     args = get_args(hint)

@@ -50,7 +50,7 @@ class WorldRun:
         self.touched_names: set[str] = set()
         self.first_contact: float | None = None
         self._touching: set[str] = set()
-        self._seq = [0, 0, 0]
+        self._truth_seq = self._bodies_seq = self._tracked_seq = 0
         self._yaw = spec.manifest.robot.yaw
         self._touched: set[int] = set()
         """Bodies touched since the previous sample."""
@@ -77,27 +77,29 @@ class WorldRun:
         touching = world.robot_contact_indices()
         if touching or self._touching:
             self._contacts(touching, clock.now)
-        board.truth = RobotTruth(self._seq[0], clock.now, pose, tuple(touching))
-        self._seq[0] += 1
+        board.truth = RobotTruth(self._truth_seq, clock.now, pose, tuple(touching))
+        self._truth_seq += 1
         spec = self.spec
         if k % spec.sample_every == 0:
             self._bodies(clock.now, sample=True)
         elif spec.laser_every is not None and k % spec.laser_every == 0:
             self._bodies(clock.now, sample=False)
         if self.tracked and k % self.spec.control_every == 0:
-            board.tracked = TrackedBodies(self._seq[2], clock.now,
+            board.tracked = TrackedBodies(self._tracked_seq, clock.now,
                                           tuple(world.pose(b) for b in self.tracked), pose,
                                           world.twist(world.robot_id))
-            self._seq[2] += 1
+            self._tracked_seq += 1
 
     def observe(self, clock: Clock) -> None:
         """At the end of the run: the truth and the objects' states of this tick, if not
-        published yet (the run may end before the first step, or off the sample rate)."""
-        if self.board.truth is None:
+        published yet (the run may end before the first step, off the sample rate, or be
+        interrupted within a step)."""
+        truth = self.board.truth
+        if truth is None or truth.time != clock.now:
             pose = self.world.pose(self.world.robot_id)
-            self.board.truth = RobotTruth(self._seq[0], clock.now, pose,
+            self.board.truth = RobotTruth(self._truth_seq, clock.now, pose,
                                           tuple(self.world.robot_contact_indices()))
-            self._seq[0] += 1
+            self._truth_seq += 1
         if self._sampled != clock.now:
             self._bodies(clock.now, sample=True)
 
@@ -109,9 +111,9 @@ class WorldRun:
             if self._touched:
                 touched = tuple(sorted(self._touched))
                 self._touched = set()
-        self.board.bodies = BodyStates(self._seq[1], now, self.world.twist(self.world.robot_id),
-                                       poses, twists, touched)
-        self._seq[1] += 1
+        twist = self.world.twist(self.world.robot_id)
+        self.board.bodies = BodyStates(self._bodies_seq, now, twist, poses, twists, touched)
+        self._bodies_seq += 1
 
     def _contacts(self, touching: list[int], now: float) -> None:
         self._touched.update(touching)

@@ -173,6 +173,12 @@ def test_every_topic_has_a_round_trip_example() -> None:
      "field 'pose': expected 3 values, found 2"),
     ({"topic": "mission/status", "seq": 0, "time": 0.0, "events": [{"kind": "boom"}],
       "nav_state": "idle", "task": None}, "field 'events': expected a mission event kind"),
+    ({"topic": "mission/status", "seq": 0, "time": 0.0, "nav_state": "idle", "task": None,
+      "events": [{"kind": "begin", "time": 0.0, "index": "first"}]},
+     "expected a mission event's index as an integer"),
+    ({"topic": "sensor/laser", "seq": 0, "time": 0.0, "scan": {"angle_min": 0.0,
+      "angle_increment": 0.1, "range_min": 0.1, "range_max": 3.5, "ranges": [1.0, None]}},
+     "field 'scan'"),
 ])
 def test_a_bad_message_is_refused_naming_topic_and_field(data: Any, error: str) -> None:
     with pytest.raises(MessageError, match=error.replace("(", r"\(")):
