@@ -202,7 +202,7 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
     laser = Laser(manifest, manifest.laser.noise if config.laser_noise is None
                   else config.laser_noise)
     world = World(manifest, rate, tuple(o.name for o in header.objects),
-                  every_laser if laser.moving_seen else None, every_sample, every_control)
+                  every_laser, bool(laser.moving_seen), every_sample, every_control)
 
     board = Board()
     wall_start = wallclock.perf_counter()

@@ -10,9 +10,9 @@ otherwise, so a run is a pure function of its inputs and seed. A stage may end t
 last tick the run may reach (``Clock.final``) the stages of rate None run as well: one of
 them ends the run there.
 
-The scheduler accounts each component's processor time (``time.process_time_ns`` between
-stages, kept per component name): what a run costs, component by component, never written
-into any output.
+The scheduler accounts each component's processor time (``time.process_time_ns`` read
+where the running component changes, kept per component name): what a run costs, component
+by component, never written into any output.
 """
 
 from __future__ import annotations
@@ -81,9 +81,10 @@ class Scheduler:
     def __init__(self, stages: Sequence[Stage], clock: Clock) -> None:
         self.stages = tuple(stages)
         self.clock = clock
-        n = len(self.stages)
-        self._ns = [0] * n
-        """Processor nanoseconds per stage (summed per component by ``cpu_seconds``)."""
+        self.components = tuple(dict.fromkeys(s.component for s in self.stages))
+        self._owner = tuple(self.components.index(s.component) for s in self.stages)
+        self._ns = [0] * len(self.components)
+        """Processor nanoseconds per component."""
         # The stages due at each phase of the rates' common period, precomputed (positions
         # in declared order): the loop only indexes, it allocates nothing per step.
         self._period = 1
@@ -93,67 +94,71 @@ class Scheduler:
         self._due: list[tuple[int, ...]] | None = None
         if self._period <= 100_000:  # else rates without a small common period: no table
             self._due = [_due_at(self.stages, k) for k in range(self._period)]
-        self._at_end = tuple(i for i in range(n) if self.stages[i].at_end)
-        self._before = 0
+        self._at_end = tuple(i for i, s in enumerate(self.stages) if s.at_end)
+        self._running = 0
+        """The component charged for the processor time since ``_since``."""
+        self._since = 0
 
     def run(self) -> None:
         """Tick until a stage stops the run or the last tick ran."""
         clock = self.clock
         last, rate, period, due = clock.last, clock.rate, self._period, self._due
-        self._before = cputime.process_time_ns()
-        for k in range(last):
-            clock.k = k
-            clock.now = k / rate
-            if self._tick(due[k % period] if due is not None else _due_at(self.stages, k)):
-                return
-        clock.k = last
-        clock.now = last / rate
-        ends = {i for i, s in enumerate(self.stages) if s.every is None or s.at_end}
-        if not self._tick(tuple(sorted(set(_due_at(self.stages, last)) | ends))):
-            clock.stop("final tick")
+        self._since = cputime.process_time_ns()
+        self._running = self._owner[0] if self.stages else 0
+        try:
+            for k in range(last):
+                clock.k = k
+                clock.now = k / rate
+                if self._tick(due[k % period] if due is not None else _due_at(self.stages, k)):
+                    return
+            clock.k = last
+            clock.now = last / rate
+            ends = {i for i, s in enumerate(self.stages) if s.every is None or s.at_end}
+            if not self._tick(tuple(sorted(set(_due_at(self.stages, last)) | ends))):
+                clock.stop("final tick")
+        finally:
+            self._charge(self._running)
 
     def _tick(self, positions: tuple[int, ...]) -> bool:
-        """Run one tick's stages; True when one of them stopped the run. The processor
-        clock is read once per stage, between stages (the reading that ends one stage, or
-        one tick, starts the next): the clock costs a system call."""
-        stages, spent, clock = self.stages, self._ns, self.clock
-        ns = cputime.process_time_ns
+        """Run one tick's stages; True when one of them stopped the run. The processor clock
+        (a system call) is read only where the running component changes: a run of
+        world-only ticks costs one reading, not one per step."""
+        stages, owner, clock = self.stages, self._owner, self.clock
         for n, i in enumerate(positions):
-            try:
-                stages[i].run(clock)
-            finally:
-                after = ns()
-                spent[i] += after - self._before
-                self._before = after
+            if owner[i] != self._running:
+                self._charge(owner[i])
+            stages[i].run(clock)
             if clock.stopped:
                 self._end(positions[:n + 1])
                 return True
         return False
 
+    def _charge(self, then: int) -> None:
+        """The time since the last reading to the running component; ``then`` runs next."""
+        now = cputime.process_time_ns()
+        self._ns[self._running] += now - self._since
+        self._since, self._running = now, then
+
     def end(self) -> None:
         """End the run in the current tick from outside (a controller fault, an
         interruption): every ``at_end`` stage runs, in order."""
         self.clock.stop("ended from outside")
-        self._end(())
+        self._since = cputime.process_time_ns()
+        try:
+            self._end(())
+        finally:
+            self._charge(self._running)
 
     def _end(self, ran: tuple[int, ...]) -> None:
         for i in self._at_end:
             if i not in ran:
-                self._timed(i)
-
-    def _timed(self, i: int) -> None:
-        before = cputime.process_time_ns()
-        try:
-            self.stages[i].run(self.clock)
-        finally:
-            self._ns[i] += cputime.process_time_ns() - before
+                if self._owner[i] != self._running:
+                    self._charge(self._owner[i])
+                self.stages[i].run(self.clock)
 
     def cpu_seconds(self) -> dict[str, float]:
         """Processor seconds per component, in declaration order."""
-        out: dict[str, float] = {}
-        for stage, spent in zip(self.stages, self._ns, strict=True):
-            out[stage.component] = out.get(stage.component, 0.0) + spent / 1e9
-        return out
+        return {name: spent / 1e9 for name, spent in zip(self.components, self._ns, strict=True)}
 
 
 def _due_at(stages: Sequence[Stage], k: int) -> tuple[int, ...]:

@@ -1,17 +1,18 @@
 """The world component: pybullet physics and the ground truth read from it.
 
 Every physics step it first applies what the previous tick decided (the animator's body
-velocities for that step, then the robot's motor command at its heading) and steps pybullet,
-then
-publishes the robot's true pose and the bodies touching it. It publishes the objects'
-states when a reader needs them (the laser's ticks when it sees moving bodies, the
-collector's samples and the end of the run, with every body touched since the previous
-sample) and the animated bodies' poses every control tick.
-It also counts contact episodes (a new one starts when a body starts touching the robot).
+velocities for that step, then the robot's motor command at its heading), steps pybullet
+and notes the bodies touching the robot; at the ticks where another component reads the
+truth (laser, control, sample) it publishes the robot's true pose and those bodies. It
+publishes the objects' states when a reader needs them (the laser's ticks when it sees
+moving bodies, the collector's samples and the end of the run, with every body touched since
+the previous sample) and the animated bodies' poses every control tick. It also counts
+contact episodes (a new one starts when a body starts touching the robot).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from rei.runtime.loop.board import Board
@@ -19,6 +20,9 @@ from rei.runtime.loop.scheduler import Clock
 from rei.runtime.messages import BodyStates, RobotTruth, TrackedBodies
 from rei.runtime.world.bullet import BulletWorld
 from rei.runtime.world.manifest import WorldManifest
+
+SAMPLE, SCAN = "sample", "scan"
+"""Why the objects' states go out at a tick."""
 
 
 @dataclass(frozen=True)
@@ -28,9 +32,10 @@ class World:
     physics_rate: float
     names: tuple[str, ...]
     """Names of the stream's objects (walls, then objects), for the contact record."""
-    laser_every: int | None
-    """Steps between the laser's scans when it needs the objects' states (None: it never
-    does: nothing moving crosses its plane)."""
+    laser_every: int
+    """Steps between the laser's scans."""
+    laser_bodies: bool
+    """The laser needs the objects' states (something moving crosses its plane)."""
     sample_every: int
     """Steps between the collector's samples."""
     control_every: int
@@ -56,6 +61,12 @@ class WorldRun:
         """Bodies touched since the previous sample."""
         self._sampled: float | None = None
         """When the latest states for a sample went out."""
+        # What goes out at each phase of the readers' common period (one look-up per step):
+        # the truth when anyone reads it, the objects' states for a sample or a scan.
+        self._period = math.lcm(spec.control_every, spec.sample_every, spec.laser_every)
+        if self._period > 100_000:  # rates without a small common period: ask every step
+            self._period = 0
+        self._plan = tuple(self._plan_at(k) for k in range(self._period))
 
     def track(self, bodies: tuple[int, ...]) -> None:
         self.tracked = bodies
@@ -77,18 +88,28 @@ class WorldRun:
         touching = world.robot_contact_indices()
         if touching or self._touching:
             self._contacts(touching, clock.now)
+        truth, bodies, control = (self._plan[k % self._period] if self._period
+                                  else self._plan_at(k))
+        if not truth:
+            return
         board.truth = RobotTruth(self._truth_seq, clock.now, pose, tuple(touching))
         self._truth_seq += 1
-        spec = self.spec
-        if k % spec.sample_every == 0:
-            self._bodies(clock.now, sample=True)
-        elif spec.laser_every is not None and k % spec.laser_every == 0:
-            self._bodies(clock.now, sample=False)
-        if self.tracked and k % self.spec.control_every == 0:
+        if bodies is not None:
+            self._bodies(clock.now, sample=bodies is SAMPLE)
+        if self.tracked and control:
             board.tracked = TrackedBodies(self._tracked_seq, clock.now,
                                           tuple(world.pose(b) for b in self.tracked), pose,
                                           world.twist(world.robot_id))
             self._tracked_seq += 1
+
+    def _plan_at(self, k: int) -> tuple[bool, str | None, bool]:
+        """At tick ``k``: publish the truth? the objects' states (for what)? the tracked?"""
+        spec = self.spec
+        control, sample, laser = spec.control_every, spec.sample_every, spec.laser_every
+        bodies = SAMPLE if k % sample == 0 else \
+            SCAN if spec.laser_bodies and k % laser == 0 else None
+        return (k % control == 0 or k % sample == 0 or k % laser == 0, bodies,
+                k % control == 0)
 
     def observe(self, clock: Clock) -> None:
         """At the end of the run: the truth and the objects' states of this tick, if not

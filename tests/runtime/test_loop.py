@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import fields
+from dataclasses import fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -250,9 +250,13 @@ class Recording(_Base):
         return VelocityCommand(0.1, 0.0)
 
 
-def _run(tmp: Path, faults: Any, monitor: bool = True) -> tuple[Any, SampleList, Recording]:
+def _run(tmp: Path, faults: Any, monitor: bool = True,
+         rates: tuple[float, float] | None = None) -> tuple[Any, SampleList, Recording]:
     mission = generate_world(NAVIGATION, tmp / "world")
     manifest, config = load_manifest(tmp / "world"), load_monitor_config(tmp / "world")
+    if rates is not None:  # (laser, sample) Hz
+        manifest = replace(manifest, laser=replace(manifest.laser, rate=rates[0]))
+        config = replace(config, rate=rates[1])
     samples, robot = SampleList(), Recording()
     sinks: list[Any] = [samples, TraceWriter(tmp / "trace.jsonl")]
     if monitor:
@@ -327,3 +331,17 @@ def test_a_run_with_a_fault_stage_is_deterministic(tmp_path: Path) -> None:
            (tmp_path / "b" / "trace.jsonl").read_bytes()
     assert (tmp_path / "a" / "monitor" / "events.csv").read_bytes() == \
            (tmp_path / "b" / "monitor" / "events.csv").read_bytes()
+
+
+def test_a_scan_measured_between_control_ticks_reaches_the_belief_through_the_stage(
+        tmp_path: Path) -> None:
+    # laser and samples at 20 Hz, control at 10 Hz: every other sample falls between ticks
+    _, plain, _ = _run(tmp_path / "plain", None, monitor=False, rates=(20.0, 20.0))
+    assert [round(s.time, 2) for s in plain.samples[:4]] == [0.0, 0.05, 0.1, 0.15]
+    assert all(s.belief.scan is not None for s in plain.samples[:-1])  # each one fresh
+    stage = BlankAfterSignal("never")
+    stage.active_from = 0.0
+    _, blank, robot = _run(tmp_path / "blank", stage, monitor=False, rates=(20.0, 20.0))
+    assert all(s.belief.scan is not None and (s.belief.scan.ranges == 3.5).all()
+               for s in blank.samples[:-1])
+    assert all(o.scan is not None and (o.scan.ranges == 3.5).all() for o in robot.seen)
