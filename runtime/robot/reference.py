@@ -4,8 +4,8 @@ Global planning: A* (``rei.runtime.robot.gridplan``) over a grid of the known st
 cells blocked within the robot's footprint radius of any wall or static object and made dearer
 near them, so paths keep to the middle of passages. Local planning: a dynamic-window search
 over (linear, angular) velocity pairs within the drive limits, each rolled out for a short
-horizon against the points the laser sees (humans and moving objects included), scored by progress towards a
-lookahead point on the path, clearance and speed.
+horizon against the points the laser sees (humans and moving objects included), scored by
+progress towards a lookahead point on the path, clearance and speed.
 
 Recovery (runtime/robot/recovery.py, as ROS move_base / Nav2 do it): when the local planner
 finds no admissible motion for ``STUCK_AFTER`` seconds, or the robot makes no progress for
