@@ -153,6 +153,11 @@ class ReferenceNavigator:
         self._wmax = context.drive.max_angular
         self._points_of: LaserScan | None = None
         self._points = np.zeros((0, 2))
+        # Per-scan results, keyed by the identity of the scan's points (see _laser_points).
+        self._clearance_of: np.ndarray | None = None
+        self._clearance = np.zeros(0)
+        self._near_of: np.ndarray | None = None
+        self._near = np.zeros((0, 2))
         self._build_grid(context)
         self._build_map_fit(context)
         self._build_rollouts()
@@ -200,12 +205,13 @@ class ReferenceNavigator:
         """Whether an unmapped laser point is within the slow zone (and its lead)."""
         if not len(points):
             return False
-        hx, hy = self._half
-        qx = np.abs(points[:, 0]) - hx
-        qy = np.abs(points[:, 1]) - hy
-        gap = np.hypot(np.maximum(qx, 0.0), np.maximum(qy, 0.0))
-        near = points[gap < SLOW_ZONE_RADIUS + SLOW_ZONE_LEAD]
-        return bool(self._unmapped(near, pose).any())
+        if self._near_of is not points:  # the points near the footprint: once per scan
+            hx, hy = self._half
+            qx = np.abs(points[:, 0]) - hx
+            qy = np.abs(points[:, 1]) - hy
+            gap = np.hypot(np.maximum(qx, 0.0), np.maximum(qy, 0.0))
+            self._near_of, self._near = points, points[gap < SLOW_ZONE_RADIUS + SLOW_ZONE_LEAD]
+        return bool(self._unmapped(self._near, pose).any())
 
     def _grid_graph(self, inflate: float) -> GridGraph:
         """The planning graph of the cells farther than ``inflate`` from the static map."""
@@ -497,15 +503,7 @@ class ReferenceNavigator:
         c, s = math.cos(yaw), math.sin(yaw)
         tx = c * (target[0] - x) + s * (target[1] - y)
         ty = -s * (target[0] - x) + c * (target[1] - y)
-        n = self._local_n
-        if len(points):
-            ij = np.floor(points / LOCAL_RES + n / 2).astype(np.int64)
-            inside = ((ij >= 0) & (ij < n)).all(axis=1)
-            flat = ij[inside, 0] * n + ij[inside, 1]
-            gaps = self._sweep[:, flat]
-            clearance = gaps.min(axis=1) if gaps.shape[1] else np.full(len(self._cmds), 0.5)
-        else:
-            clearance = np.full(len(self._cmds), 0.5)
+        clearance = self._rollout_clearance(points)
         hit = clearance < margin
         clearance = np.clip(clearance, 0.0, 0.5)
         v, w = self._cmds[:, 0], self._cmds[:, 1]
@@ -525,6 +523,24 @@ class ReferenceNavigator:
         if not np.isfinite(score[best]):
             return None
         return VelocityCommand(float(v[best]), float(w[best]))
+
+    def _rollout_clearance(self, points: np.ndarray) -> np.ndarray:
+        """Each roll-out's smallest gap to the laser points (robot frame), 0.5 when none
+        is in reach; the same for every tick of one scan, so computed once per scan."""
+        if self._clearance_of is points:
+            return self._clearance
+        n = self._local_n
+        if len(points):
+            ij = np.floor(points / LOCAL_RES + n / 2).astype(np.int64)
+            inside = ((ij >= 0) & (ij < n)).all(axis=1)
+            flat = ij[inside, 0] * n + ij[inside, 1]
+            gaps = self._sweep[:, flat]
+            clearance = gaps.min(axis=1) if gaps.shape[1] else np.full(len(self._cmds), 0.5)
+        else:
+            clearance = np.full(len(self._cmds), 0.5)
+        clearance.flags.writeable = False
+        self._clearance_of, self._clearance = points, clearance
+        return clearance
 
     def _replan_around(self, points: np.ndarray, goal: NavGoal, xy: tuple[float, float],
                        reduced: bool = False) -> bool:
