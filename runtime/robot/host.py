@@ -257,13 +257,16 @@ class HostedController:
         """Write the request; False when the host does not take it before the deadline."""
         fd = self._requests.fileno()
         view = memoryview(data)
+        ready: list[int] = [fd]  # a request fits in an empty pipe: try before waiting
         while view:
-            _, ready, _ = select.select([], [fd], [], self._remaining(deadline))
             if not ready:
-                return False
+                _, ready, _ = select.select([], [fd], [], self._remaining(deadline))
+                if not ready:
+                    return False
             try:
                 view = view[os.write(fd, view):]
             except BlockingIOError:
+                ready = []
                 continue
             except BrokenPipeError:
                 return True  # the host is gone: the answer's end of file says how
@@ -349,7 +352,7 @@ def _answer_of(what: str, controller: Any, args: tuple[Any, ...]) -> dict[str, A
 def _read_exactly(stream: BinaryIO, size: int) -> bytes | None:
     data = b""
     while len(data) < size:
-        chunk = stream.read(size - len(data))
+        chunk = stream.read(size - len(data))  # buffered: all of it unless the pipe closed
         if not chunk:
             return None
         data += chunk
@@ -385,7 +388,8 @@ def serve(requests: BinaryIO, answers: BinaryIO) -> None:
 def main() -> None:
     # The pipes move to descriptors of their own; 0 reads nothing and 1 is stderr, so what
     # the controller prints cannot be taken for an answer.
-    requests = os.fdopen(os.dup(0), "rb", buffering=0)
+    # Buffered: a request's length prefix and body usually arrive in one read of the pipe.
+    requests = os.fdopen(os.dup(0), "rb")
     answers = os.fdopen(os.dup(1), "wb")
     devnull = os.open(os.devnull, os.O_RDONLY)
     os.dup2(devnull, 0)
