@@ -55,6 +55,20 @@ class GridGraph:
         return 0 <= i < self.shape[0] and 0 <= j < self.shape[1] and \
             bool(self._free[i * self.shape[1] + j])
 
+    def weight(self, a: tuple[int, int], b: tuple[int, int]) -> float | None:
+        """The weight of the edge between neighbouring cells ``a`` and ``b``; None when
+        there is none."""
+        if a not in self or b not in self:
+            return None
+        if b < a:
+            a, b = b, a
+        step = (b[0] - a[0], b[1] - a[1])
+        if step not in DIRECTIONS:
+            return None
+        weights = self._weights[DIRECTIONS.index(step)]
+        weight: float | None = weights[a[0] * self.shape[1] + a[1]]
+        return weight
+
     def astar(self, source: tuple[int, int], target: tuple[int, int],
               blocked: set[tuple[int, int]] | None = None) -> list[tuple[int, int]] | None:
         """The cheapest path of cells from ``source`` to ``target`` (both free), avoiding the

@@ -82,3 +82,14 @@ def test_membership_and_no_path() -> None:
     assert (detour[0], detour[-1], len(detour)) == ((0, 0), (5, 0), 6)
     assert all(max(abs(p[0] - q[0]), abs(p[1] - q[1])) == 1
                for p, q in zip(detour, detour[1:], strict=False))
+
+
+def test_edge_weights_are_networkx_weights() -> None:
+    rng = np.random.default_rng(3)
+    free = rng.random((9, 7)) > 0.2
+    cost = 1.0 + 4.0 * rng.random((9, 7))
+    ours, theirs = GridGraph(free, cost), networkx_graph(free, cost)
+    for a in theirs.nodes:
+        for b, data in theirs.adj[a].items():
+            assert ours.weight(a, b) == data["weight"]
+    assert ours.weight((0, 0), (2, 0)) is None  # not neighbours
