@@ -179,7 +179,7 @@ def full_mission(mission_file: Path, work: Path) -> dict[str, Any]:
     steady = max(cpu - cut.cpu_seconds, 1e-9)
     # The robot's process starts while the world is built; what is left of its start-up is
     # waited for in the loop's first call: that wait is start-up, not the loop's.
-    wall = record.wall_seconds - hosts[0].load_wait
+    wall = record.wall_seconds - getattr(hosts[0], "load_wait", 0.0)  # older hosts: none
     return {"record": record, "rtf": record.duration / wall,
             "cpu_rtf": record.duration / cpu, "cpu": cpu, "steady_rtf": record.duration / steady,
             "in_loop_setup": cut.cpu_seconds}
