@@ -306,8 +306,10 @@ def link_fault_entry(entry: Any, span: Callable[[Any], Span],
     kind = entry.kind.name
     spec = KINDS.get(kind)
     if spec is None:
-        diagnostics.append(Diagnostic(span(entry.kind), "FAULT-KIND",
-                                      parameter_problems(kind, {})[0][1]))
+        message = parameter_problems(kind, {})[0][1]
+        if any(k.parameter(kind) for k in FAULT_KINDS):
+            message += f" (a parameter is followed by its number: '{kind} 0.5')"
+        diagnostics.append(Diagnostic(span(entry.kind), "FAULT-KIND", message))
         return None
     values: dict[str, float] = {}
     where: dict[str, Span] = {}
