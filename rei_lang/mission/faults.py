@@ -194,7 +194,7 @@ def parameter_problems(kind: str, values: dict[str, float]) -> list[tuple[str | 
     """(parameter or None, message) for every problem of a kind's complete parameter set."""
     spec = KINDS.get(kind)
     if spec is None:
-        return [(None, f"expected a fault kind ({', '.join(KINDS)}), found '{kind}'"
+        return [(None, f"expected a fault kind ({', '.join(KINDS)}), found '{_shown(kind)}'"
                  + did_you_mean(kind, KINDS))]
     out: list[tuple[str | None, str]] = []
     for name, value in values.items():
@@ -223,8 +223,13 @@ def parameter_problems(kind: str, values: dict[str, float]) -> list[tuple[str | 
 def _unknown_parameter(spec: FaultKind, name: str) -> str:
     names = [p.name for p in spec.parameters]
     accepted = ", ".join(names) if names else "none"
-    return (f"{spec.kind}: expected a parameter of {spec.kind} ({accepted}), found '{name}'"
-            + did_you_mean(name, names))
+    return (f"{spec.kind}: expected a parameter of {spec.kind} ({accepted}), found "
+            f"'{_shown(name)}'" + did_you_mean(name, names))
+
+
+def _shown(name: str) -> str:
+    """A name as quoted in a message: a 100,000-letter one is not echoed whole."""
+    return name if len(name) <= 60 else name[:57] + "..."
 
 
 @dataclass(frozen=True)
@@ -398,6 +403,10 @@ def parse_fault_option(text: str) -> FaultDefinition:
     from rei.lang.source import SourceText
 
     source = SourceText("--fault", text)
+    if not text.strip():
+        raise LanguageError([Diagnostic(Span.point("--fault"), "SYNTAX",
+                                        "expected a fault kind and its parameters "
+                                        "('laser_dropout share 0.3'), found nothing")])
     parsed = parse("mission_fault", source)
     if isinstance(parsed, Diagnostic):
         raise LanguageError([parsed])

@@ -172,3 +172,31 @@ def test_the_editor_completes_the_fault_section() -> None:
     assert {"for", "until"} <= after_signal
     outside = {c.label for c in mission_completions('mission m in "r.room" {\n    ', None)}
     assert "fault" in outside and not outside & {"when", "until", "as", "from"}
+
+
+@pytest.mark.parametrize(("text", "words"), [
+    ("", "found nothing"),
+    (" \n ", "found nothing"),
+    ("x" * 100_000, "xxx...'"),
+    ("cmd_drop \x1b[31m share 1", "\\x1b"),
+    ("cmd_drop share 0.1 when SIG_A for 1e999", "finite"),
+])
+def test_hostile_options_get_clear_errors(text: str, words: str) -> None:
+    with pytest.raises(LanguageError) as err:
+        parse_fault_option(text)
+    message = str(err.value)
+    assert message.startswith("--fault:1:") and words in message
+    assert len(message) < 400
+
+
+@pytest.mark.parametrize(("activation", "words"), [
+    (Activation(start=5.0, end=5.0), "end after the start"),
+    (Activation(signal="SIG_A", start=3.0), "either a time window or a signal"),
+    (Activation(duration=2.0), "'for': expected after 'when SIGNAL'"),
+    (Activation(stop="SIG_B", end=3.0), "'until': expected after"),
+    (Activation(signal="SIG A"), "expected a signal name"),
+    (Activation(start=math.inf), "finite"),
+])
+def test_python_definitions_are_checked_too(activation: Activation, words: str) -> None:
+    with pytest.raises(LanguageError, match=words):
+        FaultDefinition.of("cmd_drop", activation, share=0.5)
