@@ -64,8 +64,8 @@ class LaserPoisson:
         self.when, self.rng = when, rng
         self.previous: LaserScan | None = None
         self.previous_stamp: float | None = None
-        self.occurrences: list[float] = []
-        """Times of the occurrences counted so far (while active and the impulse was high)."""
+        self.occurrences = 0
+        """Occurrences counted so far (while active and the impulse was high)."""
         self.corrupted = 0
         """Scans replaced by a noisy previous reading."""
 
@@ -84,7 +84,7 @@ class LaserPoisson:
         times = np.sort(start + span * (1.0 - self.rng.random(int(self.rng.poisson(
             self.rate * span)))))
         counted = [float(t) for t in times if self.pulse_high(float(t))]
-        self.occurrences.extend(counted)
+        self.occurrences += len(counted)
         previous = self.previous
         self.previous, self.previous_stamp = scan, stamp
         if not counted or previous is None:
@@ -269,7 +269,7 @@ class OdomJump:
         self.transform = (0.0, 0.0, 0.0)
         """(tx, ty, theta): reported = R(theta) measured + t."""
         self.jumped_for: float | None = None
-        self.jumps: list[float] = []
+        self.jumps = 0
 
     def _report(self, pose: Pose) -> Pose:
         tx, ty, th = self.transform
@@ -281,7 +281,7 @@ class OdomJump:
         since = self.when.since(time)
         if since is not None and since != self.jumped_for:
             self.jumped_for = since
-            self.jumps.append(time)
+            self.jumps += 1
             # Turn by dyaw about the reported point, then shift: reported' = J(reported).
             rx, ry, _ = self._report(pose)
             tx, ty, th = self.transform

@@ -122,8 +122,7 @@ class FaultPlan:
                               "jumps"):
                 value = getattr(m, attribute, None)
                 if value is not None:
-                    counts.append((attribute, len(value) if isinstance(value, list)
-                                   else int(value)))
+                    counts.append((attribute, int(value)))
             out.append(FaultStatistics(d.name, d.kind, tuple(counts)))
         return tuple(out)
 

@@ -427,3 +427,20 @@ def test_dropped_commands_are_always_a_previous_command(share: float, seed: int)
         asked = (float(k), 0.0)
         asked_so_far.add(asked)
         assert stage.command(k * 0.1, asked) in asked_so_far
+
+
+def test_statistics_count_what_each_fault_did(scans: list[LaserScan]) -> None:
+    stage = FaultPlan([FaultDefinition.of("laser_poisson", rate=3.0, gain=0.05),
+                       FaultDefinition.of("laser_dropout", share=0.5),
+                       FaultDefinition.of("cmd_drop", share=0.5),
+                       FaultDefinition.of("odom_jump", Activation(start=1.0), dx=1.0)], seed=3)
+    for time, measured, _, delivered, _ in feed(stage, scans, 20.0, tick_dt=0.2):
+        stage.command(time, (time, 0.0))
+        stage.odometry(time, (0.0, 0.0, 0.0), (0.0, 0.0))
+        assert delivered is not None and delivered is not measured  # half the beams drop
+    stats = {s.name: dict(s.counts) for s in stage.statistics()}
+    assert stats["laser_poisson"]["corrupted"] >= 1
+    assert stats["laser_poisson"]["occurrences"] >= stats["laser_poisson"]["corrupted"]
+    assert stats["laser_dropout"]["beams"] == 101 * len(scans[0].ranges)
+    assert stats["cmd_drop"]["asked"] == 101 and 0 < stats["cmd_drop"]["lost"] < 101
+    assert stats["odom_jump"] == {"jumps": 1}
