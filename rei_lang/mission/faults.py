@@ -415,3 +415,21 @@ def parse_fault_option(text: str) -> FaultDefinition:
     if definition is None:
         raise LanguageError(diagnostics)
     return definition
+
+
+FAULT_OPTION_HELP = ("a fault to inject, written as one entry of a mission's fault section, "
+                     "e.g. 'laser_dropout share 0.3 when SIG_GEOM_FAR_TRANSIT_CLOSE for 2' "
+                     f"(repeatable; kinds: {', '.join(KINDS)}; see docs/faults.md)")
+"""The ``--help`` text of a ``--fault`` option, for every command that takes one."""
+
+
+def fault_argument(text: str) -> FaultDefinition:
+    """``parse_fault_option`` as an argparse ``type``: a bad fault is a usage error whose
+    message says where in the option's text, what was expected and what was found."""
+    import argparse  # noqa: PLC0415
+
+    try:
+        return parse_fault_option(text)
+    except LanguageError as err:
+        raise argparse.ArgumentTypeError(
+            "; ".join(f"column {d.span.col}: {d.message}" for d in err.diagnostics)) from None

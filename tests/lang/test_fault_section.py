@@ -200,3 +200,19 @@ def test_hostile_options_get_clear_errors(text: str, words: str) -> None:
 def test_python_definitions_are_checked_too(activation: Activation, words: str) -> None:
     with pytest.raises(LanguageError, match=words):
         FaultDefinition.of("cmd_drop", activation, share=0.5)
+
+
+def test_fault_argument_is_an_argparse_type() -> None:
+    import argparse  # noqa: PLC0415
+
+    from rei.lang.mission.faults import FAULT_OPTION_HELP, fault_argument  # noqa: PLC0415
+
+    parser = argparse.ArgumentParser(prog="rei run", exit_on_error=False)
+    parser.add_argument("--fault", type=fault_argument, action="append", default=[],
+                        help=FAULT_OPTION_HELP)
+    args = parser.parse_args(["--fault", "cmd_drop share 0.2", "--fault",
+                              "laser_freeze when SIG_A for 1"])
+    assert [d.kind for d in args.fault] == ["cmd_drop", "laser_freeze"]
+    with pytest.raises(argparse.ArgumentError, match=r"column 10: cmd_drop share \(share\): "
+                       r"expected a number >= 0 and <= 1, found 2"):
+        parser.parse_args(["--fault", "cmd_drop share 2"])
