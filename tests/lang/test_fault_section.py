@@ -123,7 +123,9 @@ def definitions(draw: st.DrawFn) -> FaultDefinition:
         if p.default is None or draw(st.booleans()):
             params[p.name] = draw(st.floats(p.low, p.high, exclude_min=p.low_open))
     if spec.nonzero_one_of and all(params.get(n, 0.0) == 0.0 for n in spec.nonzero_one_of):
-        params[spec.nonzero_one_of[0]] = spec.parameter(spec.nonzero_one_of[0]).high  # type: ignore[union-attr]
+        first = spec.parameter(spec.nonzero_one_of[0])
+        assert first is not None
+        params[first.name] = first.high
     if spec.kind == "laser_sector" and params["min_deg"] > params["max_deg"]:
         params["min_deg"], params["max_deg"] = params["max_deg"], params["min_deg"]
     window = draw(st.sampled_from(["always", "window", "event", "until"]))

@@ -19,7 +19,7 @@ from hypothesis import strategies as st
 from rei.lang.errors import LanguageError
 from rei.lang.mission.faults import Activation, FaultDefinition
 from rei.runtime.errors import RunError
-from rei.runtime.faults import NO_FAULTS, FaultPlan, fault_stage
+from rei.runtime.faults import NO_FAULTS, FaultPlan, FaultStage, fault_stage
 from rei.runtime.messages import LaserScan
 from rei.runtime.run import generate_world
 from rei.runtime.sensors.laser import Laser2D, ShapeSet, merge_wall_tiles, shapes_of
@@ -46,13 +46,12 @@ def scans(tmp_path_factory: pytest.TempPathFactory) -> list[LaserScan]:
     return out
 
 
-def feed(stage: object, scans: list[LaserScan], seconds: float, scan_dt: float = 0.2,
+def feed(stage: FaultStage, scans: list[LaserScan], seconds: float, scan_dt: float = 0.2,
          tick_dt: float = 0.1) -> Iterator[tuple[float, LaserScan, float, LaserScan | None,
                                                   float | None]]:
     """Drive a stage like the run loop: a control tick every ``tick_dt``, a new scan (a fresh
     object, cycling through ``scans``) every ``scan_dt``. Yields (time, measured, measured_at,
     delivered, delivered stamp) at every tick."""
-    assert hasattr(stage, "scan")
     ticks = round(seconds / tick_dt)
     per_scan = round(scan_dt / tick_dt)
     measured: LaserScan | None = None
@@ -65,11 +64,11 @@ def feed(stage: object, scans: list[LaserScan], seconds: float, scan_dt: float =
                                  source.range_max, source.ranges.copy())
             measured_at = time
         assert measured is not None
-        out, stamp = stage.scan(time, measured, measured_at)  # type: ignore[attr-defined]
+        out, stamp = stage.scan(time, measured, measured_at)
         yield time, measured, measured_at, out, stamp  # type: ignore[misc]
 
 
-def new_scans(stage: object, scans: list[LaserScan], seconds: float, scan_dt: float = 0.2
+def new_scans(stage: FaultStage, scans: list[LaserScan], seconds: float, scan_dt: float = 0.2
               ) -> list[tuple[float, LaserScan, LaserScan | None, float | None]]:
     """(stamp, measured, delivered, delivered stamp) once per measured scan."""
     out = []
@@ -156,7 +155,8 @@ def test_poisson_gain_changes_during_the_mission(scans: list[LaserScan]) -> None
         FaultDefinition.of("laser_poisson", Activation(start=20.0), "high", rate=5.0,
                            gain=0.5)], seed=1)
     rows = new_scans(stage, scans, 40.0)
-    offsets_before, offsets_after = set(), set()
+    offsets_before: set[int] = set()
+    offsets_after: set[int] = set()
     previous = None
     for at, measured, delivered, _ in rows:
         assert delivered is not None
@@ -251,7 +251,7 @@ def test_blocked_sector(scans: list[LaserScan]) -> None:
 
 # ---- odometry ---------------------------------------------------------------------------------
 
-def drive(stage: object, seconds: float, speed: float = 0.2, dt: float = 0.1,
+def drive(stage: FaultStage, seconds: float, speed: float = 0.2, dt: float = 0.1,
           signals: dict[float, str] | None = None) -> list[tuple[float, tuple[float, float, float],
                                                              tuple[float, float, float]]]:
     """(time, true pose, reported pose) while the robot drives straight along +x."""
@@ -260,9 +260,9 @@ def drive(stage: object, seconds: float, speed: float = 0.2, dt: float = 0.1,
         t = k * dt
         for at, name in (signals or {}).items():
             if abs(t - at) < 1e-9:
-                stage.signal(t, name)  # type: ignore[attr-defined]
+                stage.signal(t, name)
         pose = (1.0 + speed * t, 2.0, 0.0)
-        reported, _ = stage.odometry(t, pose, (speed, 0.0))  # type: ignore[attr-defined]
+        reported, _ = stage.odometry(t, pose, (speed, 0.0))
         out.append((t, pose, reported))
     return out
 
@@ -444,3 +444,65 @@ def test_statistics_count_what_each_fault_did(scans: list[LaserScan]) -> None:
     assert stats["laser_dropout"]["beams"] == 101 * len(scans[0].ranges)
     assert stats["cmd_drop"]["asked"] == 101 and 0 < stats["cmd_drop"]["lost"] < 101
     assert stats["odom_jump"] == {"jumps": 1}
+
+
+def test_the_impulse_starts_with_an_event_triggered_fault(scans: list[LaserScan]) -> None:
+    """Pulses are timed from the moment the signal fired, not from the start of the run."""
+    dt = 0.01
+    stage = fault_stage([FaultDefinition.of("laser_poisson", Activation(signal="SIG_A"),
+                                            rate=400.0, gain=0.01, period=1.0, width=0.1)],
+                        seed=6)
+    fired = 3.37
+    rows: list[tuple[float, LaserScan, LaserScan | None, float | None]] = []
+    last = None
+    for time, measured, at, delivered, _ in feed(stage, scans, 12.0, scan_dt=dt, tick_dt=dt):
+        if abs(time - fired) < 1e-9:
+            stage.signal(time, "SIG_A")
+        if measured is not last:
+            assert at is not None
+            rows.append((at, measured, delivered, None))
+            last = measured
+    counts = poisson_counts(rows, gain=0.01)
+    hit = [at for at, k in counts if k]
+    assert hit and min(hit) > fired
+    for at in hit:
+        assert math.fmod(at - fired + 1e-9, 1.0) < 0.1 + dt + 2e-9, at
+    # Every pulse after the signal (8 whole ones) shows occurrences: 400/s x 0.1 s = 40 each.
+    assert {math.floor(at - fired + 1e-9) for at in hit} == set(range(9))
+
+
+@given(st.lists(st.tuples(st.floats(0.0, 50.0), st.sampled_from(["SIG_A", "SIG_B", "X"])),
+                max_size=12),
+       st.sampled_from([Activation(signal="SIG_A", duration=3.0),
+                        Activation(signal="SIG_A", stop="SIG_B"),
+                        Activation(signal="SIG_A"), Activation(stop="SIG_B"),
+                        Activation(start=10.0, end=30.0)]))
+@settings(max_examples=150, deadline=None)
+def test_activation_follows_the_signals(events: list[tuple[float, str]],
+                                        activation: Activation) -> None:
+    """Against a tick-by-tick reference: active at t exactly when the definition says."""
+    events.sort()
+    stage = FaultPlan([FaultDefinition.of("laser_freeze", activation)], seed=0)
+    tracker = stage.trackers[0]
+    for time, name in events:
+        stage.signal(time, name)
+    for k in range(601):
+        t = k * 0.1
+        before = [(time, name) for time, name in events if time <= t]
+        if activation.signal is None:
+            stopped = any(name == "SIG_B" for _, name in before) and activation.stop
+            expected = (activation.start <= t and (activation.end is None or t < activation.end)
+                        and not stopped)
+        else:
+            starts = [time for time, name in before if name == "SIG_A"]
+            stops = [time for time, name in before if name == "SIG_B"]
+            if activation.duration is not None:
+                expected = any(t < s + activation.duration for s in starts)
+            elif activation.stop is not None:
+                expected = bool(starts) and (not stops or max(starts) > max(stops)) \
+                    if starts else False
+            else:
+                expected = bool(starts)
+        assert tracker.active(t) == bool(expected), (t, events)
+    for name, start, end in stage.timeline():
+        assert name == "laser_freeze" and (end is None or end > start)
