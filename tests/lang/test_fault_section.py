@@ -218,3 +218,16 @@ def test_fault_argument_is_an_argparse_type() -> None:
     with pytest.raises(argparse.ArgumentError, match=r"column 10: cmd_drop share \(share\): "
                        r"expected a number >= 0 and <= 1, found 2"):
         parser.parse_args(["--fault", "cmd_drop share 2"])
+
+
+def test_the_outline_lists_faults_among_the_goals(tmp_path: Path) -> None:
+    from rei.lang.lsp.outline import mission_outline  # noqa: PLC0415
+    from rei.lang.lsp.positions import LineIndex  # noqa: PLC0415
+
+    path = mission(tmp_path, "        cmd_drop share 0.2\n        laser_freeze as stuck from 3")
+    doc = Workspace().mission(path)
+    assert doc.mission is not None
+    outline = mission_outline(doc.mission, LineIndex.of(path.read_text(encoding="utf-8")))
+    assert [(s.name, s.kind, s.span.line) for s in outline.children] == [
+        ("cmd_drop", "fault", 3), ("stuck", "fault", 4), ("a", "goal", 6), ("b", "goal", 7)]
+    assert outline.children[1].detail == "laser_freeze as stuck from 3.0"
