@@ -646,6 +646,8 @@ class TraceWriter:
 
     Raises ``TraceError`` (and writes nothing more) for a header, sample or end the reader
     would refuse: a non-finite number, a time going back, an unknown kind, ...
+    ``line`` is the last line written (without its newline): a sink after this one can
+    carry it as is (the MCAP recorder does) instead of encoding the record again.
     """
 
     def __init__(self, path: str | Path) -> None:
@@ -653,6 +655,7 @@ class TraceWriter:
         self.partial = self.path.with_name(self.path.name + ".partial")
         self._file: IO[str] | None = None
         self._encoder = TraceEncoder(str(self.partial))
+        self.line = ""
 
     def _refuse(self, exc: TraceError) -> TraceError:
         if self._file is not None:
@@ -668,6 +671,7 @@ class TraceWriter:
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._file = open_output(self.partial)  # never written through a link
         self._file.write(text + "\n")
+        self.line = text
 
     def feed(self, sample: Sample) -> None:
         assert self._file is not None, "start() first"
@@ -676,6 +680,7 @@ class TraceWriter:
         except TraceError as exc:
             raise self._refuse(exc) from None
         self._file.write(text + "\n")
+        self.line = text
 
     def finish(self, end_time: float, outcome: str, reason: str) -> None:
         if self._file is None:
@@ -685,6 +690,7 @@ class TraceWriter:
         except TraceError as exc:
             raise self._refuse(exc) from None
         self._file.write(text + "\n")
+        self.line = text
         self._file.flush()
         os.fsync(self._file.fileno())
         self._file.close()

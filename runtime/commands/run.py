@@ -227,6 +227,7 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
     for stale in (out_dir / SUMMARY, out_dir / TRACE, out_dir / EVENTS, out_dir / PAGE,
                   out_dir / RECORDING):
         stale.unlink(missing_ok=True)
+    trace_writer = TraceWriter(out_dir / TRACE)
     recorder: list[SampleSink] = []
     if recording:
         from rei.runtime.recording import McapRecorder  # noqa: PLC0415
@@ -235,8 +236,9 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
             host = monitor_sink.host if monitor_sink is not None else None
             return host.log.rows if host is not None else ()
 
-        # after the monitor: a sample's signals have fired when the recorder sees it
-        recorder.append(McapRecorder(out_dir / RECORDING, fired))
+        # after the trace writer (its lines are carried as written) and the monitor (a
+        # sample's signals have fired when the recorder sees it)
+        recorder.append(McapRecorder(out_dir / RECORDING, fired, trace=trace_writer))
 
     def show(now: float, end: float) -> None:
         if progress is None:
@@ -258,7 +260,7 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
         log(f"mission {mission.name} in room {mission.world.name}, controller {controller}, "
             f"seed {seed}")
         record = run_mission(mission, manifest, monitor_config, robot,
-                             [TraceWriter(out_dir / TRACE),
+                             [trace_writer,
                               *([monitor_sink] if monitor_sink is not None else []), *recorder,
                               *sinks],
                              config,

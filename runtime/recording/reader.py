@@ -21,8 +21,9 @@ from pathlib import Path
 from typing import IO
 
 from mcap.exceptions import EndOfFile, RecordLengthLimitExceeded
-from mcap.records import Channel, Footer, McapRecord, Message
-from mcap.stream_reader import StreamReader
+from mcap.opcode import Opcode
+from mcap.records import Channel, Chunk, Footer, McapRecord, Message
+from mcap.stream_reader import StreamReader, get_chunk_data_stream
 
 from rei.runtime.collector.trace import (
     TraceDecoder,
@@ -36,6 +37,9 @@ from rei.runtime.recording.errors import RecordingError
 from rei.runtime.recording.writer import TRACE_TOPIC
 
 MAGIC = b"\x89MCAP0\r\n"
+_MESSAGE_FIELDS = 20
+"""Bytes of a message record between its channel id and its data: sequence (4), log time
+(8), publish time (8)."""
 End = tuple[float, str, str]
 
 
@@ -78,8 +82,9 @@ class RecordedSamples(Iterator[Sample]):
         self._tracked = _Tracked(handle)
         size = os.fstat(handle.fileno()).st_size
         # A record longer than the file is a cut one (and never worth allocating for).
-        self._records = StreamReader(self._tracked, validate_crcs=True,  # type: ignore[arg-type]
-                                     record_size_limit=size).records
+        self._records = self._opened(StreamReader(
+            self._tracked, validate_crcs=True, emit_chunks=True,  # type: ignore[arg-type]
+            record_size_limit=size).records)
         self._channel: int | None = None
         self._topics: list[str] = []
         self._decoder: TraceDecoder | None = None
@@ -92,7 +97,28 @@ class RecordedSamples(Iterator[Sample]):
 
     # ---- records of the file -----------------------------------------------------------------
 
-    def _next_record(self) -> McapRecord | None:
+    def _opened(self, records: Iterator[McapRecord]) -> Iterator[McapRecord | bytes]:
+        """The file's records with each chunk opened (mcap decompresses it and checks its
+        CRC): its channels, and the data of each /rei/trace message as bytes; the other
+        messages are skipped unparsed (a replay reads only the trace)."""
+        for record in records:
+            if not isinstance(record, Chunk):
+                yield record
+                continue
+            stream, length = get_chunk_data_stream(record, validate_crc=True)
+            while stream.count < length:
+                opcode, size = stream.read1(), stream.read8()
+                if opcode == Opcode.MESSAGE:
+                    channel = stream.read2()
+                    rest = stream.read(size - 2)
+                    if channel == self._channel:
+                        yield rest[_MESSAGE_FIELDS:]
+                elif opcode == Opcode.CHANNEL:
+                    yield Channel.read(stream)
+                else:
+                    stream.read(size)
+
+    def _next_record(self) -> McapRecord | bytes | None:
         """The next record, or None at the end of the file (``cut_short`` set if it was cut)."""
         if self._done:
             return None
@@ -154,8 +180,11 @@ class RecordedSamples(Iterator[Sample]):
                             f"encoding 'json' (REI's trace), found "
                             f"{record.message_encoding!r}")
                     self._channel = record.id
-            elif isinstance(record, Message) and record.channel_id == self._channel:
+            elif isinstance(record, bytes):  # a /rei/trace message of a chunk
                 self._messages += 1
+                return record
+            elif isinstance(record, Message) and record.channel_id == self._channel:
+                self._messages += 1  # a message outside chunks (other writers)
                 return record.data
 
     def _where(self) -> str:

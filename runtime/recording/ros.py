@@ -98,11 +98,16 @@ class RosViews:
         self._duration = t["builtin_interfaces/msg/Duration"]
         self._covariance = np.zeros(36, dtype=np.float64)
         self._identity = self._quat(0.0)
+        # Set-up work done here, before the run: the schemas, and rosbags' serialisers of
+        # every type (generated and compiled on first use) -- not in the run's first sample.
+        self._schemas = {t: self.store.generate_msgdef(t, ros_version=2)[0].encode("utf-8")
+                         for t in set(TOPICS.values())}
+        for msgtype in self._schemas:
+            self.store.get_msgdef(msgtype)
 
     def schema(self, msgtype: str) -> bytes:
         """The type's ``ros2msg`` definition with its dependencies (`ros2 bag`'s form)."""
-        text, _ = self.store.generate_msgdef(msgtype, ros_version=2)
-        return text.encode("utf-8")
+        return self._schemas[msgtype]
 
     def _cdr(self, message: Any, msgtype: str) -> bytes:
         return bytes(self.store.serialize_cdr(message, msgtype))

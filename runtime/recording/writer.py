@@ -25,7 +25,7 @@ import numpy as np
 from mcap.writer import CompressionType, Writer
 
 from rei.generators.output import open_output
-from rei.runtime.collector.trace import TraceEncoder, TraceError
+from rei.runtime.collector.trace import TraceEncoder, TraceError, TraceWriter
 from rei.runtime.evaluator.signal_log import SignalRow
 from rei.runtime.messages import Sample, StreamHeader
 from rei.runtime.recording.errors import RecordingError
@@ -61,15 +61,18 @@ class McapRecorder:
     ``signals``, when given, returns the signals fired so far (the monitor's signal log):
     the new ones are recorded on /rei/signals after each sample and at the end. Put the
     recorder after the monitor among the sinks, so a sample's signals are in by then.
+    ``trace``, when given, is the run's ``TraceWriter``, fed before the recorder: its lines
+    (encoded and checked once) are carried on /rei/trace as written, byte for byte.
     Raises ``RecordingError`` for a record the trace's reader would refuse, or a file that
     cannot be written.
     """
 
     def __init__(self, path: str | Path,
                  signals: Callable[[], Sequence[SignalRow]] | None = None,
-                 chunk_bytes: int = CHUNK_BYTES) -> None:
+                 chunk_bytes: int = CHUNK_BYTES, trace: TraceWriter | None = None) -> None:
         self.path = Path(path)
         self.signals = signals
+        self.trace = trace
         self.chunk_bytes = chunk_bytes
         self._file: IO[bytes] | None = None
         self._writer: Writer | None = None
@@ -85,11 +88,27 @@ class McapRecorder:
 
     # ---- the sink ---------------------------------------------------------------------------
 
-    def start(self, header: StreamHeader) -> None:
+    def _encode(self, encode: Callable[..., str], *record: object) -> str:
         try:
-            record = self._encoder.header(header)
+            return encode(*record)
         except TraceError as exc:
+            self._abandon()
             raise RecordingError(f"cannot write the recording: {exc}") from None
+
+    def _written(self, start: str, what: str) -> str:
+        """The trace writer's last line, which must be the record being recorded."""
+        assert self.trace is not None
+        line = self.trace.line
+        if not line.startswith(start):
+            self._abandon()
+            raise RecordingError(f"cannot write the recording '{self.path}': expected the trace "
+                                 f"writer to have written {what} (it must be fed before the "
+                                 f"recorder), found {line[:40]!r}")
+        return line
+
+    def start(self, header: StreamHeader) -> None:
+        record = self._written('{"format":', "the header") if self.trace is not None \
+            else self._encode(self._encoder.header, header)
         self._header = header
         self._scan_time = 1.0 / header.rate
         try:
@@ -120,11 +139,8 @@ class McapRecorder:
     def feed(self, sample: Sample) -> None:
         header = self._header
         assert header is not None and self._writer is not None, "start() first"
-        try:
-            record = self._encoder.sample(sample)
-        except TraceError as exc:
-            self._abandon()
-            raise RecordingError(f"cannot write the recording: {exc}") from None
+        record = self._written(f'{{"seq":{sample.seq},', f"sample {sample.seq}") \
+            if self.trace is not None else self._encode(self._encoder.sample, sample)
         t = sample.time
         self._add(TRACE_TOPIC, t, record.encode("utf-8"))
         views = self._views
@@ -145,11 +161,8 @@ class McapRecorder:
     def finish(self, end_time: float, outcome: str, reason: str) -> None:
         if self._writer is None or self._file is None:
             return
-        try:
-            record = self._encoder.end(end_time, outcome, reason)
-        except TraceError as exc:
-            self._abandon()
-            raise RecordingError(f"cannot write the recording: {exc}") from None
+        record = self._written('{"end":', "the end record") if self.trace is not None \
+            else self._encode(self._encoder.end, end_time, outcome, reason)
         self._record_signals()
         self._add(TRACE_TOPIC, end_time, record.encode("utf-8"))
         try:
