@@ -71,6 +71,31 @@ def test_replaying_the_recording_gives_the_live_events_and_verdicts(
         f"verdict: {a['verdict'].upper()}"
 
 
+def test_a_new_specification_judges_the_recording_as_it_judges_the_trace(
+        runs: dict[str, Path], tmp_path: Path) -> None:
+    live = runs["crossing"]
+    vepl = EXAMPLES / "navigation" / "human_safety.vepl"
+    out = {}
+    for name in ("recording.mcap", "trace.jsonl"):
+        folder = tmp_path / name
+        done = rei("replay", str(live / name), "--vepl", str(vepl), "-o", str(folder))
+        assert done.returncode in (0, 1), done.stderr
+        out[name] = folder
+    assert (out["recording.mcap"] / "events.csv").read_bytes() == \
+        (out["trace.jsonl"] / "events.csv").read_bytes()
+    a, b = (json.loads((out[n] / "summary.json").read_text(encoding="utf-8"))
+            for n in ("recording.mcap", "trace.jsonl"))
+    assert a["verdicts"] == b["verdicts"] and a["verdicts"]
+
+
+def test_the_same_run_records_the_same_bytes(runs: dict[str, Path], tmp_path: Path) -> None:
+    done = rei("run", str(SIMPLE_WALL), "-o", str(tmp_path / "again"), "--record",
+               "--duration", "20", "--quiet")
+    assert done.returncode in (0, 1), done.stderr
+    assert (tmp_path / "again" / "recording.mcap").read_bytes() == \
+        (runs["wall"] / "recording.mcap").read_bytes()
+
+
 def test_the_trace_channel_is_the_trace_file(runs: dict[str, Path]) -> None:
     live = runs["crossing"]
     lines = (live / "trace.jsonl").read_bytes().splitlines()
