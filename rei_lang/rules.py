@@ -101,6 +101,13 @@ RULES: tuple[Rule, ...] = (
     Rule("FAULT-ACTIVATION", "mission", "a fault's activation is a time window that ends after "
          "it starts, or starts on a signal and stops after a duration > 0 or on another "
          "signal", "issue 17"),
+    Rule("FAULT-SIGNAL", "mission", "`rei run` refuses a fault started or stopped by a signal "
+         "the monitoring specification does not define, or by any signal on a run without "
+         "the monitor: it would never fire, and the fault would silently never act",
+         "issue 17"),
+    Rule("FAULT-NAME", "mission", "`rei run` refuses two faults of one run (the mission's and "
+         "--fault's) with the same name: the summary and events.csv tell faults by name",
+         "issue 17"),
     Rule("VEPL-DATA", "vepl", "`rei run` and `rei replay` refuse a specification whose queries "
          "read data the mission does not collect or the trace does not carry (laser_min without "
          "laser, ...)", "thesis 6.1.2"),

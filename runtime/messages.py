@@ -142,6 +142,9 @@ class StreamHeader:
     data: tuple[str, ...] = COLLECTED_DATA
     """What the data collector forwards (thesis 6.1.2), in COLLECTED_DATA's order: the
     samples carry these and nothing of the others (see ``BELIEF_DATA``)."""
+    faults: tuple[tuple[str, str], ...] = ()
+    """(name, entry as written) of every fault injected between the sensors and the robot
+    under test (``rei.runtime.faults``), in declaration order; empty for a run without."""
 
 
 @dataclass(frozen=True)
@@ -221,6 +224,9 @@ class Sample:
     at any physics step since the previous sample (this one included). Physics runs faster
     than the samples, so a brief touch between two samples would otherwise be lost while the
     sampled footprint distance never drops below the collision threshold."""
+    faults: tuple[str, ...] = ()
+    """Names of the header's faults active when the sample was taken, in the header's order:
+    which lie the robot was told, so every signal can be read against it (events.csv)."""
 
 
 # ---- the run loop's messages ----------------------------------------------------------------

@@ -132,9 +132,10 @@ def mission_facts(manifest: WorldManifest, mission: ConcreteMission) -> MissionF
 
 
 def stream_header(manifest: WorldManifest, monitor: MonitorConfig,
-                  mission: ConcreteMission | str, seed: int) -> StreamHeader:
+                  mission: ConcreteMission | str, seed: int,
+                  faults: tuple[tuple[str, str], ...] = ()) -> StreamHeader:
     """The header of a run's stream; a mission given by name only (a stream not made by a
-    mission run) has no mission facts."""
+    mission run) has no mission facts. ``faults``: (name, entry) of the injected faults."""
     names = [b.name for b in manifest.observed]
     if [o.name for o in monitor.objects] != names:
         raise RunError("the monitor configuration's objects expected to be the world's walls "
@@ -144,7 +145,7 @@ def stream_header(manifest: WorldManifest, monitor: MonitorConfig,
     return StreamHeader(SCHEMA_VERSION, manifest.world, name, seed, monitor.rate,
                         monitor.robot, monitor.objects, manifest.tile_size, manifest.floors,
                         (manifest.laser.mount_x, manifest.laser.mount_y), facts,
-                        monitor.data)
+                        monitor.data, faults)
 
 
 class RunProbe(Protocol):
@@ -176,7 +177,7 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
     every_control = every(rate, config.control_rate, "the control rate")
     every_laser = every(rate, manifest.laser.rate, "the laser rate")
     every_sample = every(rate, monitor.rate, "the monitor's sample rate")
-    header = stream_header(manifest, monitor, mission, config.seed)
+    header = stream_header(manifest, monitor, mission, config.seed, stage.described())
     # The jittered pose replaces the declared one in the manifest itself, so the pybullet body,
     # odometry's origin and the controller's start_pose below cannot disagree.
     started = jitter_start(manifest, config.seed, config.jitter)
@@ -305,10 +306,15 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
     # Other variations (the humans') record themselves under the same key: merge, never replace.
     variations = measurements.setdefault("variations", {})
     variations["start_jitter"] = started.to_json()
-    timeline = stage.timeline()
-    if timeline:
+    described = stage.described()
+    if described:  # a run without faults keeps the summary it always had
+        measurements["faults_injected"] = [{"fault": name, "entry": entry}
+                                           for name, entry in described]
         measurements["faults"] = [{"fault": name, "start": begin, "end": end}
-                                  for name, begin, end in timeline]
+                                  for name, begin, end in stage.timeline()]
+        statistics = getattr(stage, "statistics", None)
+        if callable(statistics):
+            measurements["fault_statistics"] = {s.name: dict(s.counts) for s in statistics()}
     return RunRecord(outcome, reason, clock.now, tasks, measurements,
                      wallclock.perf_counter() - wall_start,
                      wallclock.process_time() - cpu_start, clock.k,

@@ -90,13 +90,17 @@ class RunRequest:
     """The module of the specification's user functions (``--functions``)."""
     record: bool = False
     """Also write recording.mcap (``--record``)."""
+    faults: tuple[str, ...] = ()
+    """Fault entries of ``--fault`` (as written: the child parses them again)."""
 
     def to_json(self) -> str:
         return json.dumps(asdict(self), allow_nan=False)
 
     @staticmethod
     def from_json(text: str) -> RunRequest:
-        return RunRequest(**json.loads(text))
+        data = json.loads(text)
+        data["faults"] = tuple(data.get("faults", ()))
+        return RunRequest(**data)
 
 
 @dataclass(frozen=True)

@@ -56,6 +56,8 @@ class RunSpec:
     """`rei run --functions`: the module of the specification's user functions."""
     record: bool = False
     """`rei run --record`: the run also writes recording.mcap."""
+    faults: tuple[str, ...] = ()
+    """`rei run --fault`: fault entries as written, added to the mission's own."""
 
     def to_json(self) -> dict[str, Any]:
         data = {"run_id": self.run_id, "mission_file": self.mission_file,
@@ -70,10 +72,14 @@ class RunSpec:
             data["functions"] = self.functions
         if self.record:
             data["record"] = True
+        if self.faults:
+            data["faults"] = list(self.faults)
         return data
 
     @staticmethod
     def from_json(data: dict[str, Any]) -> RunSpec:
+        if "faults" in data:
+            data = {**data, "faults": tuple(data["faults"])}
         return RunSpec(**data)
 
     def run_argv(self, out_dir: str) -> list[str]:
@@ -91,6 +97,8 @@ class RunSpec:
             argv += ["--functions", self.functions]
         if self.record:
             argv.append("--record")
+        for fault in self.faults:
+            argv += ["--fault", fault]
         return argv
 
 
@@ -216,7 +224,7 @@ def plan_campaign(inputs: list[Path], *, repeat: int = 1, seed: int = 0,
                   controller: str | None = None, vepl: Path | None = None,
                   duration: float | None = None, static_dir: Path | None = None,
                   variation: bool = True, functions: str | None = None,
-                  record: bool = False) -> CampaignPlan:
+                  record: bool = False, faults: tuple[str, ...] = ()) -> CampaignPlan:
     """Every mission of the inputs, ``repeat`` times, each with its derived seed.
 
     With ``static_dir`` every run is paired with its static twin (same seed, the mission's
@@ -252,7 +260,7 @@ def plan_campaign(inputs: list[Path], *, repeat: int = 1, seed: int = 0,
                 group=entry.group, repeat=k, seed=derive_seed(seed, entry.key, k),
                 controller=controller, vepl=vepl_path, duration=duration,
                 parameters=entry.parameters, variation=variation, functions=functions,
-                record=record)
+                record=record, faults=faults)
             if static_dir is None:
                 runs.append(run)
                 continue

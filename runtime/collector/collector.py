@@ -64,7 +64,8 @@ class DataCollector:
                robot_twist: tuple[float, float, float], poses: np.ndarray, twists: np.ndarray,
                odom: tuple[float, float, float], odom_twist: tuple[float, float],
                scan: LaserScan | None, scan_time: float | None, nav_state: NavState,
-               task: str | None, cmd: tuple[float, float] = (0.0, 0.0)) -> Sample:
+               task: str | None, cmd: tuple[float, float] = (0.0, 0.0),
+               faults: tuple[str, ...] = ()) -> Sample:
         if not self._laser:
             scan = None
         fresh = scan if scan is not None and scan_time != self._last_scan_time else None
@@ -73,7 +74,7 @@ class DataCollector:
         belief = collected_belief(RobotBelief(odom, odom_twist, laser_min, fresh, nav_state,
                                               task, cmd), self.header.data)
         sample = Sample(self.seq, time, robot_pose, robot_twist, poses, twists, belief,
-                        tuple(self._events), tuple(sorted(self._contacts)))
+                        tuple(self._events), tuple(sorted(self._contacts)), faults)
         self._events = []
         self._contacts = set()
         self.seq += 1

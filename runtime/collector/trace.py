@@ -97,7 +97,9 @@ def header_json(h: StreamHeader) -> dict[str, Any]:
             "tile_size": h.tile_size, "floors": [list(f) for f in h.floors],
             "laser_mount": list(h.laser_mount),
             "mission_facts": _facts_json(h.mission_facts) if h.mission_facts else None,
-            "data": list(h.data)}
+            "data": list(h.data),
+            # only in a stream with faults: a run without keeps the bytes it always had
+            **({"faults": [{"name": n, "entry": e} for n, e in h.faults]} if h.faults else {})}
 
 
 def _facts_json(f: MissionFacts) -> dict[str, Any]:
@@ -139,6 +141,8 @@ def _sample_json(sample: Sample, poses: list[list[Any]], twists: list[list[Any]]
     if "mission_events" in data:
         line["events"] = [_event_json(e) for e in sample.events]
     line["contacts"] = list(sample.contacts)
+    if sample.faults:
+        line["faults"] = list(sample.faults)
     return line
 
 
@@ -161,6 +165,7 @@ _SAMPLE_KEYS = frozenset(("seq", "time", "robot_pose", "robot_twist", "poses", "
 _SCAN_KEYS = frozenset(("angle_min", "angle_increment", "range_min", "range_max", "ranges"))
 _EVENT_KEYS = frozenset(("kind", "time", "task", "index", "reason", "cause"))
 _END_KEYS = frozenset(("end", "outcome", "reason"))
+_FAULT_KEYS = frozenset(("name", "entry"))
 _FLOATS = frozenset((float,))
 _COUNTS = {2: "two", 3: "three"}
 
@@ -391,8 +396,9 @@ def _header(data: Any, where: str) -> StreamHeader:
                          f"{data.get('trace_version')!r} with schema {schema!r} (record it "
                          f"again with this REI)")
     previous = schema == PREVIOUS_SCHEMA
-    h = _Fields(data, where, "", _HEADER_KEYS - {"data"} if previous else _HEADER_KEYS,
-                "a REI trace header")
+    keys = _HEADER_KEYS - {"data"} if previous else _HEADER_KEYS
+    h = _Fields(data, where, "", keys | {"faults"} if "faults" in data and not previous
+                else keys, "a REI trace header")
     objects = h.array("objects", "observed objects")
     floors = h.array("floors", "floors")
     laser_mount = h.numbers("laser_mount", 2, "[x, y]")
@@ -403,7 +409,24 @@ def _header(data: Any, where: str) -> StreamHeader:
         h.number("tile_size", low=0.0, low_open=True),
         tuple(_floor(f, where, f"floors[{i}]") for i, f in enumerate(floors)),
         (laser_mount[0], laser_mount[1]), _mission_facts(data["mission_facts"], where),
-        COLLECTED_DATA if previous else _data(data["data"], where))
+        COLLECTED_DATA if previous else _data(data["data"], where),
+        _faults(data["faults"], where) if "faults" in data else ())
+
+
+def _faults(value: Any, where: str) -> tuple[tuple[str, str], ...]:
+    """The header's injected faults: a non-empty list of {name, entry}, names unique."""
+    if not (isinstance(value, list) and value):
+        raise TraceError(f"{where}: faults: expected a non-empty list of the injected faults "
+                         f"(absent when there are none), found {_show(value)}")
+    faults: list[tuple[str, str]] = []
+    for i, item in enumerate(value):
+        f = _Fields(item, where, f"faults[{i}]", _FAULT_KEYS, "a fault (a JSON object)")
+        name = f.text("name")
+        if not name or any(name == n for n, _ in faults):
+            raise TraceError(f"{where}: faults[{i}].name: expected a name no other fault has, "
+                             f"found {_show(name)}")
+        faults.append((name, f.text("entry")))
+    return tuple(faults)
 
 
 def _data(value: Any, where: str) -> tuple[str, ...]:
@@ -434,9 +457,12 @@ class _StreamRules:
     """What holds between the lines of one trace: sequence numbers without gaps, times that
     never go back, mission events in order, rows within the header's object table."""
 
-    def __init__(self, n_objects: int, data: tuple[str, ...] = COLLECTED_DATA) -> None:
+    def __init__(self, n_objects: int, data: tuple[str, ...] = COLLECTED_DATA,
+                 faults: tuple[str, ...] = ()) -> None:
         self.n = n_objects
         self.data = data
+        self.faults = faults
+        """The header's fault names, in its order: a sample's active faults are among them."""
         self.belief_keys = frozenset(k for kind, keys in BELIEF_DATA.items() if kind in data
                                      for k in keys)
         self.with_events = "mission_events" in data
@@ -453,7 +479,9 @@ class _StreamRules:
         """When the mission's 'end' event happened; nothing may follow it."""
 
     def sample(self, data: Any, where: str) -> Sample:
-        d = _Fields(data, where, "", self.sample_keys, "a sample line (a JSON object)")
+        keyed = isinstance(data, dict) and "faults" in data and self.faults
+        d = _Fields(data, where, "", self.sample_keys | {"faults"} if keyed
+                    else self.sample_keys, "a sample line (a JSON object)")
         seq = data["seq"]
         if not (_is_whole(seq) and seq == self.seq):
             raise TraceError(f"{where}: seq: expected {self.seq} (samples are numbered 0, 1, "
@@ -472,9 +500,21 @@ class _StreamRules:
         events = self._events(d, time, 0.0 if previous is None else previous) \
             if self.with_events else ()
         contacts = self._contacts(data["contacts"], where)
+        faults = self._active(data["faults"], where) if keyed else ()
         self.seq, self.time = seq + 1, time
         return Sample(seq, time, robot_pose, robot_twist,  # type: ignore[arg-type]
-                      self.poses.copy(), self.twists.copy(), belief, events, contacts)
+                      self.poses.copy(), self.twists.copy(), belief, events, contacts, faults)
+
+    def _active(self, value: Any, where: str) -> tuple[str, ...]:
+        """A sample's active faults: some of the header's, in its order, each once (absent
+        when none is active)."""
+        if isinstance(value, list) and value and all(isinstance(n, str) for n in value):
+            order = [self.faults.index(n) if n in self.faults else -1 for n in value]
+            if -1 not in order and order == sorted(set(order)):
+                return tuple(value)
+        raise TraceError(f"{where}: faults: expected a non-empty list of the header's fault "
+                         f"names ({', '.join(self.faults)}) in its order, each once, found "
+                         f"{_show(value)}")
 
     def _rows(self, d: _Fields, key: str, target: np.ndarray, first: bool) -> None:
         """Rows [index, a, b, c] of the objects that changed, by increasing index; the first
@@ -611,7 +651,8 @@ class TraceEncoder:
     def header(self, header: StreamHeader) -> str:
         data = header_json(header)
         _header(data, f"{self.where}:1")
-        self._rules = _StreamRules(len(header.objects), header.data)
+        self._rules = _StreamRules(len(header.objects), header.data,
+                                   tuple(n for n, _ in header.faults))
         self.line = 1
         return _dumps(data)
 
@@ -799,7 +840,8 @@ class TraceDecoder:
             raise TraceError(f"{where}: expected a REI trace header (a JSON object), found "
                              f"{_show(data)}")
         self.header = _header(data, where)
-        self._rules = _StreamRules(len(self.header.objects), self.header.data)
+        self._rules = _StreamRules(len(self.header.objects), self.header.data,
+                                   tuple(n for n, _ in self.header.faults))
 
     def line(self, raw: bytes, where: str) -> Sample | tuple[float, str, str]:
         """The sample of a line, or (end time, outcome, reason) of the end line."""

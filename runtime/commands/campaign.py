@@ -117,12 +117,31 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.add_argument("--record", action="store_true",
                         help="passed to `rei run`: every run also writes recording.mcap (MCAP "
                              "with ROS 2 types and the exact trace; see docs/recording.md)")
+    from rei.lang.mission.faults import FAULT_OPTION_HELP, fault_argument  # noqa: PLC0415
+
+    parser.add_argument("--fault", action="append", default=None, metavar="ENTRY",
+                        type=fault_argument, help="passed to `rei run`: " + FAULT_OPTION_HELP)
     parser.add_argument("--no-report", action="store_true",
                         help="skip report.html (tables and junit.xml are still written)")
     from rei.runtime.commands.run import add_verbosity  # noqa: PLC0415
 
     add_verbosity(parser)  # -q: the final verdict line alone; -v: every failed run's rerun
     parser.set_defaults(func=run)
+
+
+def _faults(args: argparse.Namespace) -> tuple[str, ...]:
+    """The --fault entries as written for every run, checked before any run starts: a
+    signal the specification does not define would fail every run alike."""
+    from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
+    from rei.runtime.faults.setup import run_faults  # noqa: PLC0415
+
+    faults = tuple(args.fault or ())
+    if any(f.activation.signal or f.activation.stop for f in faults):
+        signals = tuple(s.name for s in load_vepl(args.vepl).signals)
+        run_faults((), faults, signals, "", str(args.vepl or "default.vepl"))
+    else:
+        run_faults((), faults, (), "", "")
+    return tuple(f.text() for f in faults)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -141,7 +160,7 @@ def run(args: argparse.Namespace) -> int:
                          controller=args.controller, vepl=args.vepl, duration=args.duration,
                          static_dir=args.output / STATIC if args.pair_static else None,
                          variation=not args.no_variation, functions=args.functions,
-                         record=args.record)
+                         record=args.record, faults=_faults(args))
     engine: CampaignEngine
     if args.engine == "dask":
         if not args.scheduler:

@@ -30,6 +30,12 @@ from typing import IO, TYPE_CHECKING, Any, TextIO
 
 from rei.lang.cli_support import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_RUN_ERROR
 from rei.lang.errors import printable_lines
+from rei.lang.mission.faults import (
+    FAULT_OPTION_HELP,
+    FaultDefinition,
+    fault_argument,
+    parse_fault_option,
+)
 from rei.runtime.commands.run_config import apply_run_config, defer_defaults
 from rei.runtime.errors import RunError
 from rei.runtime.results import RunSummary, judge
@@ -121,6 +127,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                              "/rei/events, /rei/signals) that Foxglove and `ros2 bag` open, "
                              "plus the exact trace (/rei/trace) `rei replay` reads; see "
                              "docs/recording.md")
+    parser.add_argument("--fault", action="append", default=None, metavar="ENTRY",
+                        type=fault_argument, help=FAULT_OPTION_HELP + "; added to the "
+                        "mission's own fault section")
     add_verbosity(parser)
     defer_defaults(parser)
     parser.set_defaults(func=run)
@@ -180,7 +189,8 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
              vepl: Path | None = None, monitor: bool = True, laser_noise: float | None = None,
              variation: bool = True, probe: RunProbe | None = None,
              echo: IO[str] | None = None, functions: str | None = None,
-             recording: bool = False) -> tuple[RunSummary, RunRecord]:
+             recording: bool = False, faults: Sequence[FaultDefinition] = ()
+             ) -> tuple[RunSummary, RunRecord]:
     """Everything `rei run` does, in this process: generate, run, monitor with the .vepl's
     automata (the default specification unless ``vepl``; none when ``monitor`` is False),
     write outputs. Extra ``sinks`` see the same stream as the trace and the monitor; ``probe``
@@ -195,6 +205,8 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
     from rei.runtime.collector import TraceWriter, load_monitor_config  # noqa: PLC0415
     from rei.runtime.collector.needs import check_needs  # noqa: PLC0415
     from rei.runtime.evaluator import merge_summary, write_summary  # noqa: PLC0415
+    from rei.runtime.faults.plan import fault_stage  # noqa: PLC0415
+    from rei.runtime.faults.setup import run_faults  # noqa: PLC0415
     from rei.runtime.monitor import MonitorSink, generate_automata  # noqa: PLC0415
     from rei.runtime.monitor.functions import load_functions  # noqa: PLC0415
     from rei.runtime.robot import make_controller  # noqa: PLC0415
@@ -216,10 +228,15 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
         probe.begin(mission.name, mission.world.name)
     manifest = load_manifest(world_dir)
     monitor_config = load_monitor_config(world_dir)
-    if monitor:
+    specification = load_vepl(vepl) if monitor else None
+    if specification is not None:
         # Never judge on data the collector will not forward (a false PASS): refuse first.
-        check_needs(load_vepl(vepl), monitor_config.data, f"the mission '{mission.name}' to "
+        check_needs(specification, monitor_config.data, f"the mission '{mission.name}' to "
                     f"collect", "name that data in the mission's monitor block, or drop the query")
+    injected = run_faults(mission.faults, faults,
+                          None if specification is None
+                          else tuple(s.name for s in specification.signals),
+                          str(mission_path), str(vepl) if vepl is not None else "default.vepl")
     robot = make_controller(controller)
     config = RunConfig(seed=seed, physics_rate=physics_rate, duration=duration,
                        watchdog=watchdog, odom_drift=odom_drift, laser_noise=laser_noise,
@@ -259,13 +276,15 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
 
         log(f"mission {mission.name} in room {mission.world.name}, controller {controller}, "
             f"seed {seed}")
+        for fault in injected:
+            log(f"fault {fault.name}: {fault.text()}")
         record = run_mission(mission, manifest, monitor_config, robot,
                              [trace_writer,
                               *([monitor_sink] if monitor_sink is not None else []), *recorder,
                               *sinks],
                              config,
                              progress=show if progress is not None else None, log=log,
-                             probe=probe)
+                             probe=probe, faults=fault_stage(injected, seed))
     if progress is not None:
         progress.write("\n")
     summary = summary_of(record, mission, controller, seed)
@@ -286,7 +305,8 @@ def execute_request(request: RunRequest, probe: RunProbe) -> tuple[int, dict[str
         monitor=request.monitor, laser_noise=request.laser_noise,
         variation=request.variation, probe=probe,
         echo=sys.stderr if request.echo_events else None, functions=request.functions,
-        recording=request.record)
+        recording=request.record,
+        faults=tuple(parse_fault_option(text) for text in request.faults))
     page = write_page(Path(request.output)) if request.monitor else None
     written = (Path(request.output) / SUMMARY).read_bytes()
     return exit_code(summary, request.monitor), {
@@ -315,7 +335,8 @@ def run(args: argparse.Namespace) -> int:
         args.watchdog, args.physics_rate, args.odom_drift, args.laser_noise,
         str(args.vepl) if args.vepl is not None else None, not args.no_monitor,
         not args.no_variation, progress=not args.quiet and sys.stderr.isatty(),
-        echo_events=args.verbose, functions=args.functions, record=args.record)
+        echo_events=args.verbose, functions=args.functions, record=args.record,
+        faults=tuple(f.text() for f in args.fault or ()))
     ended = supervise(request)
     summary = _read_summary(out) if ended.status != 2 else None
     if summary is None:

@@ -1,6 +1,8 @@
 """The event log of a run: one row per signal with time, signal, utility, running total
 utility and the objects involved (thesis 6.1.5), written as CSV. Never reorders rows: they
-are in the order the automata raised the signals."""
+are in the order the automata raised the signals. A run with injected faults has one more
+column, ``faults``: those active at the sample the signal fired on (';'-joined), so each
+signal can be read against the lie the robot was told; a run without keeps five columns."""
 
 from __future__ import annotations
 
@@ -11,6 +13,7 @@ from pathlib import Path
 from rei.generators.output import open_output
 
 COLUMNS = ("time", "signal", "utility", "total_utility", "objects")
+FAULT_COLUMN = "faults"
 
 
 @dataclass(frozen=True)
@@ -20,6 +23,8 @@ class SignalRow:
     utility: float
     total_utility: float
     objects: tuple[str, ...]
+    faults: tuple[str, ...] = ()
+    """The injected faults active when the signal fired."""
 
 
 @dataclass
@@ -27,11 +32,14 @@ class SignalLog:
     utilities: dict[str, float]
     rows: list[SignalRow] = field(default_factory=list)
     total: float = 0.0
+    with_faults: bool = False
+    """The run injected faults: the CSV has the ``faults`` column."""
 
-    def add(self, signal: str, time: float, objects: tuple[str, ...]) -> SignalRow:
+    def add(self, signal: str, time: float, objects: tuple[str, ...],
+            faults: tuple[str, ...] = ()) -> SignalRow:
         utility = self.utilities[signal]
         self.total += utility
-        row = SignalRow(time, signal, utility, self.total, objects)
+        row = SignalRow(time, signal, utility, self.total, objects, faults)
         self.rows.append(row)
         return row
 
@@ -44,10 +52,11 @@ class SignalLog:
     def write_csv(self, path: str | Path) -> None:
         with open_output(path, newline="") as handle:  # never written through a link
             writer = csv.writer(handle, lineterminator="\n")
-            writer.writerow(COLUMNS)
+            writer.writerow(COLUMNS + ((FAULT_COLUMN,) if self.with_faults else ()))
             for r in self.rows:
-                writer.writerow((repr(r.time), r.signal, f"{r.utility:g}",
-                                 f"{r.total_utility:g}", ";".join(r.objects)))
+                row = (repr(r.time), r.signal, f"{r.utility:g}", f"{r.total_utility:g}",
+                       ";".join(r.objects))
+                writer.writerow(row + ((";".join(r.faults),) if self.with_faults else ()))
 
 
 def read_csv(path: str | Path) -> list[SignalRow]:
@@ -55,5 +64,6 @@ def read_csv(path: str | Path) -> list[SignalRow]:
         reader = csv.DictReader(handle)
         return [SignalRow(float(r["time"]), r["signal"], float(r["utility"]),
                           float(r["total_utility"]),
-                          tuple(r["objects"].split(";")) if r["objects"] else ())
+                          tuple(r["objects"].split(";")) if r["objects"] else (),
+                          tuple(r[FAULT_COLUMN].split(";")) if r.get(FAULT_COLUMN) else ())
                 for r in reader]

@@ -16,8 +16,8 @@ from rei.lang.mission.faults import (
     parse_fault_option,
 )
 from rei.runtime.faults.plan import FAULT_STREAM, FaultPlan, FaultStatistics, fault_stage
-from rei.runtime.faults.stage import NO_FAULTS, FaultStage, NoFaults
+from rei.runtime.faults.stage import NO_FAULTS, FaultStage, NoFaults, active_at
 
 __all__ = ["ALWAYS", "FAULT_KINDS", "FAULT_STREAM", "NO_FAULTS", "Activation", "FaultDefinition",
-           "FaultPlan", "FaultStage", "FaultStatistics", "NoFaults", "fault_stage",
+           "FaultPlan", "FaultStage", "FaultStatistics", "NoFaults", "active_at", "fault_stage",
            "parse_fault_option"]

@@ -76,6 +76,25 @@ class LaserPoisson:
         into = time - since - self.phase
         return into >= -EPS and math.fmod(max(into, 0.0), self.period) < self.width * self.period
 
+    def pulses(self, start: float, end: float | None, now: float
+               ) -> list[tuple[float, float | None]]:
+        """The impulse's high phases within the activation (start, end) as of ``now`` (end
+        None: still active): when the fault actually lies; the timeline, the samples and
+        events.csv show these. A phase still high at ``now`` has end None."""
+        if self.width >= 1.0 and self.phase == 0.0:
+            return [(start, end)]  # always high: one phase, the activation itself
+        out: list[tuple[float, float | None]] = []
+        high = self.width * self.period
+        a = start + self.phase
+        while a <= now and (end is None or a < end):
+            b = a + high
+            if end is not None:
+                out.append((a, min(b, end)))
+            else:
+                out.append((a, b if b <= now else None))
+            a += self.period
+        return out
+
     def apply(self, time: float, scan: LaserScan, stamp: float
               ) -> tuple[LaserScan | None, float | None]:
         start = self.previous_stamp if self.previous_stamp is not None else min(0.0, stamp)

@@ -106,12 +106,19 @@ class FaultPlan:
             tracker.signal(time, name)
 
     def timeline(self) -> tuple[tuple[str, float, float | None], ...]:
-        rows = [(d.name, start, end, i)
-                for i, (d, tracker) in enumerate(zip(self.definitions, self.trackers,
-                                                     strict=True))
-                for start, end in tracker.timeline(self.now)]
+        rows: list[tuple[str, float, float | None, int]] = []
+        for i, (d, tracker, model) in enumerate(zip(self.definitions, self.trackers,
+                                                    self.models, strict=True)):
+            pulses = getattr(model, "pulses", None)
+            for start, end in tracker.timeline(self.now):
+                # an impulse-switched fault lies only while its impulse is high
+                spans = pulses(start, end, self.now) if pulses is not None else [(start, end)]
+                rows.extend((d.name, a, b, i) for a, b in spans)
         rows.sort(key=lambda r: (r[1], r[3]))
         return tuple((name, start, end) for name, start, end, _ in rows)
+
+    def described(self) -> tuple[tuple[str, str], ...]:
+        return tuple((d.name, d.text()) for d in self.definitions)
 
     def statistics(self) -> tuple[FaultStatistics, ...]:
         """What every fault did so far, in declaration order."""

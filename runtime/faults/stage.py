@@ -11,7 +11,8 @@ random stream, so a run without faults and a run with them share every other dra
 What the stage returns is what the robot under test receives and what the collector records
 as the robot's belief (scan, odometry); the ground truth (poses, velocities, contacts) never
 passes through it. ``timeline`` says which fault was active when, for the summary, events.csv
-and the report. This module must never import pybullet.
+and the report; every sample names the faults active when it was taken (``active_at``).
+This module must never import pybullet.
 """
 
 from __future__ import annotations
@@ -52,6 +53,11 @@ class FaultStage(Protocol):
         None while it still is."""
         ...
 
+    def described(self) -> tuple[tuple[str, str], ...]:
+        """(name, entry as written in a fault section) of every fault the stage holds, in
+        declaration order: the stream header carries them, so a replay knows the set-up."""
+        ...
+
 
 class NoFaults:
     """The empty stage: the robot receives exactly what the sensors measured."""
@@ -71,6 +77,17 @@ class NoFaults:
 
     def timeline(self) -> tuple[tuple[str, float, float | None], ...]:
         return ()
+
+    def described(self) -> tuple[tuple[str, str], ...]:
+        return ()
+
+
+def active_at(timeline: tuple[tuple[str, float, float | None], ...], time: float,
+              order: tuple[str, ...]) -> tuple[str, ...]:
+    """The faults of ``timeline`` active at ``time`` (started, not yet ended), in ``order``
+    (the declaration order): what a sample says was active when it was taken."""
+    on = {name for name, start, end in timeline if start <= time and (end is None or time < end)}
+    return tuple(name for name in order if name in on)
 
 
 NO_FAULTS: FaultStage = NoFaults()

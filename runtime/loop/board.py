@@ -49,5 +49,7 @@ class Board:
     event must reach it, even two in one tick)."""
     command: CommandIssued | None = None
     """robot, every control tick."""
+    faults: tuple[str, ...] = ()
+    """faults, every control tick and after each sample: the faults active now."""
     signals: list[SignalFired] = field(default_factory=list)
     """monitor's signals, queued until the fault stage takes them (after each sample)."""

@@ -71,7 +71,7 @@ class CollectorRun:
         # Each sample owns its arrays: sinks may keep samples (the monitor's windows).
         collector.sample(now, truth.pose, bodies.robot_twist, self.poses.copy(),
                          self.twists.copy(), odom, odom_twist, scan, scan_time, nav, task,
-                         (0.0, 0.0) if command is None else command.raw)
+                         (0.0, 0.0) if command is None else command.raw, board.faults)
 
     def finish(self, now: float, outcome: str, reason: str) -> None:
         self.collector.finish(now, outcome, reason)

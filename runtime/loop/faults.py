@@ -16,7 +16,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
-from rei.runtime.faults.stage import FaultStage
+from rei.runtime.faults.stage import FaultStage, active_at
 from rei.runtime.loop.board import Board
 from rei.runtime.loop.scheduler import Clock
 from rei.runtime.messages import RobotView, SignalFired
@@ -40,6 +40,7 @@ class Faults:
 class FaultsRun:
     def __init__(self, spec: Faults, board: Board) -> None:
         self.stage, self.board = spec.stage, board
+        self._names = tuple(name for name, _ in spec.stage.described())
         self._seq = 0
         self._signal_seq = 0
         self._measured: object = None
@@ -62,6 +63,8 @@ class FaultsRun:
         pose, twist = self.stage.odometry(now, odometry.pose, odometry.twist)
         board.view = RobotView(self._seq, now, scan, at, pose, twist)
         self._seq += 1
+        if self._names:
+            board.faults = active_at(self.stage.timeline(), now, self._names)
 
     def refresh(self, clock: Clock) -> None:
         """At a sample: the view of a scan measured since the last control tick."""

@@ -78,7 +78,10 @@ class AutomataHost:
         self.scheduler = VirtualTimeScheduler(0.0)
         self.atomic: Subject[Occurrence] = Subject()
         self.events = module.build_automata(self.atomic, self.scheduler)
-        self.log = SignalLog({s.name: s.utility for s in module.SIGNALS})
+        self.log = SignalLog({s.name: s.utility for s in module.SIGNALS},
+                             with_faults=bool(header.faults))
+        self.faults: tuple[str, ...] = ()
+        """The injected faults active at the sample being judged (events.csv names them)."""
         self.checker = RequirementChecker(module.REQUIREMENTS, set(self.domains),
                                           self.model.describe)
         self.watched_queries = sorted(self.checker.watched_queries())
@@ -103,7 +106,7 @@ class AutomataHost:
         """Told (name, time) of every signal fired (the run loop's fault stage)."""
 
     def _on_signal(self, e: Occurrence) -> None:
-        self.log.add(e.name, e.time, e.objects)
+        self.log.add(e.name, e.time, e.objects, self.faults)
         for listener in self.listeners:
             listener(e.name, e.time)
         if e.name in self._signal_watch:
@@ -119,6 +122,7 @@ class AutomataHost:
         if not s.time > self.last_time:
             self.problems.add("out_of_order", self.last_time)
             return
+        self.faults = s.faults
         problem = check_sample(s, self.header)
         if problem is not None:
             self.problems.add(problem, self.last_time if not math.isfinite(s.time) else s.time)

@@ -85,6 +85,40 @@ def _css() -> str:
                      for name in ("report.css", "run.css"))
 
 
+@dataclass(frozen=True)
+class FaultRow:
+    name: str
+    entry: str
+    intervals: tuple[tuple[float, float | None], ...]
+    counts: tuple[tuple[str, int], ...]
+
+
+def _fault_rows(summary: RunSummary) -> list[FaultRow]:
+    """The faults the run injected, from its summary (written by the run itself, so trusted
+    in shape; anything else is left out rather than shown wrong)."""
+    m = summary.measurements
+    injected, timeline = m.get("faults_injected"), m.get("faults")
+    statistics = m.get("fault_statistics") or {}
+    if not isinstance(injected, list) or not isinstance(timeline, list):
+        return []
+    rows = []
+    for item in injected:
+        if not isinstance(item, dict):
+            continue
+        name = str(item.get("fault", ""))
+        counts = statistics.get(name) if isinstance(statistics, dict) else None
+        try:
+            intervals = tuple((float(t["start"]),
+                               None if t.get("end") is None else float(t["end"]))
+                              for t in timeline if isinstance(t, dict) and t.get("fault") == name)
+            shown = tuple((str(k), int(v)) for k, v in counts.items()) \
+                if isinstance(counts, dict) else ()
+        except (KeyError, TypeError, ValueError):
+            continue
+        rows.append(FaultRow(name, str(item.get("entry", "")), intervals, shown))
+    return rows
+
+
 def render_run_page(summary: RunSummary, signals: list[SignalRow], series: TraceSeries | None,
                     thresholds: Thresholds, map_image: str | None, map_note: str,
                     trace_note: str, trace_name: str = "") -> str:
@@ -119,7 +153,7 @@ def render_run_page(summary: RunSummary, signals: list[SignalRow], series: Trace
         samples=series.samples if series is not None else 0,
         speed_limit=series.speed_limit if series is not None else None,
         speed_limit_source=series.speed_limit_source if series is not None else "",
-        trace_name=trace_name,
+        trace_name=trace_name, faults=_fault_rows(summary),
         has_command=series is not None and series.commanded is not None)
 
 

@@ -228,6 +228,9 @@ class BlankAfterSignal:
     def timeline(self) -> tuple[tuple[str, float, float | None], ...]:
         return () if self.active_from is None else (("blank_laser", self.active_from, None),)
 
+    def described(self) -> tuple[tuple[str, str], ...]:
+        return (("blank_laser", f"laser_dropout as blank_laser share 1 when {self.trigger}"),)
+
 
 class HalfSpeed(BlankAfterSignal):
     """Halves what reaches the motors."""
@@ -290,6 +293,9 @@ def test_the_robot_and_the_trace_get_the_faulted_scan_and_truth_stays(
     _, plain, _ = unfaulted
     later = [s for s in samples.samples if s.time > start]
     assert all(s.belief.laser_min == 3.5 for s in later)
+    # every sample says which fault was active when it was taken
+    assert all(s.faults == ("blank_laser",) for s in later)
+    assert all(s.faults == () for s in samples.samples if s.time <= start)
     assert any(s.belief.laser_min < 3.5 for s in plain.samples if s.time > start)
     # the ground truth never passed through the stage: the robot ignores its scan, so the
     # world moved exactly as without the fault
@@ -298,7 +304,11 @@ def test_the_robot_and_the_trace_get_the_faulted_scan_and_truth_stays(
         assert a.robot_pose == b.robot_pose and np.array_equal(a.poses, b.poses)
     assert record.measurements["faults"] == [{"fault": "blank_laser", "start": 0.0,
                                               "end": None}]
+    assert record.measurements["faults_injected"] == [
+        {"fault": "blank_laser",
+         "entry": "laser_dropout as blank_laser share 1 when SIG_MISSION_TASK_START"}]
     assert "faults" not in unfaulted[0].measurements
+    assert "faults_injected" not in unfaulted[0].measurements
 
 
 def test_the_motors_get_the_faulted_command_and_the_belief_the_asked_one(

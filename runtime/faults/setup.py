@@ -1,0 +1,52 @@
+"""The faults of one run: the mission's fault section and ``--fault``, checked together.
+
+Before a run is started, every fault it will inject is checked against what the run can
+deliver: names unique across the mission and the command line (the summary, events.csv and
+the report tell faults by name), and every signal that starts or stops a fault defined by
+the monitoring specification. A fault waiting for a signal nobody raises would never act and
+the run would look like a fault study while testing nothing: refused (``FAULT-SIGNAL``),
+never silently run.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+
+from rei.lang.errors import Diagnostic, LanguageError, Span
+from rei.lang.mission.faults import FaultDefinition
+from rei.lang.suggest import did_you_mean
+
+
+def run_faults(mission: Iterable[FaultDefinition], extra: Iterable[FaultDefinition],
+               signals: Sequence[str] | None, mission_file: str,
+               specification: str) -> tuple[FaultDefinition, ...]:
+    """The mission's faults then ``extra`` (``--fault``), checked: ``signals`` are the
+    names the monitoring ``specification`` defines, None when the run is not monitored.
+    LanguageError (FAULT-NAME, FAULT-SIGNAL), located at each fault, when a check fails."""
+    own, added = tuple(mission), tuple(extra)
+    problems: list[Diagnostic] = []
+    seen: set[str] = set()
+    for k, fault in enumerate(own + added):
+        where = fault.span or Span.point(mission_file if k < len(own) else "--fault")
+        if fault.name in seen:
+            problems.append(Diagnostic(where, "FAULT-NAME", (
+                f"expected a fault name no other fault of the run has, found '{fault.name}' "
+                f"twice (the mission's fault section and --fault together; name one with "
+                f"'as NAME')")))
+        seen.add(fault.name)
+        for signal in (fault.activation.signal, fault.activation.stop):
+            if signal is None:
+                continue
+            if signals is None:
+                problems.append(Diagnostic(where, "FAULT-SIGNAL", (
+                    f"expected a monitored run for the fault '{fault.name}', which waits for "
+                    f"the signal {signal}, found --no-monitor (no signal ever fires)")))
+            elif signal not in signals:
+                hint = did_you_mean(signal, signals)
+                problems.append(Diagnostic(where, "FAULT-SIGNAL", (
+                    f"expected a signal of the specification {specification} for the fault "
+                    f"'{fault.name}', found {signal}, which it does not define (the fault "
+                    f"would never act){hint}")))
+    if problems:
+        raise LanguageError(problems)
+    return own + added
