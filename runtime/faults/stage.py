@@ -91,3 +91,23 @@ def active_at(timeline: tuple[tuple[str, float, float | None], ...], time: float
 
 
 NO_FAULTS: FaultStage = NoFaults()
+
+
+class SampledTimeline:
+    """The faults' timeline as a stream's samples saw it (``rei replay``: the live stage is
+    gone, its samples remain): an interval starts at the first sample naming a fault and ends
+    at the first sample that no longer does (end None when the stream ends with it)."""
+
+    def __init__(self) -> None:
+        self._open: dict[str, float] = {}
+        self._rows: list[tuple[str, float, float | None]] = []
+
+    def feed(self, time: float, active: tuple[str, ...]) -> None:
+        for name in [n for n in self._open if n not in active]:
+            self._rows.append((name, self._open.pop(name), time))
+        for name in active:
+            self._open.setdefault(name, time)
+
+    def timeline(self) -> tuple[tuple[str, float, float | None], ...]:
+        rows = self._rows + [(name, start, None) for name, start in self._open.items()]
+        return tuple(sorted(rows, key=lambda r: (r[1], r[0])))

@@ -86,6 +86,13 @@ def test_events_csv_names_the_active_faults_and_replay_gives_the_same_bytes(
     done = rei("replay", str(faulted / "trace.jsonl"), "-o", str(tmp_path), "-q")
     assert done.returncode in (0, 1), done.stderr
     assert (tmp_path / "events.csv").read_bytes() == (faulted / "events.csv").read_bytes()
+    # the replay's summary and page say which fault was active when, as the samples saw it
+    live = json.loads((faulted / "summary.json").read_text())["measurements"]
+    again = json.loads((tmp_path / "summary.json").read_text())["measurements"]
+    assert again["faults_injected"] == live["faults_injected"]
+    windows = [(f["start"], f["end"]) for f in again["faults"] if f["fault"] == "blind"]
+    assert windows == [(1.0, 3.0)]
+    assert 'data-fault="blind"' in (tmp_path / "report.html").read_text()
 
 
 def test_the_run_page_lists_the_faults(faulted: Path) -> None:
