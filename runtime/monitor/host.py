@@ -99,9 +99,13 @@ class AutomataHost:
         self.last_time = -math.inf
         self.first_time: float | None = None
         self.samples = 0
+        self.listeners: list[Callable[[str, float], None]] = []
+        """Told (name, time) of every signal fired (the run loop's fault stage)."""
 
     def _on_signal(self, e: Occurrence) -> None:
         self.log.add(e.name, e.time, e.objects)
+        for listener in self.listeners:
+            listener(e.name, e.time)
         if e.name in self._signal_watch:
             self.checker.on_event(e.name, e.time, e.objects)
 
@@ -264,6 +268,14 @@ class MonitorSink:
         self.automata = Path(automata) if automata is not None else None
         self.host: AutomataHost | None = None
         self.result: MonitorResult | None = None
+        self._listeners: list[Callable[[str, float], None]] = []
+
+    def listen(self, listener: Callable[[str, float], None]) -> None:
+        """Tell ``listener(name, time)`` of every signal the monitor fires, as it fires (the
+        run loop hands them to the fault stage)."""
+        self._listeners.append(listener)
+        if self.host is not None:
+            self.host.listeners.append(listener)
 
     def start(self, header: StreamHeader) -> None:
         from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
@@ -276,6 +288,7 @@ class MonitorSink:
         self.out_dir.mkdir(parents=True, exist_ok=True)
         path = self.automata or generate_automata(self.vepl, self.out_dir / "automata")
         self.host = AutomataHost(load_generated(path), header, self.functions)
+        self.host.listeners.extend(self._listeners)
 
     def feed(self, sample: Sample) -> None:
         if self.host is None:

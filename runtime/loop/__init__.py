@@ -1,0 +1,26 @@
+"""The run loop as components on one simulated clock (issue 16).
+
+``scheduler`` owns simulated time and steps each component's stages at their declared rates
+in a fixed order; ``board`` holds the messages (``rei.runtime.messages``) the components
+exchange, which is all they share. One module per component, each a frozen definition whose
+``start`` returns the running part: world (pybullet, contacts), laser, odometry, faults (the
+fault stage), mission (the executor), robot (the robot under test and its motors), collector
+(samples to the sinks), animator (humans and dynamic objects). ``rei.runtime.run.run_mission``
+assembles them; docs/run-loop.md describes the order within a tick.
+"""
+
+from rei.runtime.loop.animator import Animator, AnimatorRun
+from rei.runtime.loop.board import Board
+from rei.runtime.loop.collector import Collector, CollectorRun
+from rei.runtime.loop.faults import Faults, FaultsRun, SignalSource
+from rei.runtime.loop.laser import Laser, LaserRun
+from rei.runtime.loop.mission import Mission, MissionRun
+from rei.runtime.loop.odometry import Odometry, OdometryRun
+from rei.runtime.loop.robot import Robot, RobotRun
+from rei.runtime.loop.scheduler import Clock, Scheduler, Stage, every
+from rei.runtime.loop.world import World, WorldRun
+
+__all__ = ["Animator", "AnimatorRun", "Board", "Clock", "Collector", "CollectorRun", "Faults",
+           "FaultsRun", "Laser", "LaserRun", "Mission", "MissionRun", "Odometry", "OdometryRun",
+           "Robot", "RobotRun", "Scheduler", "SignalSource", "Stage", "World", "WorldRun",
+           "every"]
