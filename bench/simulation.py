@@ -1,39 +1,64 @@
-"""Benchmark of `rei run`: real-time factor of full missions, against bare pybullet and IR-SIM.
+"""Benchmark of `rei run`: real-time factor of full missions, where the time goes, start-up.
 
 For each bundled example mission and a generated 200-object room (192 static objects and
-8 walking humans), in one process on one core:
+8 walking humans):
 
-* full mission: physics (100 Hz) + animator + laser + odometry + the reference navigator
-  (10 Hz) + mission executor + data collector + trace writer, until the mission ends;
+* full mission, everything on, as `rei run` runs it (``run_into``): physics (100 Hz) +
+  animator + laser + odometry + the reference navigator (10 Hz) in its own process +
+  mission executor + data collector + trace writer + monitor (the default specification's
+  automata) + evaluator, until the mission ends. Real-time factor per wall second and per
+  CPU second of the loop, the CPU of the run's process and of the robot's process added
+  (the robot's from its first call to its last, read from /proc; its start-up is counted
+  under start-up);
+* where the CPU goes: the same mission once more, profiled (cProfile) with the navigator in
+  this process, each function's own time given to a component by its module's path (numpy
+  and builtins to their caller): physics (pybullet, rei/runtime/world), laser, odometry,
+  navigator (rei/runtime/robot), mission, animator, collector, trace writer, monitor,
+  evaluator, run loop; plus the controller IPC, the difference between the hosted and the
+  in-process loop's CPU;
 * baseline: bare pybullet stepping of the same generated world for the same number of
-  physics steps, measured in the same run; the table reports full / bare;
+  physics steps; the table reports full / bare;
 * laser: one 360-beam scan by REI's numpy ray caster vs pybullet's ``rayTestBatch``;
 * IR-SIM (PyPI ``ir-sim``), the light peer a user might pick instead: the same walls,
   objects and humans as rectangles and circles, the same robot footprint, a 360-beam
   2D lidar, stepped at 10 Hz (its lidar runs every step) with its built-in ``dash``
   behaviour for the same simulated time. REI is also run with its laser at 10 Hz for
-  the equal-rate comparison.
+  the equal-rate comparison (the loop without the monitor, as IR-SIM has none; CPU of both
+  processes);
+* start-up: the fixed CPU cost of one run in a fresh process (interpreter and imports, the
+  run's set-up until the loop starts, the robot's process start-up), from a run cut after
+  one physics step.
 
-Usage: python bench/simulation.py [--out DIR] [--skip-irsim]
+Usage: python bench/simulation.py [--out DIR] [--repeat N] [--skip-irsim] [--world NAME]
 Real-time factor = simulated seconds / wall seconds; never asserted by tests.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import cProfile
 import os
+import pstats
+import subprocess
 import sys
 import tempfile
 import time
+from collections import Counter
+from collections.abc import Callable, Iterator
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+import rei.runtime.robot as robot_package
 from rei.runtime.collector import TraceWriter, load_monitor_config
-from rei.runtime.robot import make_controller
-from rei.runtime.run import RunConfig, generate_world, run_mission
+from rei.runtime.commands.run import run_into
+from rei.runtime.robot.host import HostedController
+from rei.runtime.robot.protocol import Controller, ControllerContext
+from rei.runtime.robot.select import load_controller
+from rei.runtime.run import RunConfig, RunRecord, generate_world, run_mission
 from rei.runtime.sensors.laser import Laser2D, ShapeSet, merge_wall_tiles, shapes_of
 from rei.runtime.world import WorldManifest, load_manifest
 from rei.runtime.world.bullet import BulletWorld
@@ -100,18 +125,203 @@ def laser_costs(manifest: WorldManifest, scans: int = 50) -> tuple[float, float]
     return ours, theirs
 
 
-def full_mission(mission_file: Path, work: Path, laser_rate: float | None = None) -> dict[str, Any]:
+def process_cpu(pid: int) -> float:
+    """CPU seconds (user + system) a live process used so far, from /proc."""
+    with open(f"/proc/{pid}/stat", encoding="ascii") as f:
+        fields = f.read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+class MeteredHost(HostedController):
+    """The robot's own process, its CPU read when its first call (reset) has returned and
+    again before it is stopped: what the robot spent during the loop, start-up excluded."""
+
+    loop_cpu: float = 0.0
+
+    def reset(self, context: ControllerContext) -> None:
+        super().reset(context)
+        self._begun = process_cpu(self.pid)
+
+    def close(self) -> None:
+        begun = getattr(self, "_begun", None)
+        if begun is not None:
+            with contextlib.suppress(OSError):
+                self.loop_cpu = process_cpu(self.pid) - begun
+            self._begun = None
+        super().close()
+
+
+@contextlib.contextmanager
+def controllers(make: Callable[[str, str | None], Controller]) -> Iterator[None]:
+    """``run_into`` makes its controller with ``make`` while inside (restored after)."""
+    saved = robot_package.make_controller
+    robot_package.make_controller = make  # type: ignore[assignment]
+    try:
+        yield
+    finally:
+        robot_package.make_controller = saved
+
+
+def full_mission(mission_file: Path, work: Path) -> dict[str, Any]:
+    """One `rei run` of the mission, everything on, the robot in its own process."""
+    hosts: list[MeteredHost] = []
+
+    def make(spec: str, folder: str | None = None) -> Controller:
+        hosts.append(MeteredHost(spec, folder))
+        return hosts[-1]
+
+    with controllers(make):
+        _, record = run_into(mission_file, work / "run")
+        # The loop's CPU includes set-up done in it (the world's bodies, the monitor's start,
+        # the controller's reset): a run cut after one step measures that part.
+        _, cut = run_into(mission_file, work / "cut", duration=0.01)
+    cpu = record.cpu_seconds + hosts[0].loop_cpu
+    steady = max(cpu - cut.cpu_seconds, 1e-9)
+    # The robot's process starts while the world is built; what is left of its start-up is
+    # waited for in the loop's first call: that wait is start-up, not the loop's.
+    wall = record.wall_seconds - getattr(hosts[0], "load_wait", 0.0)  # older hosts: none
+    return {"record": record, "rtf": record.duration / wall,
+            "cpu_rtf": record.duration / cpu, "cpu": cpu, "steady_rtf": record.duration / steady,
+            "in_loop_setup": cut.cpu_seconds}
+
+
+def equal_rate(mission_file: Path, work: Path, laser_rate: float) -> dict[str, Any]:
+    """The loop without monitor at another laser rate (IR-SIM's), robot in its own process."""
     world_dir = work / "world"
-    mission = generate_world(mission_file, world_dir)
+    mission = generate_world(mission_file, world_dir, replace=True)
     manifest = load_manifest(world_dir)
-    if laser_rate is not None:
-        manifest = replace(manifest, laser=replace(manifest.laser, rate=laser_rate))
-    monitor = load_monitor_config(world_dir)
-    record = run_mission(mission, manifest, monitor, make_controller("reference"),
-                         [TraceWriter(work / "trace.jsonl")], RunConfig(seed=0))
+    manifest = replace(manifest, laser=replace(manifest.laser, rate=laser_rate))
+    host = MeteredHost("reference")
+    try:
+        record = run_mission(mission, manifest, load_monitor_config(world_dir), host,
+                             [TraceWriter(work / "trace.jsonl")], RunConfig(seed=0))
+    finally:
+        host.close()
+    cpu = record.cpu_seconds + host.loop_cpu
     return {"mission": mission, "manifest": manifest, "record": record,
-            "rtf": record.duration / record.wall_seconds,
-            "cpu_rtf": record.duration / record.cpu_seconds}
+            "rtf": record.duration / record.wall_seconds, "cpu_rtf": record.duration / cpu}
+
+
+COMPONENTS = (
+    ("pybullet", "physics"), ("rei/runtime/world/", "physics"),
+    ("rei/runtime/sensors/laser", "laser"), ("rei/runtime/sensors/odometry", "odometry"),
+    ("rei/runtime/robot/host", "controller IPC"), ("rei/runtime/robot/watchdog", "run loop"),
+    ("rei/runtime/robot/", "navigator"), ("rei/runtime/mission", "mission"),
+    ("rei/runtime/animator", "animator"), ("rei/runtime/collector/trace", "trace writer"),
+    ("json/", "trace writer"), ("rei/runtime/collector", "collector"),
+    ("rei/runtime/monitor", "monitor"), ("/automata/automata.py", "monitor"),
+    ("reactivex", "monitor"), ("rei/runtime/evaluator", "evaluator"),
+    ("rei/runtime/run.py", "run loop"), ("rei/runtime/messages", "run loop"),
+    ("arpeggio", "set-up"), ("textx", "set-up"), ("jinja2", "set-up"), ("rei/lang", "set-up"),
+    ("rei/generators", "set-up"), ("<frozen", "set-up"),
+)
+"""Module path fragment -> component, first match wins (paths as installed: rei/...)."""
+_CALLER_PAYS = ("~", "numpy/", "dataclasses.py", "functools.py", "enum.py", "typing.py",
+                "abc.py", "copy.py", "contextlib.py", "threading.py", "queue.py")
+"""Builtins and helpers whose own time goes to the component that called them."""
+
+
+def _component(path: str) -> str | None:
+    path = path.replace(os.sep, "/")
+    if "/rei/" not in path:  # an editable install: rei.runtime is runtime/, rei.lang rei_lang/
+        path = path.replace("/runtime/", "/rei/runtime/").replace("/rei_lang/", "/rei/lang/") \
+            .replace("/generators/", "/rei/generators/")
+    for fragment, name in COMPONENTS:
+        if fragment in path:
+            return name
+    if path == "~" or any(f in path for f in _CALLER_PAYS):
+        return None
+    return "other"
+
+
+def component_shares(stats: pstats.Stats) -> Counter[str]:
+    """Own time per component; builtins and numpy share theirs among their callers."""
+    table = stats.stats  # type: ignore[attr-defined]
+    memo: dict[Any, Counter[str]] = {}
+
+    def owners(func: Any, depth: int = 0) -> Counter[str]:
+        if func in memo:
+            return memo[func]
+        own = _component(func[0]) if "pybullet" not in func[2] else "physics"
+        out: Counter[str] = Counter()
+        callers = table[func][4] if func in table else {}
+        if own is not None or depth > 6 or not callers:
+            out[own or "other"] = 1.0
+        else:
+            total = sum(v[2] for v in callers.values()) or 1.0
+            for caller, v in callers.items():
+                for name, w in owners(caller, depth + 1).items():
+                    out[name] += w * v[2] / total
+        memo[func] = out
+        return out
+
+    shares: Counter[str] = Counter()
+    for func, (_, _, own_time, _, _) in table.items():
+        for name, w in owners(func).items():
+            shares[name] += own_time * w
+    return shares
+
+
+def profiled(mission_file: Path, work: Path) -> tuple[Counter[str], RunRecord]:
+    """The mission with the navigator in this process, under cProfile during the loop."""
+    profile = cProfile.Profile()
+
+    def make(spec: str, folder: str | None = None) -> Controller:
+        return load_controller(spec, folder)
+
+    import rei.runtime.run as run_module  # noqa: PLC0415
+
+    loop = run_module.run_mission
+
+    def run_profiled(*args: Any, **kwargs: Any) -> RunRecord:
+        profile.enable()
+        try:
+            return loop(*args, **kwargs)
+        finally:
+            profile.disable()
+
+    run_module.run_mission = run_profiled  # type: ignore[assignment]
+    try:
+        with controllers(make):
+            _, record = run_into(mission_file, work / "profiled", watchdog=None)
+    finally:
+        run_module.run_mission = loop  # type: ignore[assignment]
+    return component_shares(pstats.Stats(profile)), record
+
+
+def in_process_cpu(mission_file: Path, work: Path) -> float:
+    """Loop CPU of the mission with the navigator in this process (no messages), less the
+    set-up done in the loop (a run cut after one step: the navigator's reset is in it)."""
+    with controllers(lambda spec, folder=None: load_controller(spec, folder)):
+        _, record = run_into(mission_file, work / "in_process", watchdog=None)
+        _, cut = run_into(mission_file, work / "in_process_cut", watchdog=None, duration=0.01)
+    return record.cpu_seconds - cut.cpu_seconds
+
+
+STARTUP_PROBE = """
+import resource, sys, time
+cpu0, wall0 = time.process_time(), time.perf_counter()
+from pathlib import Path
+from rei.runtime.commands.run import run_into
+cpu1 = time.process_time()
+run_into(Path(sys.argv[1]), Path(sys.argv[2]), duration=0.01)
+cpu2, wall2 = time.process_time(), time.perf_counter()
+child = resource.getrusage(resource.RUSAGE_CHILDREN)
+print(cpu0, cpu1 - cpu0, cpu2 - cpu1, child.ru_utime + child.ru_stime, wall2 - wall0)
+"""
+"""A run cut after its first physics step in a fresh interpreter: CPU before any import,
+of the imports of `rei run`'s path, of the run's set-up, of the robot's process; wall."""
+
+
+def startup(mission_file: Path, work: Path) -> dict[str, float]:
+    """The fixed cost of one run (best of the repeats is taken by the caller)."""
+    start = time.perf_counter()
+    done = subprocess.run([sys.executable, "-c", STARTUP_PROBE, str(mission_file),
+                           str(work / "startup")], capture_output=True, text=True, check=True)
+    wall = time.perf_counter() - start
+    python, imports, setup, robot, _ = (float(v) for v in done.stdout.split())
+    return {"python": python, "imports": imports, "setup": setup, "robot": robot,
+            "total": python + imports + setup + robot, "wall": wall}
 
 
 def irsim_world(manifest: WorldManifest, goal: tuple[float, float], path: Path) -> None:
@@ -172,35 +382,46 @@ def best(runs: list[dict[str, Any]]) -> dict[str, Any]:
     return max(runs, key=lambda r: r["cpu_rtf"])
 
 
+SHOWN = ("physics", "laser", "odometry", "navigator", "mission", "animator", "collector",
+         "trace writer", "monitor", "evaluator", "run loop")
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--out", type=Path, default=None)
     parser.add_argument("--repeat", type=int, default=3, help="runs per figure, best kept")
     parser.add_argument("--skip-irsim", action="store_true")
+    parser.add_argument("--world", action="append", default=None,
+                        help="only this world (an example's name or 'big'); repeatable")
     args = parser.parse_args(argv)
     work_root = Path(args.out or tempfile.mkdtemp(prefix="rei-bench-sim-"))
     missions = [(name, REPO / "examples" / name / f"{name}.mission") for name in EXAMPLES]
     (work_root / "big").mkdir(parents=True, exist_ok=True)
     missions.append(("200 objects", big_room(work_root / "big")))
-    print(f"# rei bench simulation — {time.strftime('%Y-%m-%d')}, {os.cpu_count()} cores, "
-          f"python {sys.version.split()[0]}, best of {args.repeat}; "
-          f"× real time per wall second (per CPU second)", flush=True)
-    print("| world | bodies | outcome | sim s | full mission | bare pybullet | full / bare "
-          "| laser numpy ms | laser rayTestBatch ms | REI, laser 10 Hz | IR-SIM 10 Hz "
-          "| REI / IR-SIM |")
-    print("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    if args.world:
+        missions = [(n, p) for n, p in missions
+                    if n in args.world or (n == "200 objects" and "big" in args.world)]
+    load = " / ".join(f"{v:.1f}" for v in os.getloadavg())
+    print(f"# rei bench simulation — {time.strftime('%Y-%m-%d %H:%M')}, {os.cpu_count()} "
+          f"cores, load average {load}, python {sys.version.split()[0]}, best of "
+          f"{args.repeat}; × real time per wall second (per CPU second of the loop, the "
+          f"run's and the robot's processes)", flush=True)
+    print("| world | bodies | outcome | sim s | full mission | full, set-up excluded (CPU) "
+          "| bare pybullet | full / bare | laser numpy ms | laser rayTestBatch ms "
+          "| REI, laser 10 Hz | IR-SIM 10 Hz | REI / IR-SIM |")
+    print("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    profiles, startups = [], []
     for name, path in missions:
         work = work_root / name.replace(" ", "_")
         work.mkdir(parents=True, exist_ok=True)
         full = best([full_mission(path, work) for _ in range(args.repeat)])
-        record, manifest, mission = full["record"], full["manifest"], full["mission"]
+        equal = best([equal_rate(path, work / "10hz", 10.0) for _ in range(args.repeat)])
+        record, manifest, mission = full["record"], equal["manifest"], equal["mission"]
         bare = max((bare_rate(manifest, max(record.steps, 1000)) for _ in range(args.repeat)),
                    key=lambda r: r[1])
         bare = (bare[0] / 100.0, bare[1] / 100.0)
         ours_ms, bullet_ms = min(laser_costs(manifest) for _ in range(args.repeat))
-        equal = best([full_mission(path, work / "10hz", laser_rate=10.0)
-                      for _ in range(args.repeat)])
         peer = None
         if not args.skip_irsim:
             goal = mission.tasks()[-1]
@@ -212,9 +433,44 @@ def main(argv: list[str] | None = None) -> int:
         ratio = f"{equal['cpu_rtf'] / peer[1]:.2f}" if peer else "n/a"
         print(f"| {name} | {bodies} | {record.outcome}, {record.measurements['collisions']} "
               f"collisions | {record.duration:.1f} | {full['rtf']:.0f} ({full['cpu_rtf']:.0f}) | "
+              f"{full['steady_rtf']:.0f} | "
               f"{bare[0]:.0f} ({bare[1]:.0f}) | {full['cpu_rtf'] / bare[1]:.2f} | "
               f"{ours_ms:.3f} | {bullet_ms:.3f} | {equal['rtf']:.0f} ({equal['cpu_rtf']:.0f}) | "
               f"{peer_text} | {ratio} |", flush=True)
+        inside = min(in_process_cpu(path, work) for _ in range(args.repeat))
+        shares, _ = profiled(path, work)
+        profiles.append((name, full, inside, shares))
+        startups.append((name, min((startup(path, work) for _ in range(args.repeat)),
+                                   key=lambda r: r["total"])))
+    print("\nWhere the loop's CPU goes, set-up excluded (% of the full mission's loop CPU "
+          "in both processes, less the set-up done in the loop as a run cut after one step "
+          "measures it). Controller IPC = hosted − in-process loop CPU, both set-up "
+          "excluded; the components share the rest as a cProfile run with the navigator "
+          "in-process shares its own time (set-up excluded)\n")
+    print("| world | loop CPU s | set-up in loop s | in-process, set-up excluded s "
+          "| controller IPC | "
+          + " | ".join(SHOWN) + " | other |")
+    print("|---|---:|---:|---:|---:|" + "---:|" * (len(SHOWN) + 1))
+    for name, full, inside, shares in profiles:
+        steady = max(full["cpu"] - full["in_loop_setup"], 1e-9)
+        ipc = max(steady - inside, 0.0)
+        rest = max(steady - ipc, 0.0)
+        total = sum(v for k, v in shares.items() if k != "set-up") or 1.0
+        cells = [100 * shares.get(c, 0.0) / total * rest / steady for c in SHOWN]
+        other = 100 * sum(v for k, v in shares.items() if k not in SHOWN and k != "set-up") \
+            / total * rest / steady
+        print(f"| {name} | {full['cpu']:.2f} | {full['in_loop_setup']:.2f} | {inside:.2f} | "
+              f"{100 * ipc / steady:.0f} % | " + " | ".join(f"{c:.0f} %" for c in cells)
+              + f" | {other:.0f} % |")
+    print("\nStart-up: the fixed cost of one run in a fresh process (CPU seconds; wall seconds "
+          "of the whole process)\n")
+    print("| world | interpreter | imports | set-up | robot's process | total CPU | wall |")
+    print("|---|---:|---:|---:|---:|---:|---:|")
+    for name, st in startups:
+        print(f"| {name} | {st['python']:.2f} | {st['imports']:.2f} | {st['setup']:.2f} | "
+              f"{st['robot']:.2f} | {st['total']:.2f} | {st['wall']:.2f} |")
+    load = " / ".join(f"{v:.1f}" for v in os.getloadavg())
+    print(f"\n# load average at the end: {load}")
     return 0
 
 

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-import networkx as nx
 import numpy as np
 
+from rei.runtime.robot.gridplan import GridGraph
 from rei.runtime.robot.protocol import ControllerContext
 from rei.runtime.robot.reference import COMFORT, ReferenceNavigator
 
@@ -32,7 +32,7 @@ class FootprintTooSmall(ReferenceNavigator):
         w, h = context.robot_size
         super().reset(replace(context, robot_size=(w * FOOTPRINT_SCALE, h * FOOTPRINT_SCALE)))
 
-    def _grid_graph(self, inflate: float) -> tuple[nx.Graph, np.ndarray]:
+    def _grid_graph(self, inflate: float) -> GridGraph:
         # Every free cell costs as much as one far from obstacles: no inflation gradient.
         clear = self._clear
         self._clear = np.where(clear > inflate, COMFORT + 1.0, clear)

@@ -93,6 +93,8 @@ class _WorldCache:
 
     poses: np.ndarray | None = None
     world: np.ndarray | None = None
+    robot_inner: float | None = None
+    """The robot footprint's inner radius (computed on first use)."""
 
 
 @dataclass(frozen=True)
@@ -165,8 +167,11 @@ class FootprintSet:
         ``distance`` is exact only where ``exact`` is set and a lower bound elsewhere."""
         rx, ry, _ = robot_pose
         centre = np.hypot(poses[:, 0] - rx, poses[:, 1] - ry)
-        robot_inner = self.robot_radius if self.robot_polygon is None else _inner_radius(
-            self.robot_polygon)
+        robot_inner = self.cache.robot_inner
+        if robot_inner is None:
+            robot_inner = self.robot_radius if self.robot_polygon is None else _inner_radius(
+                self.robot_polygon)
+            self.cache.robot_inner = robot_inner
         upper = np.where(exact, distance, centre - self.inner_radius - robot_inner)
         bound = float(upper[group].min())
         candidates = group & ~exact & (distance <= bound)

@@ -58,6 +58,7 @@ from rei.runtime.robot.protocol import (
     checked_feedback,
     read_only_scan,
 )
+from rei.runtime.robot.teleop import SCRIPTS
 from rei.runtime.robot.watchdog import ControllerFault, raised
 
 MAX_ANSWER = 1 << 20
@@ -159,16 +160,61 @@ class HostedController:
         self._answers: IO[bytes] = self._process.stdout
         os.set_blocking(self._requests.fileno(), False)
         self._finalizer = weakref.finalize(self, _stop, self._process, self._home)
+        self._name: str | None = None
+        self.load_wait = 0.0
+        """Wall seconds the first call waited for a built-in controller's process to be
+        ready (its start-up not hidden behind the caller's own work)."""
+        self._loading: float | None = None
+        """Wall seconds the load's answer is still awaited for (NaN: as long as it takes)."""
+        home = os.getcwd() if folder is None else folder
+        if built_in(spec):
+            # Nothing of the user's to import, so nothing to report before the run: the
+            # host starts (a second interpreter's imports) while this process builds the
+            # world, and its answer is awaited with the first call.
+            self._loading = math.nan if timeout is None else timeout
+            if not self._send(self._request("load", (spec, home)),
+                              None if timeout is None else time.monotonic() + timeout):
+                self._loading = None
+                self.close()
+                raise RunError(f"--controller: '{spec}' could not be started: "
+                               f"{self._late('load')}")
+            return
         try:
-            answer = self._call("load", "load", spec,
-                                os.getcwd() if folder is None else folder)
+            answer = self._call("load", "load", spec, home)
         except ControllerFault as fault:
             self.close()
             raise RunError(f"--controller: '{spec}' could not be started: {fault}") from None
         if "error" in answer:
             self.close()
             raise RunError(_text(answer["error"]))
-        self.name = _text(answer["ok"])
+        self._name = _text(answer["ok"])
+
+    @property
+    def name(self) -> str:
+        """The controller's name, as it gives it."""
+        self._loaded()
+        return self.spec if self._name is None else self._name
+
+    @name.setter
+    def name(self, value: str) -> None:
+        self._loaded()
+        self._name = value
+
+    def _loaded(self) -> None:
+        """Await the answer of a load sent without waiting; a ControllerFault if it failed."""
+        if self._loading is None:
+            return
+        wait, self._loading = self._loading, None
+        began = time.monotonic()
+        deadline = None if math.isnan(wait) else began + wait
+        try:
+            answer = self._answer("load", "load", deadline)
+        finally:
+            self.load_wait = time.monotonic() - began
+        if "error" in answer:
+            raise self._fault(f"the controller's process could not load '{self.spec}': "
+                              f"{_text(answer['error'])}")
+        self._name = _text(answer["ok"])
 
     @property
     def pid(self) -> int:
@@ -220,14 +266,27 @@ class HostedController:
         self.close()
         return ControllerFault(reason)
 
+    @staticmethod
+    def _request(op: str, args: tuple[Any, ...]) -> bytes:
+        request = pickle.dumps((op, args), protocol=pickle.HIGHEST_PROTOCOL)
+        return _LENGTH.pack(len(request)) + request
+
     def _call(self, what: str, op: str, *args: Any) -> dict[str, Any]:
         if self._broken is not None:
             raise ControllerFault(self._broken)
+        self._loaded()
         deadline = None if self.timeout is None else time.monotonic() + self.timeout
-        request = pickle.dumps((op, args), protocol=pickle.HIGHEST_PROTOCOL)
         try:
-            if not self._send(_LENGTH.pack(len(request)) + request, deadline):
+            if not self._send(self._request(op, args), deadline):
                 raise self._fault(self._late(what))
+        except KeyboardInterrupt:  # the user's Ctrl-C, in this process: its answer is lost
+            self._fault(f"controller {what}() was interrupted by the user")
+            raise
+        return self._answer(what, op, deadline)
+
+    def _answer(self, what: str, op: str, deadline: float | None) -> dict[str, Any]:
+        """The answer to the request sent last, checked for its framing and keys."""
+        try:
             line = self._receive(what, deadline)
         except KeyboardInterrupt:  # the user's Ctrl-C, in this process: its answer is lost
             self._fault(f"controller {what}() was interrupted by the user")
@@ -257,13 +316,16 @@ class HostedController:
         """Write the request; False when the host does not take it before the deadline."""
         fd = self._requests.fileno()
         view = memoryview(data)
+        ready: list[int] = [fd]  # a request fits in an empty pipe: try before waiting
         while view:
-            _, ready, _ = select.select([], [fd], [], self._remaining(deadline))
             if not ready:
-                return False
+                _, ready, _ = select.select([], [fd], [], self._remaining(deadline))
+                if not ready:
+                    return False
             try:
                 view = view[os.write(fd, view):]
             except BlockingIOError:
+                ready = []
                 continue
             except BrokenPipeError:
                 return True  # the host is gone: the answer's end of file says how
@@ -295,6 +357,13 @@ class HostedController:
         except subprocess.TimeoutExpired:
             return f"controller {what}() closed its process's answer pipe"
         return f"the controller's process {describe_status(status)} during {what}()"
+
+
+def built_in(spec: str) -> bool:
+    """Whether ``spec`` names one of REI's own controllers (no user module to import)."""
+    if spec.startswith("teleop:"):
+        return spec.split(":", 1)[1] in SCRIPTS
+    return spec in ("reference", "teleop")
 
 
 def _text(value: Any) -> str:
@@ -349,7 +418,7 @@ def _answer_of(what: str, controller: Any, args: tuple[Any, ...]) -> dict[str, A
 def _read_exactly(stream: BinaryIO, size: int) -> bytes | None:
     data = b""
     while len(data) < size:
-        chunk = stream.read(size - len(data))
+        chunk = stream.read(size - len(data))  # buffered: all of it unless the pipe closed
         if not chunk:
             return None
         data += chunk
@@ -385,7 +454,8 @@ def serve(requests: BinaryIO, answers: BinaryIO) -> None:
 def main() -> None:
     # The pipes move to descriptors of their own; 0 reads nothing and 1 is stderr, so what
     # the controller prints cannot be taken for an answer.
-    requests = os.fdopen(os.dup(0), "rb", buffering=0)
+    # Buffered: a request's length prefix and body usually arrive in one read of the pipe.
+    requests = os.fdopen(os.dup(0), "rb")
     answers = os.fdopen(os.dup(1), "wb")
     devnull = os.open(os.devnull, os.O_RDONLY)
     os.dup2(devnull, 0)

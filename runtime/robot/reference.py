@@ -1,11 +1,11 @@
 """`reference`: a real navigator shipped with REI, so a mission runs out of the box.
 
-Global planning: A* (networkx) over a grid of the known static map, cells blocked within the
-robot's footprint radius of any wall or static object and made dearer near them, so paths keep
-to the middle of passages. Local planning: a dynamic-window search over (linear, angular)
-velocity pairs within the drive limits, each rolled out for a short horizon against the
-points the laser sees (humans and moving objects included), scored by progress towards a
-lookahead point on the path, clearance and speed.
+Global planning: A* (``rei.runtime.robot.gridplan``) over a grid of the known static map,
+cells blocked within the robot's footprint radius of any wall or static object and made dearer
+near them, so paths keep to the middle of passages. Local planning: a dynamic-window search
+over (linear, angular) velocity pairs within the drive limits, each rolled out for a short
+horizon against the points the laser sees (humans and moving objects included), scored by
+progress towards a lookahead point on the path, clearance and speed.
 
 Recovery (runtime/robot/recovery.py, as ROS move_base / Nav2 do it): when the local planner
 finds no admissible motion for ``STUCK_AFTER`` seconds, or the robot makes no progress for
@@ -33,10 +33,10 @@ from __future__ import annotations
 
 import math
 
-import networkx as nx
 import numpy as np
 
 from rei.runtime.messages import LaserScan
+from rei.runtime.robot.gridplan import GridGraph
 from rei.runtime.robot.protocol import (
     STOP,
     ControllerContext,
@@ -153,6 +153,11 @@ class ReferenceNavigator:
         self._wmax = context.drive.max_angular
         self._points_of: LaserScan | None = None
         self._points = np.zeros((0, 2))
+        # Per-scan results, keyed by the identity of the scan's points (see _laser_points).
+        self._clearance_of: np.ndarray | None = None
+        self._clearance = np.zeros(0)
+        self._near_of: np.ndarray | None = None
+        self._near = np.zeros((0, 2))
         self._build_grid(context)
         self._build_map_fit(context)
         self._build_rollouts()
@@ -170,8 +175,8 @@ class ReferenceNavigator:
         self._origin = (x0, y0)
         self._shape = (nx_, ny_)
         self._clear = clear
-        self._graph, self._free_cells = self._grid_graph(self._radius + 0.01)
-        self._reduced: tuple[nx.Graph, np.ndarray] | None = None
+        self._graph = self._grid_graph(self._radius + 0.01)
+        self._reduced: GridGraph | None = None
 
     def _build_map_fit(self, ctx: ControllerContext) -> None:
         """The fine distance-to-map grid that tells mapped laser points from unmapped ones."""
@@ -200,38 +205,21 @@ class ReferenceNavigator:
         """Whether an unmapped laser point is within the slow zone (and its lead)."""
         if not len(points):
             return False
-        hx, hy = self._half
-        qx = np.abs(points[:, 0]) - hx
-        qy = np.abs(points[:, 1]) - hy
-        gap = np.hypot(np.maximum(qx, 0.0), np.maximum(qy, 0.0))
-        near = points[gap < SLOW_ZONE_RADIUS + SLOW_ZONE_LEAD]
-        return bool(self._unmapped(near, pose).any())
+        if self._near_of is not points:  # the points near the footprint: once per scan
+            hx, hy = self._half
+            qx = np.abs(points[:, 0]) - hx
+            qy = np.abs(points[:, 1]) - hy
+            gap = np.hypot(np.maximum(qx, 0.0), np.maximum(qy, 0.0))
+            self._near_of, self._near = points, points[gap < SLOW_ZONE_RADIUS + SLOW_ZONE_LEAD]
+        return bool(self._unmapped(self._near, pose).any())
 
-    def _grid_graph(self, inflate: float) -> tuple[nx.Graph, np.ndarray]:
+    def _grid_graph(self, inflate: float) -> GridGraph:
         """The planning graph of the cells farther than ``inflate`` from the static map."""
         clear = self._clear
-        nx_, ny_ = self._shape
-        free = clear > inflate
         cost = 1.0 + 4.0 * np.clip((COMFORT - clear) / COMFORT, 0.0, 1.0)
-        graph: nx.Graph = nx.Graph()
-        idx = np.argwhere(free)
-        graph.add_nodes_from(map(tuple, idx.tolist()))
-        for di, dj in ((1, 0), (0, 1), (1, 1), (1, -1)):
-            a = idx
-            b = idx + (di, dj)
-            ok = (b[:, 0] < nx_) & (b[:, 1] >= 0) & (b[:, 1] < ny_)
-            a, b = a[ok], b[ok]
-            ok = free[b[:, 0], b[:, 1]]
-            a, b = a[ok], b[ok]
-            length = math.hypot(di, dj)
-            w = length * 0.5 * (cost[a[:, 0], a[:, 1]] + cost[b[:, 0], b[:, 1]])
-            graph.add_weighted_edges_from(
-                ((p0, p1), (q0, q1), c) for p0, p1, q0, q1, c in
-                zip(a[:, 0].tolist(), a[:, 1].tolist(), b[:, 0].tolist(), b[:, 1].tolist(),
-                    w.tolist(), strict=False))
-        return graph, idx
+        return GridGraph(clear > inflate, cost)
 
-    def _reduced_graph(self) -> tuple[nx.Graph, np.ndarray]:
+    def _reduced_graph(self) -> GridGraph:
         """The graph with the inflation cut to the half width (built on first use): passages
         the robot fits through only when aligned with them, which the local planner checks."""
         if self._reduced is None:
@@ -300,10 +288,10 @@ class ReferenceNavigator:
         return min(max(i, 0), self._shape[0] - 1), min(max(j, 0), self._shape[1] - 1)
 
     @staticmethod
-    def _nearest_free(cell: tuple[int, int], graph: nx.Graph,
-                      free_cells: np.ndarray) -> tuple[int, int] | None:
+    def _nearest_free(cell: tuple[int, int], graph: GridGraph) -> tuple[int, int] | None:
         if cell in graph:
             return cell
+        free_cells = graph.free_cells
         if len(free_cells) == 0:
             return None
         d = np.abs(free_cells - np.array(cell)).sum(axis=1)
@@ -313,22 +301,14 @@ class ReferenceNavigator:
     def _plan(self, start: tuple[float, float], goal: NavGoal,
               blocked: set[tuple[int, int]] | None = None,
               reduced: bool = False) -> np.ndarray | None:
-        base, free_cells = self._reduced_graph() if reduced else (self._graph, self._free_cells)
-        a = self._nearest_free(self._cell(*start), base, free_cells)
-        b = self._nearest_free(self._cell(goal.x, goal.y), base, free_cells)
+        graph = self._reduced_graph() if reduced else self._graph
+        a = self._nearest_free(self._cell(*start), graph)
+        b = self._nearest_free(self._cell(goal.x, goal.y), graph)
         if a is None or b is None:
             return None
-        graph = base
-        if blocked:
-            # A view hides what the laser saw for this plan without copying the graph.
-            graph = nx.restricted_view(base, [c for c in blocked if c not in (a, b)], [])
-
-        def h(u: tuple[int, int], v: tuple[int, int]) -> float:
-            return math.hypot(u[0] - v[0], u[1] - v[1])
-
-        try:
-            cells = nx.astar_path(graph, a, b, heuristic=h, weight="weight")
-        except (nx.NetworkXNoPath, nx.NodeNotFound):
+        # What the laser saw is hidden for this plan only (the start and goal never are).
+        cells = graph.astar(a, b, blocked)
+        if cells is None:
             return None
         pts = [(self._origin[0] + (i + 0.5) * RESOLUTION, self._origin[1] + (j + 0.5) * RESOLUTION)
                for i, j in cells]
@@ -523,15 +503,7 @@ class ReferenceNavigator:
         c, s = math.cos(yaw), math.sin(yaw)
         tx = c * (target[0] - x) + s * (target[1] - y)
         ty = -s * (target[0] - x) + c * (target[1] - y)
-        n = self._local_n
-        if len(points):
-            ij = np.floor(points / LOCAL_RES + n / 2).astype(np.int64)
-            inside = ((ij >= 0) & (ij < n)).all(axis=1)
-            flat = ij[inside, 0] * n + ij[inside, 1]
-            gaps = self._sweep[:, flat]
-            clearance = gaps.min(axis=1) if gaps.shape[1] else np.full(len(self._cmds), 0.5)
-        else:
-            clearance = np.full(len(self._cmds), 0.5)
+        clearance = self._rollout_clearance(points)
         hit = clearance < margin
         clearance = np.clip(clearance, 0.0, 0.5)
         v, w = self._cmds[:, 0], self._cmds[:, 1]
@@ -551,6 +523,24 @@ class ReferenceNavigator:
         if not np.isfinite(score[best]):
             return None
         return VelocityCommand(float(v[best]), float(w[best]))
+
+    def _rollout_clearance(self, points: np.ndarray) -> np.ndarray:
+        """Each roll-out's smallest gap to the laser points (robot frame), 0.5 when none
+        is in reach; the same for every tick of one scan, so computed once per scan."""
+        if self._clearance_of is points:
+            return self._clearance
+        n = self._local_n
+        if len(points):
+            ij = np.floor(points / LOCAL_RES + n / 2).astype(np.int64)
+            inside = ((ij >= 0) & (ij < n)).all(axis=1)
+            flat = ij[inside, 0] * n + ij[inside, 1]
+            gaps = self._sweep[:, flat]
+            clearance = gaps.min(axis=1) if gaps.shape[1] else np.full(len(self._cmds), 0.5)
+        else:
+            clearance = np.full(len(self._cmds), 0.5)
+        clearance.flags.writeable = False
+        self._clearance_of, self._clearance = points, clearance
+        return clearance
 
     def _replan_around(self, points: np.ndarray, goal: NavGoal, xy: tuple[float, float],
                        reduced: bool = False) -> bool:

@@ -48,11 +48,6 @@ def _quat(yaw: float) -> tuple[float, float, float, float]:
     return (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
 
 
-def _yaw(q: tuple[float, ...]) -> float:
-    x, y, z, w = q
-    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
-
-
 class BulletWorld:
     """The loaded world; call ``close`` (or use as a context manager) to free the client."""
 
@@ -85,6 +80,9 @@ class BulletWorld:
         self.moving_index = [i for i, b in enumerate(manifest.objects) if not b.fixed]
         self._fixed_poses = np.array([(b.x, b.y, b.yaw) for b in manifest.objects],
                                      dtype=float).reshape(-1, 3)
+        self._moving = [(i, self.object_ids[i]) for i in self.moving_index]
+        self._states: tuple[np.ndarray, np.ndarray] | None = None
+        """``object_states`` of the current step, until a step or a velocity change."""
 
     def _load(self, body: BodySpec) -> int:
         path = Path(self.manifest.folder) / body.urdf
@@ -116,8 +114,9 @@ class BulletWorld:
             self.client = -1
 
     def pose(self, bid: int) -> tuple[float, float, float]:
-        pos, orn = p.getBasePositionAndOrientation(bid, physicsClientId=self.client)
-        return (pos[0], pos[1], _yaw(orn))
+        pos, (x, y, z, w) = p.getBasePositionAndOrientation(bid, physicsClientId=self.client)
+        # the yaw of the quaternion, inline: this runs several times per physics step
+        return (pos[0], pos[1], math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z)))
 
     def twist(self, bid: int) -> tuple[float, float, float]:
         lin, ang = p.getBaseVelocity(bid, physicsClientId=self.client)
@@ -125,11 +124,13 @@ class BulletWorld:
 
     def place(self, bid: int, pose: tuple[float, float, float]) -> None:
         """Put a body at a planar pose (tests and benchmarks; a run never teleports bodies)."""
+        self._states = None
         z = p.getBasePositionAndOrientation(bid, physicsClientId=self.client)[0][2]
         p.resetBasePositionAndOrientation(bid, (pose[0], pose[1], z), _quat(pose[2]),
                                           physicsClientId=self.client)
 
     def set_planar_velocity(self, bid: int, vx: float, vy: float, wz: float) -> None:
+        self._states = None
         p.resetBaseVelocity(bid, (vx, vy, 0.0), (0.0, 0.0, wz), physicsClientId=self.client)
 
     def drive_robot(self, linear: float, angular: float, yaw: float) -> None:
@@ -138,6 +139,7 @@ class BulletWorld:
                                  angular)
 
     def step(self) -> None:
+        self._states = None
         for bid in self.free_ids:
             lin, ang = p.getBaseVelocity(bid, physicsClientId=self.client)
             p.resetBaseVelocity(bid, (lin[0], lin[1], 0.0), (0.0, 0.0, ang[2]),
@@ -148,7 +150,7 @@ class BulletWorld:
         """Body ids the robot touches now: a contact point closer than 1 mm (pybullet keeps
         points a little apart as well; those are not touches)."""
         points = p.getContactPoints(bodyA=self.robot_id, physicsClientId=self.client)
-        return {pt[2] for pt in points if pt[8] < CONTACT_DISTANCE}
+        return {pt[2] for pt in points if pt[8] < CONTACT_DISTANCE} if points else set()
 
     def robot_contacts(self) -> list[str]:
         """Names of the bodies the robot touches now (sorted)."""
@@ -157,18 +159,31 @@ class BulletWorld:
     def robot_contact_indices(self) -> list[int]:
         """Indices into manifest.observed (the stream's objects) of the bodies the robot
         touches now, sorted; the same test as ``robot_contacts``."""
+        touching = self._touching()
+        if not touching:
+            return []
         index = self._observed_index
-        return sorted(index[bid] for bid in self._touching() if bid in index)
+        return sorted(index[bid] for bid in touching if bid in index)
 
     def object_states(self) -> tuple[np.ndarray, np.ndarray]:
-        """(N, 3) poses and twists of manifest.objects, in order."""
-        poses = self._fixed_poses.copy()
-        twists = np.zeros_like(poses)
-        for i in self.moving_index:
-            bid = self.object_ids[i]
-            poses[i] = self.pose(bid)
-            twists[i] = self.twist(bid)
-        return poses, twists
+        """(N, 3) poses and twists of manifest.objects, in order (the caller's own arrays).
+
+        Read once per physics step: a second call before the next step or velocity change
+        (the laser and the collector at the same instant) copies the first one's."""
+        if self._states is None:
+            poses = self._fixed_poses.copy()
+            twists = np.zeros_like(poses)
+            cid = self.client
+            get_pose, get_twist = p.getBasePositionAndOrientation, p.getBaseVelocity
+            for i, bid in self._moving:
+                pos, (x, y, z, w) = get_pose(bid, physicsClientId=cid)
+                poses[i] = (pos[0], pos[1],
+                            math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z)))
+                lin, ang = get_twist(bid, physicsClientId=cid)
+                twists[i] = (lin[0], lin[1], ang[2])
+            self._states = (poses, twists)
+        poses, twists = self._states
+        return poses.copy(), twists.copy()
 
     def ray_scan(self, origin: tuple[float, float, float], angles: np.ndarray,
                  max_range: float) -> np.ndarray:

@@ -57,3 +57,32 @@ def test_goal_tracker_follows_figure_22() -> None:
     assert tracker.feedback().message == "blocked"
     with pytest.raises(IllegalTransition):
         tracker.succeed()
+
+
+def test_a_built_in_host_that_dies_while_starting_is_a_fault_naming_how() -> None:
+    """A built-in controller's host is started without waiting for it (it loads while the
+    world is built); a host that dies before it answered is the first call's fault."""
+    import os
+    import signal
+
+    from rei.runtime.robot.host import HostedController
+    from rei.runtime.robot.watchdog import ControllerFault
+
+    hosted = HostedController("reference", timeout=30.0)
+    try:
+        os.killpg(hosted.pid, signal.SIGKILL)
+        with pytest.raises(ControllerFault, match=r"killed by signal 9 \(SIGKILL\) during load"):
+            hosted.feedback()
+        with pytest.raises(ControllerFault):  # and it stays broken
+            hosted.cancel_goal()
+    finally:
+        hosted.close()
+
+
+def test_a_built_in_host_answers_its_name_once_loaded() -> None:
+    hosted = make_controller("teleop:circle")
+    try:
+        assert hosted.name == "teleop:circle"
+        assert hosted.feedback().state == NavState.IDLE
+    finally:
+        hosted.close()
