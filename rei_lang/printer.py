@@ -80,6 +80,10 @@ def print_mission(mission: Mission, room_path: str) -> str:
     if mission.sample_rate != DEFAULT_SAMPLE_RATE or mission.data != COLLECTED_DATA:
         lines.append(f"    monitor {{ rate {_num(mission.sample_rate)} Hz  data "
                      f"{', '.join(mission.data)} }}")
+    if mission.faults:
+        lines.append("    fault {")
+        lines.extend(f"        {fault.text()}" for fault in mission.faults)
+        lines.append("    }")
     for goal in mission.goals:
         line = f"    goal {goal.name} at {goal.floor.name}"
         if goal.tolerance != DEFAULT_TOLERANCE:

@@ -91,6 +91,16 @@ RULES: tuple[Rule, ...] = (
     Rule("MONITOR-DATA", "mission", "the monitor block names known data (ground_truth, "
          "odometry, laser, nav_state, mission_events), each once, ground_truth among them; its "
          "rate is more than 0 and at most 1000 samples per second", "thesis 3.2.2.2, 6.1.2"),
+    Rule("FAULT-KIND", "mission", "every fault in a mission's fault section (or a --fault "
+         "option) is a known kind: laser_poisson, laser_noise, laser_dropout, laser_freeze, "
+         "laser_delay, laser_sector, odom_drift, odom_jump, cmd_drop, cmd_delay (with 'did you "
+         "mean')", "issue 17, thesis 7.5"),
+    Rule("FAULT-PARAM", "mission", "a fault's parameters are its kind's own (with 'did you "
+         "mean'), the required ones present, and they make sense together (a drift or jump "
+         "of something, a sector's min_deg <= max_deg)", "issue 17"),
+    Rule("FAULT-ACTIVATION", "mission", "a fault's activation is a time window that ends after "
+         "it starts, or starts on a signal and stops after a duration > 0 or on another "
+         "signal", "issue 17"),
     Rule("VEPL-DATA", "vepl", "`rei run` and `rei replay` refuse a specification whose queries "
          "read data the mission does not collect or the trace does not carry (laser_min without "
          "laser, ...)", "thesis 6.1.2"),

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 from rei.catalogue import ObjectType
+from rei.lang.mission.faults import FaultDefinition
 from rei.lang.mission.model import COLLECTED_DATA, DEFAULT_HEADING_TOLERANCE, DEFAULT_SAMPLE_RATE
 from rei.lang.room.model import DEFAULT_BEHAVIOUR, Behaviour
 
@@ -143,6 +144,8 @@ class ConcreteMission:
     """Samples per second of simulation time the data collector takes."""
     data: tuple[str, ...] = COLLECTED_DATA
     """What the data collector forwards (the mission's ``monitor`` block)."""
+    faults: tuple[FaultDefinition, ...] = ()
+    """The mission's ``fault`` section (rei.runtime.faults.fault_stage builds the stage)."""
 
     def tasks(self) -> tuple[ConcreteGoal, ...]:
         """The goals in the order they are sent (the sequence repeated ``cycles`` times)."""

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from importlib import resources
 
 from rei.catalogue import Catalogue, default_catalogue
+from rei.lang.mission.faults import ACTIVATION_KEYWORDS, KINDS
 from rei.lang.mission.model import COLLECTED_DATA
 from rei.lang.room.model import BEHAVIOURS, Room
 
@@ -29,9 +30,22 @@ instant in a 2 MB file, and no REI statement is longer."""
 SIDES = ("top", "right", "bottom", "left")
 ROLE_OF_KEYWORD = {"object": "static", "dynamic": "dynamic", "human": "human",
                    "robot": "robot", "floor": "floor", "wall": "wall"}
-BLOCK_OPENERS = ("room", "grid", "legend", "floor", "trajectory", "mission", "monitor")
+BLOCK_OPENERS = ("room", "grid", "legend", "floor", "trajectory", "mission", "monitor", "fault")
 MONITOR_KEYWORDS = ("rate", "data", "Hz")
 """Words of a mission's monitor block, offered only inside it."""
+FAULT_KEYWORDS = ACTIVATION_KEYWORDS
+"""Words of a fault entry, offered only inside a fault section."""
+
+
+@functools.cache
+def default_signals() -> tuple[str, ...]:
+    """The signals the default specification declares: what a fault's ``when`` / ``until``
+    usually names (a mission does not know which .vepl it will be run with)."""
+    try:
+        text = resources.files("rei.lang.vepl").joinpath("default.vepl").read_text("utf-8")
+    except (OSError, ValueError):
+        return ()
+    return tuple(re.findall(r"^\s*signal\s+([A-Za-z_]\w*)", text, re.MULTILINE))
 
 
 @functools.cache
@@ -163,14 +177,57 @@ def mission_completions(text_before: str, room: Room | None,
     if prev in ("cycles", "time_limit", "max_speed", "tolerance", "heading",
                 "heading_tolerance", "timeout", "rate"):
         return []
+    if ctx.blocks and ctx.blocks[-1] == "fault":
+        return _fault_completions(ctx.previous)
     if ctx.blocks and ctx.blocks[-1] == "monitor":
         if prev in ("data", ","):
             return [Candidate(d, "keyword", "collected data") for d in COLLECTED_DATA]
         return _keywords(("rate", "data"))
     if ctx.blocks:
         return _keywords(w for w in grammar_keywords("mission")
-                         if w not in ("mission", "in", *MONITOR_KEYWORDS))
+                         if w not in ("mission", "in", *MONITOR_KEYWORDS, *FAULT_KEYWORDS))
     return _keywords(("mission", "in"))
+
+
+def _fault_kinds() -> list[Candidate]:
+    return [Candidate(k.kind, "keyword", f"fault ({k.channel}): {k.summary}")
+            for k in KINDS.values()]
+
+
+def _fault_completions(previous: tuple[str, ...]) -> list[Candidate]:
+    """Inside ``fault { }``: a kind starts an entry; after it, its parameters not yet given
+    and the activation words; after ``when`` / ``until``, the default signals."""
+    prev = previous[-1] if previous else ""
+    if prev in ("when", "until"):
+        return [Candidate(s, "keyword", "signal of the default specification")
+                for s in default_signals()]
+    if prev in ("as", "from", "to", "for"):
+        return []  # a name or a number follows
+    at = next((i for i in range(len(previous) - 1, -1, -1) if previous[i] in KINDS), None)
+    if at is None or prev in ("{", "}"):
+        return _fault_kinds()
+    spec = KINDS[previous[at]]
+    entry = previous[at + 1:]
+    if any(p.name == prev for p in spec.parameters):
+        return []  # the parameter's number follows
+    words = [w for w in entry if w in ("when", "until", "from", "to", "for")]
+    if words:
+        if words == ["from"]:
+            return [Candidate("to", "keyword", "end of the window (seconds)"), *_fault_kinds()]
+        if words == ["when"] and entry[-2:-1] == ("when",):
+            return [Candidate("for", "keyword", "seconds active after the signal"),
+                    Candidate("until", "keyword", "the signal that stops it"), *_fault_kinds()]
+        return _fault_kinds()
+    if prev not in (spec.kind, *entry):
+        return _fault_kinds()
+    given = set(entry)
+    out = [Candidate(p.name, "keyword", f"{p.unit}: {p.doc}" + (
+        "" if p.default is not None else " (required)"))
+           for p in spec.parameters if p.name not in given]
+    if "as" not in given and prev == spec.kind:
+        out.append(Candidate("as", "keyword", "name this fault"))
+    out.extend(Candidate(w, "keyword", "activation") for w in ("from", "to", "when", "until"))
+    return out + _fault_kinds()
 
 
 OBJECT_ROLES = ("static", "dynamic", "human", "robot")

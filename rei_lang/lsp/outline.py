@@ -20,7 +20,8 @@ from rei.lang.room.model import Room
 class Symbol:
     name: str
     kind: str
-    """room | grid | floor | wall | object | robot | human | mission | goal | declaration"""
+    """room | grid | floor | wall | object | robot | human | mission | goal | fault |
+    declaration"""
     detail: str
     span: Span
     selection: Span
@@ -58,8 +59,11 @@ def room_outline(room: Room, index: LineIndex) -> Symbol:
 
 
 def mission_outline(mission: Mission, index: LineIndex) -> Symbol:
-    goals = tuple(Symbol(goal.name, "goal", f"goal at {goal.floor.name}", goal.span,
-                         goal.floor.span)
-                  for goal in mission.goals)
+    goals = [Symbol(goal.name, "goal", f"goal at {goal.floor.name}", goal.span,
+                    goal.floor.span)
+             for goal in mission.goals]
+    faults = [Symbol(fault.name, "fault", fault.text(), fault.span, fault.span)
+              for fault in mission.faults if fault.span is not None]
+    children = sorted(goals + faults, key=lambda s: (s.span.line, s.span.col))
     return Symbol(mission.name, "mission", f"mission in {mission.room_path}", mission.span,
-                  name_span(index, mission.span, mission.name), goals)
+                  name_span(index, mission.span, mission.name), tuple(children))

@@ -4,6 +4,8 @@ Rules: the imported room exists and is valid, each goal names a floor of that ro
 the robot can reach, at least two goals (thesis 4.1.2: start and final place), unique goal
 names, options given once, and every number finite and in range. The optional ``monitor``
 block names known data (each once, ground truth among them) and a sampling rate in range.
+The optional ``fault`` section names known fault kinds with known, finite, in-range
+parameters, each fault once (rei.lang.mission.faults).
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from rei.lang.errors import Diagnostic, Span
+from rei.lang.mission.faults import FaultDefinition, link_fault_section
 from rei.lang.mission.model import (
     COLLECTED_DATA,
     DEFAULT_HEADING_TOLERANCE,
@@ -33,6 +36,7 @@ from rei.lang.source import SourceText
 from rei.lang.suggest import did_you_mean
 
 MAX_CYCLES = 10_000
+_WORDS = {"FaultSection": "fault", "TimeLimit": "time_limit", "MaxSpeed": "max_speed"}
 
 
 def room_path_of(textx_mission: Any, source: SourceText) -> str:
@@ -59,13 +63,15 @@ def link_mission(textx_mission: Any, source: SourceText, room_doc: RoomDocument
     seen: set[str] = set()
     goals: list[Goal] = []
     goal_names: dict[str, Span] = {}
+    faults: list[FaultDefinition] = []
+    fault_names: dict[str, Span] = {}
     for item in textx_mission.items:
         kind = type(item).__name__
         if kind != "Goal":
             if kind in seen:
+                word = _WORDS.get(kind, kind.lower())
                 diagnostics.append(Diagnostic(span(item), "OPTION-REPEAT",
-                                              f"expected one '{kind.lower()}' setting, found "
-                                              f"another"))
+                                              f"expected one '{word}' setting, found another"))
                 continue
             seen.add(kind)
         if kind == "Cycles":
@@ -78,6 +84,8 @@ def link_mission(textx_mission: Any, source: SourceText, room_doc: RoomDocument
                                low_open=True)
         elif kind == "Monitor":
             sample_rate, data = _monitor(item, span, number, diagnostics)
+        elif kind == "FaultSection":
+            faults.extend(link_fault_section(item, span, diagnostics, fault_names))
         else:
             goals.append(_goal(item, len(goals) + 1, span, number, diagnostics, goal_names))
 
@@ -93,6 +101,7 @@ def link_mission(textx_mission: Any, source: SourceText, room_doc: RoomDocument
         goals=tuple(goals),
         sample_rate=sample_rate if sample_rate is not None else DEFAULT_SAMPLE_RATE,
         data=data,
+        faults=tuple(faults),
     )
     if len(goals) < 2:
         diagnostics.append(Diagnostic(mission.span, "MISSION-GOALS",

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from rei.lang.errors import Span
+from rei.lang.mission.faults import FaultDefinition
 from rei.lang.room.model import NameRef
 
 DEFAULT_TOLERANCE = 0.25
@@ -53,6 +54,8 @@ class Mission:
     """Samples per second the data collector takes (the ``monitor`` block's ``rate``)."""
     data: tuple[str, ...] = COLLECTED_DATA
     """What the data collector forwards, a subset of COLLECTED_DATA in its order."""
+    faults: tuple[FaultDefinition, ...] = ()
+    """The ``fault`` section: what is injected between the sensors and the robot under test."""
 
     def task_sequence(self) -> tuple[Goal, ...]:
         """The goals in the order they are sent: the sequence repeated ``cycles`` times."""

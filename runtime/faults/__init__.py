@@ -3,8 +3,21 @@
 ``FaultStage`` is the contract the run loop calls (``rei.runtime.faults.stage``); ``NO_FAULTS``
 passes everything through unchanged. Faults act on what the robot receives (its scans, its
 odometry, the commands its motors get), never on the ground truth the monitor judges by.
+``fault_stage(definitions, seed)`` builds a run's stage from a mission's fault section
+(``ConcreteMission.faults``) and ``--fault`` options (``parse_fault_option``); the faults and
+their semantics are in docs/faults.md.
 """
 
+from rei.lang.mission.faults import (
+    ALWAYS,
+    FAULT_KINDS,
+    Activation,
+    FaultDefinition,
+    parse_fault_option,
+)
+from rei.runtime.faults.plan import FAULT_STREAM, FaultPlan, FaultStatistics, fault_stage
 from rei.runtime.faults.stage import NO_FAULTS, FaultStage, NoFaults
 
-__all__ = ["NO_FAULTS", "FaultStage", "NoFaults"]
+__all__ = ["ALWAYS", "FAULT_KINDS", "FAULT_STREAM", "NO_FAULTS", "Activation", "FaultDefinition",
+           "FaultPlan", "FaultStage", "FaultStatistics", "NoFaults", "fault_stage",
+           "parse_fault_option"]

@@ -6,6 +6,7 @@ pybullet so store, statistics, report and JUnit can be tested fast and exactly.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 from rei.runtime.campaign import CampaignPlan, CampaignStore, RunResult, plan_campaign
@@ -47,8 +48,12 @@ def events_csv(summary: RunSummary) -> bytes:
     return ("\n".join(lines) + "\n").encode()
 
 
-def example_plan(repeat: int = 3, seed: int = 7) -> CampaignPlan:
-    return plan_campaign([EXAMPLES], repeat=repeat, seed=seed, duration=2.0)
+def example_plan(repeat: int = 3, seed: int = 7, duration: float = 2.0) -> CampaignPlan:
+    """The examples' campaign these records are shaped on: the four thesis rooms (the fault
+    studies of examples/faults/ left out, so the records keep their shape)."""
+    plan = plan_campaign([EXAMPLES], repeat=repeat, seed=seed, duration=duration)
+    return replace(plan, runs=tuple(r for r in plan.runs
+                                    if Path(r.mission_file).parent.name != "faults"))
 
 
 def outcome_of(run_id: str, repeat: int) -> str:

@@ -33,8 +33,8 @@ def test_a_seed_does_not_depend_on_the_other_missions() -> None:
 def test_files_folders_and_duplicates() -> None:
     plan = plan_campaign([EXAMPLES, EXAMPLES / "simple_wall" / "simple_wall.mission"], repeat=2)
     ids = [r.run_id for r in plan.runs]
-    assert len(ids) == len(set(ids)) == 8
-    assert ids[:2] == ["medium_sparse.r00", "medium_sparse.r01"]
+    assert len(ids) == len(set(ids)) == 2 * len(list(EXAMPLES.rglob("*.mission")))
+    assert ids[:2] == ["high_error.r00", "high_error.r01"]  # examples/faults/high_error
     assert all(Path(r.mission_file).is_absolute() for r in plan.runs)
 
 

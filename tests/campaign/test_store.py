@@ -112,8 +112,7 @@ def test_a_different_command_is_refused(tmp_path: Path) -> None:
         CampaignStore.open(tmp_path, plan_campaign([EXAMPLES / "navigation"], repeat=3,
                                                    seed=7, duration=2.0), {})
     with pytest.raises(CampaignError, match="Run medium_sparse.r00 differs in duration"):
-        CampaignStore.open(tmp_path, plan_campaign([EXAMPLES], repeat=3, seed=7,
-                                                   duration=3.0), {})
+        CampaignStore.open(tmp_path, example_plan(duration=3.0), {})
 
 
 def test_two_campaigns_cannot_write_one_folder(tmp_path: Path) -> None:

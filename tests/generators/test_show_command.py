@@ -60,8 +60,9 @@ def test_png_is_deterministic() -> None:
 def test_contact_sheet_from_a_folder(tmp_path: Path) -> None:
     entries = sheet_entries(EXAMPLES)
     # Every example has a mission over its room, so the sheet shows the missions only.
-    assert [e.title for e in entries] == ["medium_sparse", "navigation", "simple_wall",
-                                          "small_dense"]
+    assert [e.title for e in entries] == ["high_error", "human_low_error", "human_near_dropout",
+                                          "low_error", "medium_sparse", "navigation",
+                                          "simple_wall", "small_dense"]
     out = tmp_path / "sheet.svg"
     assert rei_gen(["show", str(EXAMPLES), "-o", str(out)]) == 0
     assert out.read_bytes().startswith(b"<?xml")
