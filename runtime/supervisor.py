@@ -88,6 +88,8 @@ class RunRequest:
     """Print the mission events on stderr as they happen (``--verbose``)."""
     functions: str | None = None
     """The module of the specification's user functions (``--functions``)."""
+    record: bool = False
+    """Also write recording.mcap (``--record``)."""
 
     def to_json(self) -> str:
         return json.dumps(asdict(self), allow_nan=False)

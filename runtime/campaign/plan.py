@@ -54,6 +54,8 @@ class RunSpec:
     """False: `rei run --no-variation` (no seeded start-pose jitter: the exact declared scene)."""
     functions: str | None = None
     """`rei run --functions`: the module of the specification's user functions."""
+    record: bool = False
+    """`rei run --record`: the run also writes recording.mcap."""
 
     def to_json(self) -> dict[str, Any]:
         data = {"run_id": self.run_id, "mission_file": self.mission_file,
@@ -66,6 +68,8 @@ class RunSpec:
             data["variation"] = False
         if self.functions:
             data["functions"] = self.functions
+        if self.record:
+            data["record"] = True
         return data
 
     @staticmethod
@@ -85,6 +89,8 @@ class RunSpec:
             argv.append("--no-variation")
         if self.functions:
             argv += ["--functions", self.functions]
+        if self.record:
+            argv.append("--record")
         return argv
 
 
@@ -209,7 +215,8 @@ STATIC = "static"
 def plan_campaign(inputs: list[Path], *, repeat: int = 1, seed: int = 0,
                   controller: str | None = None, vepl: Path | None = None,
                   duration: float | None = None, static_dir: Path | None = None,
-                  variation: bool = True, functions: str | None = None) -> CampaignPlan:
+                  variation: bool = True, functions: str | None = None,
+                  record: bool = False) -> CampaignPlan:
     """Every mission of the inputs, ``repeat`` times, each with its derived seed.
 
     With ``static_dir`` every run is paired with its static twin (same seed, the mission's
@@ -244,7 +251,8 @@ def plan_campaign(inputs: list[Path], *, repeat: int = 1, seed: int = 0,
                 run_id=f"{stem}.{number}", mission_file=str(entry.path), mission_key=entry.key,
                 group=entry.group, repeat=k, seed=derive_seed(seed, entry.key, k),
                 controller=controller, vepl=vepl_path, duration=duration,
-                parameters=entry.parameters, variation=variation, functions=functions)
+                parameters=entry.parameters, variation=variation, functions=functions,
+                record=record)
             if static_dir is None:
                 runs.append(run)
                 continue

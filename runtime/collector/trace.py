@@ -591,39 +591,29 @@ class _StreamRules:
 # ---- writing --------------------------------------------------------------------------------
 
 
-class TraceWriter:
-    """A ``SampleSink`` writing the trace file; ``path`` appears only when finished.
+class TraceEncoder:
+    """Headers, samples and end records into trace lines (JSON text without the newline),
+    each checked by the reader's rules first: what ``TraceWriter`` writes to trace.jsonl and
+    an MCAP recording carries on its /rei/trace channel (``rei.runtime.recording``).
 
-    Raises ``TraceError`` (and writes nothing more) for a header, sample or end the reader
-    would refuse: a non-finite number, a time going back, an unknown kind, ...
+    ``where`` names the output in errors (``where:LINE``). Raises ``TraceError`` for a record
+    the reader would refuse; after one, the encoder is spent.
     """
 
-    def __init__(self, path: str | Path) -> None:
-        self.path = Path(path)
-        self.partial = self.path.with_name(self.path.name + ".partial")
-        self._file: IO[str] | None = None
+    def __init__(self, where: str) -> None:
+        self.where = where
         self._poses: np.ndarray | None = None
         self._twists: np.ndarray | None = None
         self._rules: _StreamRules | None = None
-        self._line = 0
+        self.line = 0
+        """Lines encoded so far."""
 
-    def _refuse(self, exc: TraceError) -> TraceError:
-        if self._file is not None:
-            self._file.close()
-            self._file = None
-        return TraceError(f"cannot write the trace: {exc}")
-
-    def start(self, header: StreamHeader) -> None:
+    def header(self, header: StreamHeader) -> str:
         data = header_json(header)
-        try:
-            _header(data, f"{self.partial}:1")
-        except TraceError as exc:
-            raise self._refuse(exc) from None
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        self._file = open_output(self.partial)  # never written through a link
-        self._file.write(_dumps(data) + "\n")
+        _header(data, f"{self.where}:1")
         self._rules = _StreamRules(len(header.objects), header.data)
-        self._line = 1
+        self.line = 1
+        return _dumps(data)
 
     @staticmethod
     def _changed(new: np.ndarray, old: np.ndarray | None) -> list[list[Any]]:
@@ -633,28 +623,74 @@ class TraceWriter:
             rows = np.nonzero((new != old).any(axis=1))[0].tolist()
         return [[i, *new[i].tolist()] for i in rows]
 
-    def feed(self, sample: Sample) -> None:
-        assert self._file is not None and self._rules is not None, "start() first"
+    def sample(self, sample: Sample) -> str:
+        assert self._rules is not None, "header() first"
         line = _sample_json(sample, self._changed(sample.poses, self._poses),
                             self._changed(sample.twists, self._twists), self._rules.data)
+        self._rules.sample(line, f"{self.where}:{self.line + 1}")
+        self.line += 1
+        # Only what was encoded is the base of the next sample's changed rows.
+        self._poses, self._twists = sample.poses.copy(), sample.twists.copy()
+        return _dumps(line)
+
+    def end(self, end_time: float, outcome: str, reason: str) -> str:
+        assert self._rules is not None, "header() first"
+        line = {"end": end_time, "outcome": outcome, "reason": reason}
+        self._rules.end(line, f"{self.where}:{self.line + 1}")
+        self.line += 1
+        return _dumps(line)
+
+
+class TraceWriter:
+    """A ``SampleSink`` writing the trace file; ``path`` appears only when finished.
+
+    Raises ``TraceError`` (and writes nothing more) for a header, sample or end the reader
+    would refuse: a non-finite number, a time going back, an unknown kind, ...
+    ``line`` is the last line written (without its newline): a sink after this one can
+    carry it as is (the MCAP recorder does) instead of encoding the record again.
+    """
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        self.partial = self.path.with_name(self.path.name + ".partial")
+        self._file: IO[str] | None = None
+        self._encoder = TraceEncoder(str(self.partial))
+        self.line = ""
+
+    def _refuse(self, exc: TraceError) -> TraceError:
+        if self._file is not None:
+            self._file.close()
+            self._file = None
+        return TraceError(f"cannot write the trace: {exc}")
+
+    def start(self, header: StreamHeader) -> None:
         try:
-            self._rules.sample(line, f"{self.partial}:{self._line + 1}")
+            text = self._encoder.header(header)
         except TraceError as exc:
             raise self._refuse(exc) from None
-        self._file.write(_dumps(line) + "\n")
-        self._line += 1
-        # Only what was written is the base of the next sample's changed rows.
-        self._poses, self._twists = sample.poses.copy(), sample.twists.copy()
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._file = open_output(self.partial)  # never written through a link
+        self._file.write(text + "\n")
+        self.line = text
+
+    def feed(self, sample: Sample) -> None:
+        assert self._file is not None, "start() first"
+        try:
+            text = self._encoder.sample(sample)
+        except TraceError as exc:
+            raise self._refuse(exc) from None
+        self._file.write(text + "\n")
+        self.line = text
 
     def finish(self, end_time: float, outcome: str, reason: str) -> None:
-        if self._file is None or self._rules is None:
+        if self._file is None:
             return
-        line = {"end": end_time, "outcome": outcome, "reason": reason}
         try:
-            self._rules.end(line, f"{self.partial}:{self._line + 1}")
+            text = self._encoder.end(end_time, outcome, reason)
         except TraceError as exc:
             raise self._refuse(exc) from None
-        self._file.write(_dumps(line) + "\n")
+        self._file.write(text + "\n")
+        self.line = text
         self._file.flush()
         os.fsync(self._file.fileno())
         self._file.close()
@@ -723,7 +759,7 @@ def _unique_fields(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
 _ESCAPED_SURROGATE = re.compile(r"\\[uU][dD][89a-fA-F]")
 
 
-def _open(path: Path) -> BinaryIO:
+def open_regular(path: Path) -> BinaryIO:
     """The trace opened for reading: a regular file only (a FIFO would block, /dev/zero never
     ends a line), checked before it is opened and again through the descriptor."""
     try:
@@ -751,25 +787,44 @@ def _no_end(path: Path, lineno: int) -> TraceError:
                       f"(the trace was cut short; a killed run leaves only NAME.partial)")
 
 
-def _samples(handle: BinaryIO, rules: _StreamRules, path: Path) -> Iterator[Sample]:
+class TraceDecoder:
+    """Trace lines back into records, checked by the rules the writer applies: the header
+    first (``header``), then a sample or the end record per line (``line``). What
+    ``read_trace`` reads a trace file with, and ``rei.runtime.recording`` an MCAP
+    recording's /rei/trace channel. ``where`` in every call names the line in errors."""
+
+    def __init__(self, first: bytes, where: str) -> None:
+        data = _load(first, where)
+        if not isinstance(data, dict):
+            raise TraceError(f"{where}: expected a REI trace header (a JSON object), found "
+                             f"{_show(data)}")
+        self.header = _header(data, where)
+        self._rules = _StreamRules(len(self.header.objects), self.header.data)
+
+    def line(self, raw: bytes, where: str) -> Sample | tuple[float, str, str]:
+        """The sample of a line, or (end time, outcome, reason) of the end line."""
+        data = _load(raw, where)
+        try:
+            if isinstance(data, dict) and "end" in data:
+                return self._rules.end(data, where)
+            return self._rules.sample(data, where)
+        except (KeyError, IndexError, TypeError, ValueError, OverflowError) as exc:
+            # the rules name every field they refuse; this is a last line of defence
+            raise TraceError(f"{where}: damaged line ({type(exc).__name__}: {exc})") from None
+
+
+def _samples(handle: BinaryIO, decoder: TraceDecoder, path: Path) -> Iterator[Sample]:
     lineno = 1
     with handle:
         lines = enumerate(handle, start=2)
         for lineno, raw in lines:
-            where = f"{path}:{lineno}"
-            data = _load(raw, where)
-            try:
-                if isinstance(data, dict) and "end" in data:
-                    rules.end(data, where)
-                    for later, _ in lines:
-                        raise TraceError(f"{path}:{later}: expected nothing after the end "
-                                         f"line (line {lineno}), found another line")
-                    return
-                sample = rules.sample(data, where)
-            except (KeyError, IndexError, TypeError, ValueError, OverflowError) as exc:
-                # the rules name every field they refuse; this is a last line of defence
-                raise TraceError(f"{where}: damaged line ({type(exc).__name__}: {exc})") from None
-            yield sample
+            record = decoder.line(raw, f"{path}:{lineno}")
+            if not isinstance(record, Sample):
+                for later, _ in lines:
+                    raise TraceError(f"{path}:{later}: expected nothing after the end "
+                                     f"line (line {lineno}), found another line")
+                return
+            yield record
     if not _is_partial(path):
         raise _no_end(path, lineno + 1)
 
@@ -780,19 +835,13 @@ def read_trace(path: str | Path) -> tuple[StreamHeader, Iterator[Sample]]:
     ``TraceError`` for a damaged header here, for a damaged line when the iterator reaches it
     (also a finished trace without its end line, or anything after it)."""
     path = Path(path)
-    handle = _open(path)
+    handle = open_regular(path)
     try:
-        first = handle.readline()
-        where = f"{path}:1"
-        data = _load(first, where)
-        if not isinstance(data, dict):
-            raise TraceError(f"{where}: expected a REI trace header (a JSON object), found "
-                             f"{_show(data)}")
-        header = _header(data, where)
+        decoder = TraceDecoder(handle.readline(), f"{path}:1")
     except BaseException:
         handle.close()
         raise
-    return header, _samples(handle, _StreamRules(len(header.objects), header.data), path)
+    return decoder.header, _samples(handle, decoder, path)
 
 
 def read_trace_end(path: str | Path) -> tuple[float, str, str] | None:
@@ -803,7 +852,7 @@ def read_trace_end(path: str | Path) -> tuple[float, str, str] | None:
     end: tuple[int, Any] | None = None
     last: tuple[int, Any] | None = None
     lineno = 1
-    with _open(path) as handle:
+    with open_regular(path) as handle:
         handle.readline()
         for lineno, raw in enumerate(handle, start=2):
             if end is not None:

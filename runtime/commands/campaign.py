@@ -114,6 +114,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.add_argument("--no-variation", action="store_true",
                         help="passed to `rei run`: no seeded start-pose jitter, every repeat "
                              "starts at the exact declared scene (only the laser noise differs)")
+    parser.add_argument("--record", action="store_true",
+                        help="passed to `rei run`: every run also writes recording.mcap (MCAP "
+                             "with ROS 2 types and the exact trace; see docs/recording.md)")
     parser.add_argument("--no-report", action="store_true",
                         help="skip report.html (tables and junit.xml are still written)")
     from rei.runtime.commands.run import add_verbosity  # noqa: PLC0415
@@ -137,7 +140,8 @@ def run(args: argparse.Namespace) -> int:
     plan = plan_campaign(list(args.missions), repeat=args.repeat, seed=args.seed,
                          controller=args.controller, vepl=args.vepl, duration=args.duration,
                          static_dir=args.output / STATIC if args.pair_static else None,
-                         variation=not args.no_variation, functions=args.functions)
+                         variation=not args.no_variation, functions=args.functions,
+                         record=args.record)
     engine: CampaignEngine
     if args.engine == "dask":
         if not args.scheduler:

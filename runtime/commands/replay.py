@@ -1,6 +1,9 @@
 """`rei replay TRACE --vepl FILE -o DIR`: monitor a recorded trace offline.
 
-The trace's samples go through the same generated automata and evaluator as a live run, so
+TRACE is a trace.jsonl or an MCAP recording (`rei run --record`'s recording.mcap, read
+through its /rei/trace channel with the trace's own rules; a recording cut short by a crash
+is replayed up to its last complete chunk, as an interrupted run). The trace's samples go
+through the same generated automata and evaluator as a live run, so
 the event log and verdicts equal the live run's (same trace, same specification). Writes
 DIR/events.csv, DIR/summary.json, DIR/automata/automata.py and DIR/report.html (the run's
 page, drawn from the trace; its map needs the run's world/ folder beside the trace). Prints
@@ -26,13 +29,18 @@ from rei.runtime.results import RESULTS_VERSION, Outcome, RunSummary
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser = sub.add_parser(
-        "replay", help="monitor a recorded trace with the event automata of a .vepl file",
-        description="Feed a trace recorded by `rei run` through the event automata generated "
-                    "from a .vepl specification (the default one unless --vepl) and write "
-                    "events.csv, summary.json and report.html (the run's page). Same trace "
-                    "and specification give the same events and verdicts as the live run. "
-                    "Results go to stdout, diagnostics to stderr.")
-    parser.add_argument("trace", type=Path, metavar="TRACE", help="a trace.jsonl file")
+        "replay", help="monitor a recorded trace (or recording.mcap) with the event automata "
+                       "of a .vepl file",
+        description="Feed a trace recorded by `rei run` (trace.jsonl, or the recording.mcap "
+                    "of `rei run --record`) through the event automata generated from a .vepl "
+                    "specification (the default one unless --vepl) and write events.csv, "
+                    "summary.json and report.html (the run's page). Same trace and "
+                    "specification give the same events and verdicts as the live run. A "
+                    "recording cut short by a crash is replayed up to its last complete chunk "
+                    "and judged as an interrupted run. Results go to stdout, diagnostics to "
+                    "stderr.")
+    parser.add_argument("trace", type=Path, metavar="TRACE",
+                        help="a trace.jsonl file or an MCAP recording (.mcap)")
     parser.add_argument("--vepl", type=Path, default=None, metavar="FILE",
                         help="the specification (default: REI's default.vepl); its queries "
                              "may read only the data the trace carries (its header's "
@@ -51,16 +59,16 @@ def replay(trace: Path, vepl: Path | None, out_dir: Path,
     """Monitor ``trace`` into ``out_dir``; the summary (also written as summary.json)."""
     from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
     from rei.runtime.collector.needs import check_needs  # noqa: PLC0415
-    from rei.runtime.collector.trace import read_trace, read_trace_end  # noqa: PLC0415
     from rei.runtime.evaluator.summary import merge_summary, write_summary  # noqa: PLC0415
     from rei.runtime.monitor import MonitorSink, generate_automata  # noqa: PLC0415
     from rei.runtime.monitor.functions import load_functions  # noqa: PLC0415
+    from rei.runtime.recording import read_stream  # noqa: PLC0415
 
     # The specification is checked and generated before the trace is opened: a bad .vepl
     # is reported without touching the trace.
     automata = generate_automata(vepl, Path(out_dir) / "automata", replace=True)
     user = load_functions(functions, vepl)
-    header, samples = read_trace(trace)
+    header, samples, read_end = read_stream(trace)
     try:
         # Never judge on data the recording does not carry (a false PASS): refuse first.
         check_needs(load_vepl(vepl), header.data, f"the trace '{trace}' to carry",
@@ -82,9 +90,10 @@ def replay(trace: Path, vepl: Path | None, out_dir: Path,
         close = getattr(samples, "close", None)
         if close is not None:
             close()
-    end = read_trace_end(trace)
-    end_time, outcome, reason = end if end is not None else (last, "interrupted",
-                                                             "the trace has no end line")
+    end = read_end()
+    cut = getattr(samples, "cut_short", "")
+    end_time, outcome, reason = end if end is not None else (
+        last, "interrupted", cut or "the trace has no end line")
     sink.finish(end_time, outcome, reason)
     assert sink.result is not None
     # The end line was written by `rei run` from its summary's outcome; read back as is.

@@ -4,8 +4,9 @@ Writes into DIR: ``world/`` (the generated `pybullet` and `monitor` targets the 
 ``automata/`` (the RxPY automata generated from the .vepl), ``trace.jsonl`` (the sample
 stream), ``events.csv`` (one row per signal), ``summary.json`` (a RunSummary with verdicts),
 ``report.html`` (the run's page: verdicts, timeline, distances, speed, map; not with
---no-monitor) and ``run.log`` (the mission events and the outcome). Every output is a
-function of the inputs, the seed and the REI version only: wall-clock time goes to the
+--no-monitor), ``run.log`` (the mission events and the outcome) and, with --record,
+``recording.mcap`` (MCAP with ROS 2 types and the exact trace, docs/recording.md). Every
+output is a function of the inputs, the seed and the REI version only: wall-clock time goes to the
 terminal, never into DIR. The simulation runs in a child process under
 ``rei.runtime.supervisor`` (``run`` here validates the options, starts it and prints);
 ``run_into`` is the same work in the caller's process, for the library and tests. Results
@@ -35,6 +36,7 @@ from rei.runtime.results import RunSummary, judge
 
 if TYPE_CHECKING:
     from rei.runtime.collector import SampleSink
+    from rei.runtime.evaluator.signal_log import SignalRow
     from rei.runtime.run import RunProbe, RunRecord
     from rei.runtime.supervisor import RunRequest
 
@@ -47,6 +49,8 @@ TRACE = "trace.jsonl"
 SUMMARY = "summary.json"
 LOG = "run.log"
 EVENTS = "events.csv"
+RECORDING = "recording.mcap"
+"""Written with --record (rei.runtime.recording.RECORDING)."""
 
 
 def add_verbosity(parser: argparse.ArgumentParser) -> None:
@@ -111,6 +115,12 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                              "functions the specification declares with 'function'")
     parser.add_argument("--no-monitor", action="store_true",
                         help="record the trace only (monitor it later with `rei replay`)")
+    parser.add_argument("--record", action="store_true",
+                        help="also write recording.mcap: the run as an MCAP file with ROS 2 "
+                             "messages (/scan, /odom, /cmd_vel, /tf, /world/markers, "
+                             "/rei/events, /rei/signals) that Foxglove and `ros2 bag` open, "
+                             "plus the exact trace (/rei/trace) `rei replay` reads; see "
+                             "docs/recording.md")
     add_verbosity(parser)
     defer_defaults(parser)
     parser.set_defaults(func=run)
@@ -169,12 +179,13 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
              sinks: Sequence[SampleSink] = (), progress: IO[str] | None = None,
              vepl: Path | None = None, monitor: bool = True, laser_noise: float | None = None,
              variation: bool = True, probe: RunProbe | None = None,
-             echo: IO[str] | None = None, functions: str | None = None
-             ) -> tuple[RunSummary, RunRecord]:
+             echo: IO[str] | None = None, functions: str | None = None,
+             recording: bool = False) -> tuple[RunSummary, RunRecord]:
     """Everything `rei run` does, in this process: generate, run, monitor with the .vepl's
     automata (the default specification unless ``vepl``; none when ``monitor`` is False),
     write outputs. Extra ``sinks`` see the same stream as the trace and the monitor; ``probe``
-    hears the loop's progress; ``echo`` gets run.log's lines as they are written.
+    hears the loop's progress; ``echo`` gets run.log's lines as they are written; ``recording``
+    also writes recording.mcap (``rei.runtime.recording``), with the monitor's signals.
 
     The controller runs in this process: a controller that ends or stalls the process ends
     the caller too. `rei run` supervises it instead (``rei.runtime.supervisor.supervise``).
@@ -213,8 +224,21 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
     config = RunConfig(seed=seed, physics_rate=physics_rate, duration=duration,
                        watchdog=watchdog, odom_drift=odom_drift, laser_noise=laser_noise,
                        jitter=START_JITTER if variation else None, vary=variation)
-    for stale in (out_dir / SUMMARY, out_dir / TRACE, out_dir / EVENTS, out_dir / PAGE):
+    for stale in (out_dir / SUMMARY, out_dir / TRACE, out_dir / EVENTS, out_dir / PAGE,
+                  out_dir / RECORDING):
         stale.unlink(missing_ok=True)
+    trace_writer = TraceWriter(out_dir / TRACE)
+    recorder: list[SampleSink] = []
+    if recording:
+        from rei.runtime.recording import McapRecorder  # noqa: PLC0415
+
+        def fired() -> Sequence[SignalRow]:
+            host = monitor_sink.host if monitor_sink is not None else None
+            return host.log.rows if host is not None else ()
+
+        # after the trace writer (its lines are carried as written) and the monitor (a
+        # sample's signals have fired when the recorder sees it)
+        recorder.append(McapRecorder(out_dir / RECORDING, fired, trace=trace_writer))
 
     def show(now: float, end: float) -> None:
         if progress is None:
@@ -236,8 +260,9 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
         log(f"mission {mission.name} in room {mission.world.name}, controller {controller}, "
             f"seed {seed}")
         record = run_mission(mission, manifest, monitor_config, robot,
-                             [TraceWriter(out_dir / TRACE),
-                              *([monitor_sink] if monitor_sink is not None else []), *sinks],
+                             [trace_writer,
+                              *([monitor_sink] if monitor_sink is not None else []), *recorder,
+                              *sinks],
                              config,
                              progress=show if progress is not None else None, log=log,
                              probe=probe)
@@ -260,7 +285,8 @@ def execute_request(request: RunRequest, probe: RunProbe) -> tuple[int, dict[str
         vepl=Path(request.vepl) if request.vepl is not None else None,
         monitor=request.monitor, laser_noise=request.laser_noise,
         variation=request.variation, probe=probe,
-        echo=sys.stderr if request.echo_events else None, functions=request.functions)
+        echo=sys.stderr if request.echo_events else None, functions=request.functions,
+        recording=request.record)
     page = write_page(Path(request.output)) if request.monitor else None
     written = (Path(request.output) / SUMMARY).read_bytes()
     return exit_code(summary, request.monitor), {
@@ -280,7 +306,8 @@ def run(args: argparse.Namespace) -> int:
     _make_folder(out)
     # Outputs of an earlier run into the same folder go now: a run that dies must not leave
     # them beside its own error summary.
-    for stale in (SUMMARY, TRACE, TRACE + ".partial", EVENTS, PAGE, "internal-error.txt"):
+    for stale in (SUMMARY, TRACE, TRACE + ".partial", EVENTS, PAGE, RECORDING,
+                  "internal-error.txt"):
         (out / stale).unlink(missing_ok=True)
     request = RunRequest(
         # absolute: the process under test may change its working folder
@@ -288,7 +315,7 @@ def run(args: argparse.Namespace) -> int:
         args.watchdog, args.physics_rate, args.odom_drift, args.laser_noise,
         str(args.vepl) if args.vepl is not None else None, not args.no_monitor,
         not args.no_variation, progress=not args.quiet and sys.stderr.isatty(),
-        echo_events=args.verbose, functions=args.functions)
+        echo_events=args.verbose, functions=args.functions, record=args.record)
     ended = supervise(request)
     summary = _read_summary(out) if ended.status != 2 else None
     if summary is None:

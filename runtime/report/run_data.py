@@ -17,13 +17,13 @@ from pathlib import Path
 
 import numpy as np
 
-from rei.runtime.collector.trace import read_trace, read_trace_end
 from rei.runtime.errors import RunError
 from rei.runtime.evaluator.signal_log import SignalRow, read_csv
 from rei.runtime.messages import MissionEvent, MissionFacts
 from rei.runtime.monitor.automata import load_generated
 from rei.runtime.monitor.errors import MonitorError
 from rei.runtime.monitor.model import RuntimeModel
+from rei.runtime.recording import read_stream
 from rei.runtime.results import RunSummary
 from rei.runtime.world.manifest import WorldManifest, load_manifest
 
@@ -118,7 +118,7 @@ def trace_path(out_dir: Path, trace: Path | None = None) -> Path | None:
 
 def read_series(path: Path, manifest: WorldManifest | None = None) -> TraceSeries:
     """The time series of a trace; TraceError when it cannot be read."""
-    header, samples = read_trace(path)
+    header, samples, read_end = read_stream(path)  # a trace, or a recording (rei replay)
     # Exact footprint distances are worked out only near the robot; the nearest of each
     # group is then refined exactly (FootprintSet.nearest), as the monitor does for humans.
     model = RuntimeModel(header, cutoff=EXACT_WITHIN)
@@ -172,7 +172,7 @@ def read_series(path: Path, manifest: WorldManifest | None = None) -> TraceSerie
     if limit is None and manifest is not None:
         # a trace without the mission's facts: the drive's own limit still bounds the speed
         limit, source = manifest.drive.max_linear, "drive limit"
-    end_line = read_trace_end(path)
+    end_line = read_end()
     end = end_line[0] if end_line is not None else (times[-1] if times else 0.0)
     return TraceSeries(
         robot, humans,

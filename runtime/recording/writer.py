@@ -1,0 +1,227 @@
+"""`McapRecorder`: the sample stream as an MCAP recording with ROS 2 types.
+
+One channel per topic (see ``rei.runtime.recording.ros.TOPICS``) with its ``ros2msg`` schema
+and CDR messages, plus ``/rei/trace``: the exact JSON-lines trace (header record first, one
+record per sample, then the end record; message encoding ``json``), encoded by the trace's
+own ``TraceEncoder`` and so checked by the same rules. Messages are stamped with the
+simulated time (nanoseconds from the start of the run); nothing depends on the wall clock,
+so the same run gives the same bytes.
+
+The file is written in place, chunk by chunk: a chunk is closed, compressed (zstd) and
+flushed to the file once it holds ``CHUNK_BYTES`` of messages, so a run that crashes leaves
+a recording readable up to its last complete chunk (at most a few simulated seconds are
+lost); ``finish`` writes the rest, the index and the summary. This module must never
+import pybullet.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import IO
+
+import numpy as np
+from mcap.writer import CompressionType, Writer
+
+from rei.generators.output import open_output
+from rei.runtime.collector.trace import TraceEncoder, TraceError, TraceWriter
+from rei.runtime.evaluator.signal_log import SignalRow
+from rei.runtime.messages import Sample, StreamHeader
+from rei.runtime.recording.errors import RecordingError
+from rei.runtime.recording.ros import LATCHED, TOPICS, RosViews, stamp_ns
+
+RECORDING = "recording.mcap"
+"""The recording's name in a run's output folder."""
+
+TRACE_TOPIC = "/rei/trace"
+TRACE_SCHEMA = "rei/TraceRecord"
+TRACE_SCHEMA_TEXT = (b'{"title":"rei/TraceRecord","description":"One record of the REI trace '
+                     b'(docs/recording.md): the header, a sample, or the end record.",'
+                     b'"type":"object"}')
+PROFILE = "ros2"
+
+CHUNK_BYTES = 256 * 1024
+"""Uncompressed message bytes per chunk: what a crash can lose (about 2-3 s of a 10 Hz run
+with a 360-beam laser)."""
+
+_LATCHED_QOS = (
+    "- history: 3\n  depth: 0\n  reliability: 1\n  durability: 1\n"
+    "  deadline:\n    sec: 2147483647\n    nsec: 4294967295\n"
+    "  lifespan:\n    sec: 2147483647\n    nsec: 4294967295\n"
+    "  liveliness: 1\n"
+    "  liveliness_lease_duration:\n    sec: 2147483647\n    nsec: 4294967295\n"
+    "  avoid_ros_namespace_conventions: false\n")
+"""rosbag2's offered_qos_profiles of a transient-local (latched) publisher."""
+
+
+class McapRecorder:
+    """A ``SampleSink`` writing ``path`` (an MCAP recording); see the module's docstring.
+
+    ``signals``, when given, returns the signals fired so far (the monitor's signal log):
+    the new ones are recorded on /rei/signals after each sample and at the end. Put the
+    recorder after the monitor among the sinks, so a sample's signals are in by then.
+    ``trace``, when given, is the run's ``TraceWriter``, fed before the recorder: its lines
+    (encoded and checked once) are carried on /rei/trace as written, byte for byte.
+    Raises ``RecordingError`` for a record the trace's reader would refuse, or a file that
+    cannot be written.
+    """
+
+    def __init__(self, path: str | Path,
+                 signals: Callable[[], Sequence[SignalRow]] | None = None,
+                 chunk_bytes: int = CHUNK_BYTES, trace: TraceWriter | None = None) -> None:
+        self.path = Path(path)
+        self.signals = signals
+        self.trace = trace
+        self.chunk_bytes = chunk_bytes
+        self._file: IO[bytes] | None = None
+        self._writer: Writer | None = None
+        self._encoder = TraceEncoder(f"{self.path}: {TRACE_TOPIC} message")
+        self._views = RosViews()
+        self._channels: dict[str, int] = {}
+        self._sequence: dict[int, int] = {}
+        self._header: StreamHeader | None = None
+        self._pending = 0
+        self._signals_seen = 0
+        self._scan_time = 0.0
+        self._poses: np.ndarray | None = None
+
+    # ---- the sink ---------------------------------------------------------------------------
+
+    def _encode(self, encode: Callable[..., str], *record: object) -> str:
+        try:
+            return encode(*record)
+        except TraceError as exc:
+            self._abandon()
+            raise RecordingError(f"cannot write the recording: {exc}") from None
+
+    def _written(self, start: str, what: str) -> str:
+        """The trace writer's last line, which must be the record being recorded."""
+        assert self.trace is not None
+        line = self.trace.line
+        if not line.startswith(start):
+            self._abandon()
+            raise RecordingError(f"cannot write the recording '{self.path}': expected the trace "
+                                 f"writer to have written {what} (it must be fed before the "
+                                 f"recorder), found {line[:40]!r}")
+        return line
+
+    def start(self, header: StreamHeader) -> None:
+        record = self._written('{"format":', "the header") if self.trace is not None \
+            else self._encode(self._encoder.header, header)
+        self._header = header
+        self._scan_time = 1.0 / header.rate
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self._file = open_output(self.path, binary=True)  # never written through a link
+        except OSError as exc:
+            raise RecordingError(f"cannot write the recording '{self.path}': "
+                                 f"{exc.strerror or exc}") from None
+        # Chunks are closed here (``_add``), never by the library's own size rule.
+        writer = Writer(self._file, chunk_size=2**62, compression=CompressionType.ZSTD)
+        writer.start(profile=PROFILE)
+        self._writer = writer
+        trace_schema = writer.register_schema(TRACE_SCHEMA, "jsonschema", TRACE_SCHEMA_TEXT)
+        self._channels[TRACE_TOPIC] = writer.register_channel(TRACE_TOPIC, "json", trace_schema)
+        schemas: dict[str, int] = {}
+        for topic, msgtype in TOPICS.items():
+            if msgtype not in schemas:
+                schemas[msgtype] = writer.register_schema(msgtype, "ros2msg",
+                                                          self._views.schema(msgtype))
+            metadata = {"offered_qos_profiles": _LATCHED_QOS} if topic in LATCHED else {}
+            self._channels[topic] = writer.register_channel(topic, "cdr", schemas[msgtype],
+                                                            metadata)
+        self._sequence = dict.fromkeys(self._channels.values(), 0)
+        self._add(TRACE_TOPIC, 0.0, record.encode("utf-8"))
+        self._add("/tf_static", 0.0, self._views.laser_mount(header, 0.0))
+        self._add("/world/markers", 0.0, self._views.markers(header, 0.0))
+
+    def feed(self, sample: Sample) -> None:
+        header = self._header
+        assert header is not None and self._writer is not None, "start() first"
+        record = self._written(f'{{"seq":{sample.seq},', f"sample {sample.seq}") \
+            if self.trace is not None else self._encode(self._encoder.sample, sample)
+        t = sample.time
+        self._add(TRACE_TOPIC, t, record.encode("utf-8"))
+        views = self._views
+        self._add("/tf", t, views.transforms(sample, header, self._moved(sample)))
+        data = header.data
+        if "odometry" in data:
+            self._add("/odom", t, views.odometry(sample, header))
+        if "laser" in data:
+            scan = views.scan(sample, header, self._scan_time)
+            if scan is not None:
+                self._add("/scan", t, scan)
+        if "nav_state" in data:
+            self._add("/cmd_vel", t, views.command(sample))
+        for event in sample.events:
+            self._add("/rei/events", event.time, views.event(event))
+        self._record_signals()
+
+    def finish(self, end_time: float, outcome: str, reason: str) -> None:
+        if self._writer is None or self._file is None:
+            return
+        record = self._written('{"end":', "the end record") if self.trace is not None \
+            else self._encode(self._encoder.end, end_time, outcome, reason)
+        self._record_signals()
+        self._add(TRACE_TOPIC, end_time, record.encode("utf-8"))
+        try:
+            self._writer.finish()  # type: ignore[no-untyped-call]
+            self._file.flush()
+            os.fsync(self._file.fileno())
+        except OSError as exc:
+            raise RecordingError(f"cannot write the recording '{self.path}': "
+                                 f"{exc.strerror or exc}") from None
+        finally:
+            self._file.close()
+            self._file = None
+            self._writer = None
+
+    # ---- helpers ----------------------------------------------------------------------------
+
+    def _moved(self, sample: Sample) -> list[int]:
+        """Objects whose pose changed since the previous sample (all of them first): /tf
+        carries a static wall once, as the trace does."""
+        old = self._poses
+        new = sample.poses
+        if old is None or old.shape != new.shape:
+            rows = list(range(len(new)))
+        else:
+            rows = np.nonzero((new != old).any(axis=1))[0].tolist()
+        self._poses = new.copy()
+        return rows
+
+    def _record_signals(self) -> None:
+        if self.signals is None:
+            return
+        rows = self.signals()
+        for row in rows[self._signals_seen:]:
+            self._add("/rei/signals", row.time, self._views.text(
+                {"time": row.time, "signal": row.signal, "utility": row.utility,
+                 "total_utility": row.total_utility, "objects": list(row.objects)}))
+        self._signals_seen = len(rows)
+
+    def _add(self, topic: str, time: float, data: bytes) -> None:
+        assert self._writer is not None
+        channel = self._channels[topic]
+        ns = stamp_ns(time)
+        sequence = self._sequence[channel]
+        self._sequence[channel] = sequence + 1
+        try:
+            self._writer.add_message(channel, ns, data, ns, sequence)
+            self._pending += len(data)
+            if self._pending >= self.chunk_bytes:
+                # the chunk is closed and on disk: a crash keeps it
+                self._writer.flush()  # type: ignore[no-untyped-call]
+                self._pending = 0
+        except OSError as exc:
+            self._abandon()
+            raise RecordingError(f"cannot write the recording '{self.path}': "
+                                 f"{exc.strerror or exc}") from None
+
+    def _abandon(self) -> None:
+        """Stop writing (after an error): what is on disk stays readable as a cut recording."""
+        if self._file is not None:
+            self._file.close()
+        self._file = None
+        self._writer = None
