@@ -360,6 +360,7 @@ def irsim_world(manifest: WorldManifest, goal: tuple[float, float], path: Path) 
 
 def irsim_rtf(manifest: WorldManifest, goal: tuple[float, float], seconds: float,
               work: Path) -> tuple[float, float] | None:
+    os.environ.setdefault("MPLBACKEND", "Agg")  # headless: no GUI backends tried and reported
     try:
         import irsim  # noqa: PLC0415
     except ImportError:
