@@ -94,6 +94,7 @@ class RecordedSamples(Iterator[Sample]):
         self.cut_short = ""
         self._done = False
         self._footer = False
+        self._cut_at = 0
 
     # ---- records of the file -----------------------------------------------------------------
 
@@ -146,6 +147,7 @@ class RecordedSamples(Iterator[Sample]):
     def _cut(self, at: int, exc: BaseException) -> None:
         del exc
         self._close()
+        self._cut_at = at
         if self._footer:
             self.cut_short = (f"{self.path}: the file ends inside its closing magic bytes "
                               f"(every record was read)")
@@ -195,8 +197,10 @@ class RecordedSamples(Iterator[Sample]):
         data = self._next_trace()
         if data is None:
             if self.cut_short:
-                raise RecordingError(f"{self.cut_short}, before its first complete chunk: "
-                                     f"no REI trace to read")
+                raise RecordingError(
+                    f"{self.path}: the recording was cut short before its first complete "
+                    f"chunk ended (at byte {self._cut_at} of the file; a run that crashed or "
+                    f"was killed at its start leaves this): no REI trace to read")
             topics = ", ".join(sorted(set(self._topics))) or "none"
             raise RecordingError(f"{self.path}: expected a {TRACE_TOPIC} channel carrying the "
                                  f"REI trace (recorded by `rei run --record`), found the "

@@ -36,6 +36,7 @@ from rei.runtime.recording import (
     read_stream,
 )
 from rei.runtime.recording.ros import TOPICS
+from rei.runtime.recording.writer import CHUNK_BYTES
 from tests.runtime.test_trace import _header, _samples
 
 STORE = get_typestore(Stores.ROS2_HUMBLE)
@@ -43,7 +44,7 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 def _record(path: Path, header: StreamHeader, samples: list[Sample], end: float = 0.4,
-            signals: list[SignalRow] | None = None, chunk_bytes: int = 256 * 1024) -> None:
+            signals: list[SignalRow] | None = None, chunk_bytes: int = CHUNK_BYTES) -> None:
     recorder = McapRecorder(path, (lambda: signals) if signals is not None else None,
                             chunk_bytes=chunk_bytes)
     recorder.start(header)

@@ -162,6 +162,19 @@ def test_replay_refuses_what_is_not_a_recording(tmp_path: Path) -> None:
     assert f"{fake}: expected an MCAP recording" in done.stderr
 
 
+def test_a_campaign_with_record_leaves_a_recording_in_every_run(tmp_path: Path) -> None:
+    out = tmp_path / "campaign"
+    done = rei("campaign", str(SIMPLE_WALL), "-o", str(out), "--repeat", "2", "--duration",
+               "3", "--workers", "1", "--record", "--no-report", "--quiet")
+    assert done.returncode in (0, 1), done.stderr
+    runs = sorted((out / "runs").iterdir())
+    assert len(runs) == 2
+    for run in runs:
+        header, samples = read_recording(run / "recording.mcap")
+        assert header.mission == "to_the_wall" and len(list(samples)) > 0
+        assert samples.end is not None
+
+
 def test_campaign_record_reaches_every_run(tmp_path: Path) -> None:
     plan = plan_campaign([SIMPLE_WALL], repeat=2, record=True)
     assert all(r.record and r.run_argv(str(tmp_path))[-1] == "--record" for r in plan.runs)
