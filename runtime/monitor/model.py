@@ -12,10 +12,9 @@ samples are counted, never modelled. This module must never import the simulator
 
 from __future__ import annotations
 
-import functools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-from functools import partial
 
 import numpy as np
 
@@ -41,6 +40,9 @@ APPROACH_LOOKAHEAD = 0.05
 """s: the commanded motion is projected this far ahead to see whether it closes in."""
 MOVING = 0.05
 """m/s: above this ground-truth speed the robot counts as moving (personal space)."""
+FLOOR_MARGIN = 1e-5
+"""m: a robot this far inside the tile it stood on at the last sample is still on it (the
+floors of a grid are 1e-6 m from it at most, so no other tile can claim the point)."""
 
 
 @dataclass
@@ -97,6 +99,12 @@ class RuntimeModel:
         self._floor_xy = np.array([(f[1], f[2]) for f in header.floors], dtype=float).reshape(
             -1, 2)
         self.floors = FloorMap(self._floor_xy, header.tile_size)
+        self._floor_centres = [(float(fx), float(fy)) for fx, fy in self._floor_xy]
+        self._floor_masks: dict[int, np.ndarray] = {}
+        """The robot-floor mask of each floor index (-1: none), shared and read-only."""
+        self._floor_last = -1
+        self._floors_disjoint = self.floors.on_grid and len(
+            {(int(i), int(j)) for i, j in self.floors.cells}) == len(self.floor_names)
         self.no_floors = np.full(len(header.objects), -1, dtype=np.int64)
         self.inradius = self.footprints.robot_inradius()
         self.beam_edges = BeamEdges(header.robot.footprint, header.laser_mount)
@@ -189,11 +197,11 @@ class RuntimeModel:
             self.laser_clearance = clearance(scan, self.beam_edges.of(scan))
         ox, oy, _ = s.belief.odom
         return QueryInputs(
-            distance, self.kind_masks, self._robot_floor(x, y), self.task_codes.copy(),
+            distance, self.kind_masks, self._robot_floor(x, y), self.task_codes,
             float(s.belief.laser_min), self.laser_clearance, speed,
             s.time, math.hypot(ox - x, oy - y), self.inradius, self.circumradius,
             self.mission_state, NAV_CODE.get(s.belief.nav_state.value, 0),
-            approach=approach, task_failure=self.task_failures.copy(),
+            approach=approach, task_failure=self.task_failures,
             cmd_speed=abs(s.belief.cmd[0]), cmd_turn=abs(s.belief.cmd[1]),
             turn_rate=abs(s.robot_twist[2]), yaw_rate=s.robot_twist[2], yaw=s.robot_pose[2],
             # the scenario's facts, constant through the run
@@ -201,7 +209,7 @@ class RuntimeModel:
             dynamic_objects=self.dynamic_objects, cycles=self.cycles,
             headed_goals=self.headed_goals, goals=self.goals,
             neighbouring_goals=self.neighbouring_goals,
-            object_floors=functools.cache(partial(self.floors.of, np.asarray(s.poses)[:, :2])),
+            object_floors=_Once(self.floors.of, s.poses),
             goal_floor=self.goal_floor,
             adjacency=self.floor_adjacent)
 
@@ -219,14 +227,28 @@ class RuntimeModel:
             self.min_distance_to_human_moving = min(self.min_distance_to_human_moving, nearest)
 
     def _robot_floor(self, x: float, y: float) -> np.ndarray:
-        mask = np.zeros(len(self.floor_names), dtype=bool)
-        if len(mask):
-            half = self.header.tile_size / 2
+        """The floor the robot stands on, as a mask over the floors (shared, read-only)."""
+        half = self.header.tile_size / 2
+        last = self._floor_last
+        if last >= 0 and self._floors_disjoint:
+            fx, fy = self._floor_centres[last]
+            if abs(fx - x) <= half - FLOOR_MARGIN and abs(fy - y) <= half - FLOOR_MARGIN:
+                return self._floor_masks[last]  # well inside last sample's tile: still on it
+        at = -1
+        if len(self.floor_names):
             inside = (np.abs(self._floor_xy[:, 0] - x) <= half) & (
                 np.abs(self._floor_xy[:, 1] - y) <= half)
             hits = np.flatnonzero(inside)
             if len(hits):
-                mask[hits[0]] = True  # on a shared edge the first floor in header order wins
+                at = int(hits[0])  # on a shared edge the first floor in header order wins
+        self._floor_last = at
+        mask = self._floor_masks.get(at)
+        if mask is None:
+            mask = np.zeros(len(self.floor_names), dtype=bool)
+            if at >= 0:
+                mask[at] = True
+            mask.setflags(write=False)
+            self._floor_masks[at] = mask
         return mask
 
     def apply(self, e: MissionEvent, w: QueryInputs) -> QueryInputs:
@@ -247,11 +269,13 @@ class RuntimeModel:
                     self.task_codes = np.append(self.task_codes, TASK_CODE["active"])
                     self.task_failures = np.append(self.task_failures, FAILURE_CODE["none"])
                 else:
+                    self._own_task_arrays()
                     record.status, record.started, record.ended = "active", e.time, None
                     record.cause, record.reason = "none", ""
                     self.task_codes[self.tasks.index(record)] = TASK_CODE["active"]
                     self.task_failures[self.tasks.index(record)] = FAILURE_CODE["none"]
             elif record is not None:
+                self._own_task_arrays()
                 record.status = "succeeded" if e.kind == "task_success" else "failed"
                 record.ended = e.time
                 self.task_codes[self.tasks.index(record)] = TASK_CODE[record.status]
@@ -261,8 +285,14 @@ class RuntimeModel:
                         else "aborted"
                     record.reason = e.reason
                     self.task_failures[self.tasks.index(record)] = FAILURE_CODE[record.cause]
-        return replace(w, task_state=self.task_codes.copy(), mission_state=self.mission_state,
-                       task_failure=self.task_failures.copy())
+        return replace(w, task_state=self.task_codes, mission_state=self.mission_state,
+                       task_failure=self.task_failures)
+
+    def _own_task_arrays(self) -> None:
+        """Copy the task arrays before changing them in place: the inputs handed out
+        share them (copy on write instead of a copy per sample)."""
+        self.task_codes = self.task_codes.copy()
+        self.task_failures = self.task_failures.copy()
 
     def describe(self, objects: tuple[str, ...]) -> str:
         """Words for the objects an event involved: a failed task adds the executor's
@@ -283,6 +313,23 @@ class RuntimeModel:
         if domain == "floor":
             return self.floor_names
         return tuple(t.name for t in self.tasks)
+
+
+class _Once:
+    """``of(poses[:, :2])``, worked out on the first call and kept (a sample's object
+    floors: most specifications never ask)."""
+
+    __slots__ = ("_of", "_poses", "_value")
+
+    def __init__(self, of: Callable[[np.ndarray], np.ndarray], poses: np.ndarray) -> None:
+        self._of = of
+        self._poses = poses
+        self._value: np.ndarray | None = None
+
+    def __call__(self) -> np.ndarray:
+        if self._value is None:
+            self._value = self._of(np.asarray(self._poses)[:, :2])
+        return self._value
 
 
 class FloorMap:
