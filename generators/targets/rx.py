@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any
@@ -37,6 +38,42 @@ def _states(kind: str) -> tuple[str, ...]:
     if kind == "task_failure":
         return vm.TASK_FAILURES
     return vm.TASK_STATES if kind == "task_state" else NAMED_STATES[kind]
+
+
+STEADY_READS = {
+    # what the query reads -> the inputs field that decides it ('is': handed out
+    # unchanged until it changes; '==': a number)
+    "task_state": ("task_state", "is"), "n_task": ("task_state", "is"),
+    "task_failure": ("task_failure", "is"), "mission_state": ("mission_state", "=="),
+    "nav_state": ("nav_state", "=="), "kind": ("kind_masks", "is"),
+    "goal_floor": ("goal_floor", "is"), "humans": ("humans", "=="),
+    "dynamic_objects": ("dynamic_objects", "=="), "cycles": ("cycles", "=="),
+    "headed_goals": ("headed_goals", "=="), "goals": ("goals", "=="),
+    "neighbouring_goals": ("neighbouring_goals", "=="),
+    "speed_limit": ("speed_limit", "=="), "turn_limit": ("turn_limit", "=="),
+    "robot_inradius": ("robot_inradius", "=="),
+    "robot_circumradius": ("robot_circumradius", "=="),
+}
+"""Inputs that change only at mission events or never in a run (task and mission states,
+the scenario's facts): a query reading nothing else keeps its matches from the previous
+step while these are the same (most samples), instead of being evaluated again."""
+_READS = re.compile(r"\bw\.(\w+)")
+_FINDS = re.compile(r"\bq\['(\w+)'\]")
+
+
+def steady_queries(queries: list[_QueryCode]) -> tuple[set[str], list[tuple[str, str]]]:
+    """The queries whose matches depend only on STEADY_READS (and on such queries), and
+    the inputs fields (with how to compare them) that decide all of them."""
+    steady: set[str] = set()
+    fields: dict[str, str] = {}
+    for q in queries:
+        reads = _READS.findall(q.strict)
+        finds = _FINDS.findall(q.strict)
+        if q.relaxed is None and all(r in STEADY_READS for r in reads) \
+                and all(f in steady for f in finds):
+            steady.add(q.name)
+            fields.update(STEADY_READS[r] for r in reads)
+    return steady, sorted(fields.items())
 
 
 @dataclass(frozen=True)
@@ -372,8 +409,10 @@ def render_module(spec: vm.Specification, source_name: str) -> str:
     env = make_environment(template_loader("rx"), xml=False)
     env.filters["pyrepr"] = _pyrepr
     cutoff = distance_cutoff(spec)
+    steady, steady_fields = steady_queries(queries)
     text = render(env, "automata.py.j2", spec=spec, source_name=source_name,
-                  format_version=FORMAT_VERSION, queries=queries,
+                  format_version=FORMAT_VERSION, queries=queries, steady=steady,
+                  steady_fields=steady_fields,
                   margins=list(dict.fromkeys(margins)), complex=complex_events,
                   cutoff="math.inf" if math.isinf(cutoff) else repr(cutoff),
                   functions=repr(dict(spec.functions)))

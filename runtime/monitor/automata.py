@@ -200,6 +200,17 @@ class QueryInputs:
         return np.reshape(result, shape)
 
 
+class Matches(dict[str, Any]):
+    """One step's query matches (name -> boolean array), with the inputs they were
+    evaluated on: the next step keeps the matches of queries whose inputs are the same."""
+
+    __slots__ = ("inputs",)
+
+    def __init__(self, inputs: QueryInputs) -> None:
+        super().__init__()
+        self.inputs = inputs
+
+
 def named(name: str) -> Callable[[Occurrence], bool]:
     return lambda e: e.name == name
 

@@ -32,6 +32,7 @@ from rei.lang.vepl.model import (  # noqa: F401  (the records the pattern data b
     Whenever,
 )
 from rei.runtime.monitor.automata import (
+    Matches,
     QueryEventSpec,
     QueryInputs,
     QuerySpec,
@@ -98,13 +99,19 @@ def query_taskFailed(w: QueryInputs, q: dict[str, Any], prev: dict[str, Any]) ->
 
 
 def evaluate_queries(w: QueryInputs, prev: dict[str, Any]) -> dict[str, Any]:
-    """Every query's matches: a boolean array over its domain, or a boolean."""
-    q: dict[str, Any] = {}
+    """Every query's matches: a boolean array over its domain, or a boolean. Queries that
+    read only task and mission states and the scenario's facts keep the previous step's
+    matches while those inputs are the same ones."""
+    q = Matches(w)
+    p = getattr(prev, "inputs", None)
+    steady = (p is not None
+              and p.mission_state == w.mission_state
+              and p.task_state is w.task_state)
     q['tooCloseToHuman'] = query_tooCloseToHuman(w, q, prev)
     q['humanInCollision'] = query_humanInCollision(w, q, prev)
-    q['missionEnded'] = query_missionEnded(w, q, prev)
-    q['taskSucceeded'] = query_taskSucceeded(w, q, prev)
-    q['taskFailed'] = query_taskFailed(w, q, prev)
+    q['missionEnded'] = prev['missionEnded'] if steady else query_missionEnded(w, q, prev)
+    q['taskSucceeded'] = prev['taskSucceeded'] if steady else query_taskSucceeded(w, q, prev)
+    q['taskFailed'] = prev['taskFailed'] if steady else query_taskFailed(w, q, prev)
     return q
 
 

@@ -32,6 +32,7 @@ from rei.lang.vepl.model import (  # noqa: F401  (the records the pattern data b
     Whenever,
 )
 from rei.runtime.monitor.automata import (
+    Matches,
     QueryEventSpec,
     QueryInputs,
     QuerySpec,
@@ -93,8 +94,10 @@ def query_humanNextToRobot(w: QueryInputs, q: dict[str, Any], prev: dict[str, An
 
 
 def evaluate_queries(w: QueryInputs, prev: dict[str, Any]) -> dict[str, Any]:
-    """Every query's matches: a boolean array over its domain, or a boolean."""
-    q: dict[str, Any] = {}
+    """Every query's matches: a boolean array over its domain, or a boolean. Queries that
+    read only task and mission states and the scenario's facts keep the previous step's
+    matches while those inputs are the same ones."""
+    q = Matches(w)
     q['humanOnRobotFloor'] = query_humanOnRobotFloor(w, q, prev)
     q['objectOnGoalFloor'] = query_objectOnGoalFloor(w, q, prev)
     q['humanOnFloor'] = query_humanOnFloor(w, q, prev)
