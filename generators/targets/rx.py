@@ -40,40 +40,40 @@ def _states(kind: str) -> tuple[str, ...]:
     return vm.TASK_STATES if kind == "task_state" else NAMED_STATES[kind]
 
 
-STEADY_READS = {
-    # what the query reads -> the inputs field that decides it ('is': handed out
-    # unchanged until it changes; '==': a number)
-    "task_state": ("task_state", "is"), "n_task": ("task_state", "is"),
-    "task_failure": ("task_failure", "is"), "mission_state": ("mission_state", "=="),
-    "nav_state": ("nav_state", "=="), "kind": ("kind_masks", "is"),
-    "goal_floor": ("goal_floor", "is"), "humans": ("humans", "=="),
-    "dynamic_objects": ("dynamic_objects", "=="), "cycles": ("cycles", "=="),
-    "headed_goals": ("headed_goals", "=="), "goals": ("goals", "=="),
-    "neighbouring_goals": ("neighbouring_goals", "=="),
-    "speed_limit": ("speed_limit", "=="), "turn_limit": ("turn_limit", "=="),
-    "robot_inradius": ("robot_inradius", "=="),
-    "robot_circumradius": ("robot_circumradius", "=="),
+KEPT_READS = {
+    # what a query reads -> the inputs field that decides it: the model hands out the
+    # same object until the value changes (task arrays are copied on write, the states
+    # and the scenario's facts are the same objects, the laser clearance is kept between
+    # scans), so 'is' tells an unchanged input for sure
+    "task_state": "task_state", "n_task": "task_state", "task_failure": "task_failure",
+    "mission_state": "mission_state", "nav_state": "nav_state", "kind": "kind_masks",
+    "goal_floor": "goal_floor", "humans": "humans", "dynamic_objects": "dynamic_objects",
+    "cycles": "cycles", "headed_goals": "headed_goals", "goals": "goals",
+    "neighbouring_goals": "neighbouring_goals", "speed_limit": "speed_limit",
+    "turn_limit": "turn_limit", "robot_inradius": "robot_inradius",
+    "robot_circumradius": "robot_circumradius", "laser_clearance": "laser_clearance",
 }
-"""Inputs that change only at mission events or never in a run (task and mission states,
-the scenario's facts): a query reading nothing else keeps its matches from the previous
-step while these are the same (most samples), instead of being evaluated again."""
+"""Inputs that stay the same objects over many samples: a query reading nothing else (and
+finding only such queries) keeps its matches from the previous step while they are the
+same, instead of being evaluated again."""
 _READS = re.compile(r"\bw\.(\w+)")
 _FINDS = re.compile(r"\bq\['(\w+)'\]")
 
 
-def steady_queries(queries: list[_QueryCode]) -> tuple[set[str], list[tuple[str, str]]]:
-    """The queries whose matches depend only on STEADY_READS (and on such queries), and
-    the inputs fields (with how to compare them) that decide all of them."""
-    steady: set[str] = set()
-    fields: dict[str, str] = {}
+def kept_queries(queries: list[_QueryCode]) -> tuple[dict[str, tuple[str, ...]], list[str]]:
+    """Per query that may keep its matches, the inputs fields that must be the same for it
+    (its own reads and those of the queries it finds); and every such field, sorted."""
+    kept: dict[str, tuple[str, ...]] = {}
     for q in queries:
         reads = _READS.findall(q.strict)
         finds = _FINDS.findall(q.strict)
-        if q.relaxed is None and all(r in STEADY_READS for r in reads) \
-                and all(f in steady for f in finds):
-            steady.add(q.name)
-            fields.update(STEADY_READS[r] for r in reads)
-    return steady, sorted(fields.items())
+        if q.relaxed is None and all(r in KEPT_READS for r in reads) \
+                and all(f in kept for f in finds):
+            fields = {KEPT_READS[r] for r in reads}
+            for f in finds:
+                fields.update(kept[f])
+            kept[q.name] = tuple(sorted(fields))
+    return kept, sorted({f for fields in kept.values() for f in fields})
 
 
 @dataclass(frozen=True)
@@ -409,10 +409,10 @@ def render_module(spec: vm.Specification, source_name: str) -> str:
     env = make_environment(template_loader("rx"), xml=False)
     env.filters["pyrepr"] = _pyrepr
     cutoff = distance_cutoff(spec)
-    steady, steady_fields = steady_queries(queries)
+    kept, kept_fields = kept_queries(queries)
     text = render(env, "automata.py.j2", spec=spec, source_name=source_name,
-                  format_version=FORMAT_VERSION, queries=queries, steady=steady,
-                  steady_fields=steady_fields,
+                  format_version=FORMAT_VERSION, queries=queries, kept=kept,
+                  kept_fields=kept_fields,
                   margins=list(dict.fromkeys(margins)), complex=complex_events,
                   cutoff="math.inf" if math.isinf(cutoff) else repr(cutoff),
                   functions=repr(dict(spec.functions)))

@@ -17,6 +17,8 @@ from types import ModuleType
 from typing import Any, cast
 
 import numpy as np
+from reactivex import Observable
+from reactivex.subject import Subject
 
 from rei.lang.vepl import model as vm
 from rei.runtime.monitor.cep import Occurrence
@@ -209,6 +211,30 @@ class Matches(dict[str, Any]):
     def __init__(self, inputs: QueryInputs) -> None:
         super().__init__()
         self.inputs = inputs
+
+
+def demultiplex(atomic: Observable[Occurrence], names: tuple[str, ...]
+                ) -> dict[str, Observable[Occurrence]]:
+    """One stream per query event name, fed from the stream of all query events: an event
+    goes only to its own name's subscribers, in the order they subscribed (as a filter per
+    subscriber would give, without every subscriber looking at every event)."""
+    subjects: dict[str, Subject[Occurrence]] = {n: Subject() for n in names}
+
+    def route(e: Occurrence) -> None:
+        subject = subjects.get(e.name)
+        if subject is not None:
+            subject.on_next(e)
+
+    def error(exc: Exception) -> None:
+        for subject in subjects.values():
+            subject.on_error(exc)
+
+    def completed() -> None:
+        for subject in subjects.values():
+            subject.on_completed()
+
+    atomic.subscribe(route, error, completed)
+    return dict(subjects)
 
 
 def named(name: str) -> Callable[[Occurrence], bool]:

@@ -127,6 +127,8 @@ class FootprintSet:
     of a box, (-1, radius, 0) of a circle."""
     robot_corners: tuple[tuple[float, float], ...] = ()
     """The robot's polygon as tuples (the scalar narrow phase)."""
+    poly_corners: tuple[tuple[tuple[float, float], ...], ...] = ()
+    """Each polygon's local vertices as tuples, padded as ``poly_local``."""
     cache: _WorldCache = field(default_factory=_WorldCache, compare=False, repr=False)
 
     @staticmethod
@@ -174,7 +176,9 @@ class FootprintSet:
         return FootprintSet(rpoly, rrad, np.array(pidx, dtype=np.intp), padded,
                             np.array(cidx, dtype=np.intp), np.array(crad), bound, robot_bound,
                             len(objects), inner_radius=inner, robot_half=robot_half,
-                            poly_half=poly_half, narrow=tuple(narrow), robot_corners=corners)
+                            poly_half=poly_half, narrow=tuple(narrow), robot_corners=corners,
+                            poly_corners=tuple(tuple((float(x), float(y)) for x, y in p)
+                                               for p in padded))
 
     def nearest(self, distance: np.ndarray, exact: np.ndarray, group: np.ndarray,
                 robot_pose: tuple[float, float, float], poses: np.ndarray) -> float:
@@ -217,12 +221,13 @@ class FootprintSet:
         """Exact distances into ``out`` for the objects in the boolean mask ``wanted`` (up
         to ``scalar_limit`` of them in Python floats when the robot and objects are boxes
         and circles: the same bits either way)."""
-        if not wanted.any():
-            return out
         if self.robot_half is not None and self.poly_half is not None:
             which = np.flatnonzero(wanted)
             if len(which) <= scalar_limit:
-                return self._scalar_boxes(out, which.tolist(), robot_pose, poses)
+                return self._scalar_boxes(out, which.tolist(), robot_pose, poses) \
+                    if len(which) else out
+        elif not wanted.any():
+            return out
         rx, ry, ryaw = robot_pose
         robot_world = None
         if self.robot_polygon is not None and (self.robot_half is None
@@ -263,7 +268,7 @@ class FootprintSet:
         rows_xy = rows.tolist()
         boxes = [k for k, i in enumerate(which) if self.narrow[i][0] >= 0]
         if boxes:
-            world = self._world(poses)
+            # each box's corners placed as _transform places them (same cos, sin, order)
             yaw = rows[boxes, 2]
             cos_of = dict(zip(boxes, np.cos(yaw).tolist(), strict=True))
             sin_of = dict(zip(boxes, np.sin(yaw).tolist(), strict=True))
@@ -290,7 +295,8 @@ class FootprintSet:
                 continue
             oc, os_ = cos_of[k], sin_of[k]
             points = []  # (x, y, half x, half y) in the frame of the box measured against
-            for wx, wy in world[row].tolist():
+            for x, y in self.poly_corners[row]:
+                wx, wy = oc * x - os_ * y + px, os_ * x + oc * y + py
                 relx, rely = wx - rx, wy - ry
                 points.append((c * relx + s * rely, c * rely - s * relx, hx, hy))
             for wx, wy in robot_world:

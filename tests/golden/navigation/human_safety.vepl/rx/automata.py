@@ -38,7 +38,7 @@ from rei.runtime.monitor.automata import (
     QuerySpec,
     RequirementSpec,
     SignalSpec,
-    named,
+    demultiplex,
     raise_signal,
 )
 from rei.runtime.monitor.cep import Occurrence, match_pattern
@@ -99,19 +99,22 @@ def query_taskFailed(w: QueryInputs, q: dict[str, Any], prev: dict[str, Any]) ->
 
 
 def evaluate_queries(w: QueryInputs, prev: dict[str, Any]) -> dict[str, Any]:
-    """Every query's matches: a boolean array over its domain, or a boolean. Queries that
-    read only task and mission states and the scenario's facts keep the previous step's
-    matches while those inputs are the same ones."""
+    """Every query's matches: a boolean array over its domain, or a boolean. A query that
+    reads only inputs which stay the same objects over many samples (task and mission
+    states, the scenario's facts, the laser clearance between scans) keeps the previous
+    step's matches while they are the same."""
     q = Matches(w)
     p = getattr(prev, "inputs", None)
-    steady = (p is not None
-              and p.mission_state == w.mission_state
-              and p.task_state is w.task_state)
+    same_mission_state = p is not None and p.mission_state is w.mission_state
+    same_task_state = p is not None and p.task_state is w.task_state
     q['tooCloseToHuman'] = query_tooCloseToHuman(w, q, prev)
     q['humanInCollision'] = query_humanInCollision(w, q, prev)
-    q['missionEnded'] = prev['missionEnded'] if steady else query_missionEnded(w, q, prev)
-    q['taskSucceeded'] = prev['taskSucceeded'] if steady else query_taskSucceeded(w, q, prev)
-    q['taskFailed'] = prev['taskFailed'] if steady else query_taskFailed(w, q, prev)
+    q['missionEnded'] = (prev['missionEnded'] if same_mission_state
+                         else query_missionEnded(w, q, prev))
+    q['taskSucceeded'] = (prev['taskSucceeded'] if same_task_state
+                          else query_taskSucceeded(w, q, prev))
+    q['taskFailed'] = (prev['taskFailed'] if same_task_state
+                       else query_taskFailed(w, q, prev))
     return q
 
 
@@ -165,13 +168,14 @@ PATTERNS = {
 def build_automata(atomic: Observable[Occurrence], scheduler: VirtualTimeScheduler
                    ) -> dict[str, Observable[Occurrence]]:
     """Every event's stream, from the stream of query events; time only via ``scheduler``."""
-    events: dict[str, Observable[Occurrence]] = {}
-    events['enterPersonalSpace'] = atomic.pipe(ops.filter(named('enterPersonalSpace')))
-    events['leavePersonalSpace'] = atomic.pipe(ops.filter(named('leavePersonalSpace')))
-    events['humanCollision'] = atomic.pipe(ops.filter(named('humanCollision')))
-    events['missionEnds'] = atomic.pipe(ops.filter(named('missionEnds')))
-    events['taskSucceeds'] = atomic.pipe(ops.filter(named('taskSucceeds')))
-    events['taskFails'] = atomic.pipe(ops.filter(named('taskFails')))
+    events: dict[str, Observable[Occurrence]] = demultiplex(atomic, (
+        'enterPersonalSpace',
+        'leavePersonalSpace',
+        'humanCollision',
+        'missionEnds',
+        'taskSucceeds',
+        'taskFails',
+    ))
     # complexEvent closePass(){ as (enterPersonalSpace -> leavePersonalSpace)[2000] context immediate }
     events['closePass'] = rx.merge(
         events['enterPersonalSpace'],

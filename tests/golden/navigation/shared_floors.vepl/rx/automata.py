@@ -38,7 +38,7 @@ from rei.runtime.monitor.automata import (
     QuerySpec,
     RequirementSpec,
     SignalSpec,
-    named,
+    demultiplex,
     raise_signal,
 )
 from rei.runtime.monitor.cep import Occurrence, match_pattern
@@ -94,9 +94,10 @@ def query_humanNextToRobot(w: QueryInputs, q: dict[str, Any], prev: dict[str, An
 
 
 def evaluate_queries(w: QueryInputs, prev: dict[str, Any]) -> dict[str, Any]:
-    """Every query's matches: a boolean array over its domain, or a boolean. Queries that
-    read only task and mission states and the scenario's facts keep the previous step's
-    matches while those inputs are the same ones."""
+    """Every query's matches: a boolean array over its domain, or a boolean. A query that
+    reads only inputs which stay the same objects over many samples (task and mission
+    states, the scenario's facts, the laser clearance between scans) keeps the previous
+    step's matches while they are the same."""
     q = Matches(w)
     q['humanOnRobotFloor'] = query_humanOnRobotFloor(w, q, prev)
     q['objectOnGoalFloor'] = query_objectOnGoalFloor(w, q, prev)
@@ -136,10 +137,11 @@ PATTERNS = {
 def build_automata(atomic: Observable[Occurrence], scheduler: VirtualTimeScheduler
                    ) -> dict[str, Observable[Occurrence]]:
     """Every event's stream, from the stream of query events; time only via ``scheduler``."""
-    events: dict[str, Observable[Occurrence]] = {}
-    events['humanJoinsRobot'] = atomic.pipe(ops.filter(named('humanJoinsRobot')))
-    events['goalTaken'] = atomic.pipe(ops.filter(named('goalTaken')))
-    events['humanAlongside'] = atomic.pipe(ops.filter(named('humanAlongside')))
+    events: dict[str, Observable[Occurrence]] = demultiplex(atomic, (
+        'humanJoinsRobot',
+        'goalTaken',
+        'humanAlongside',
+    ))
     return events
 
 
