@@ -98,6 +98,19 @@ class _WorldCache:
     world: np.ndarray | None = None
     robot_inner: float | None = None
     """The robot footprint's inner radius (computed on first use)."""
+    placed: dict[int, tuple[list[float], float, float, list[tuple[float, float]]]] = field(
+        default_factory=dict)
+    """Per box object the scalar narrow phase saw: (its pose, cos and sin of its yaw, its
+    world corners), kept while the pose stays the same."""
+
+
+def _same_place(placed: tuple[list[float], float, float, list[tuple[float, float]]] | None,
+                pose: list[float]) -> bool:
+    """``pose`` is the one the box was placed at, to the bit (a signed zero too)."""
+    if placed is None:
+        return False
+    return all(a == b and math.copysign(1.0, a) == math.copysign(1.0, b)
+               for a, b in zip(placed[0], pose, strict=True))
 
 
 @dataclass(frozen=True)
@@ -258,30 +271,35 @@ class FootprintSet:
         """``_boxes`` and ``_to_circles`` (box robot, box and circle objects) for a few
         objects, in Python floats: the same operations in the same order, so the same
         bits (IEEE arithmetic, comparisons, abs, min and max are exact in both; the
-        hypotenuses and the objects' cos/sin still come from numpy, in one call each),
-        without the fixed cost of ~40 numpy calls on arrays of a few elements."""
+        hypotenuses and the objects' cos/sin still come from numpy), without the fixed
+        cost of ~40 numpy calls on arrays of a few elements. A box's world corners are
+        kept while it stands still (most objects, most samples)."""
         assert self.robot_half is not None and self.poly_half is not None
         hx, hy = self.robot_half
         rx, ry, ryaw = robot_pose
         c, s = math.cos(ryaw), math.sin(ryaw)
-        rows = poses[which]
-        rows_xy = rows.tolist()
-        boxes = [k for k, i in enumerate(which) if self.narrow[i][0] >= 0]
-        if boxes:
-            # each box's corners placed as _transform places them (same cos, sin, order)
-            yaw = rows[boxes, 2]
-            cos_of = dict(zip(boxes, np.cos(yaw).tolist(), strict=True))
-            sin_of = dict(zip(boxes, np.sin(yaw).tolist(), strict=True))
-            robot_world = [(c * x - s * y + rx, s * x + c * y + ry)
-                           for x, y in self.robot_corners]
+        rows = poses[which].tolist()
+        placed = self.cache.placed
+        moved = [k for k, i in enumerate(which) if self.narrow[i][0] >= 0
+                 and not _same_place(placed.get(i), rows[k])]
+        if moved:
+            # placed as _transform places them (numpy's cos and sin, the same order)
+            yaws = [rows[k][2] for k in moved]
+            for k, oc, os_ in zip(moved, np.cos(yaws).tolist(), np.sin(yaws).tolist(),
+                                  strict=True):
+                px, py, _ = rows[k]
+                placed[which[k]] = (rows[k], oc, os_, [
+                    (oc * x - os_ * y + px, os_ * x + oc * y + py)
+                    for x, y in self.poly_corners[self.narrow[which[k]][0]]])
+        robot_world = [(c * x - s * y + rx, s * x + c * y + ry) for x, y in self.robot_corners]
         legs_x: list[float] = []
         legs_y: list[float] = []
-        # per object: (its index, the final value, or the slice of legs whose hypotenuses
-        # join `inner` (the inside points' distances) in a minimum, a circle's radius)
+        # objects whose value needs hypotenuses: (index, legs from, legs to, distances of
+        # the inside points, a circle's radius or -1 for a box)
         pending: list[tuple[int, int, int, list[float], float]] = []
         for k, i in enumerate(which):
             row, ax, ay = self.narrow[i]
-            px, py = rows_xy[k][0], rows_xy[k][1]
+            px, py, _ = rows[k]
             if row < 0:  # a circle of radius ax against the robot's box
                 relx, rely = px - rx, py - ry
                 dx = abs(c * relx + s * rely) - hx
@@ -293,38 +311,39 @@ class FootprintSet:
                     legs_x.append(max(dx, 0.0))
                     legs_y.append(max(dy, 0.0))
                 continue
-            oc, os_ = cos_of[k], sin_of[k]
-            points = []  # (x, y, half x, half y) in the frame of the box measured against
-            for x, y in self.poly_corners[row]:
-                wx, wy = oc * x - os_ * y + px, os_ * x + oc * y + py
+            _, oc, os_, world = placed[i]
+            lx: list[float] = []  # the box's corners in the robot's frame
+            ly: list[float] = []
+            for wx, wy in world:
                 relx, rely = wx - rx, wy - ry
-                points.append((c * relx + s * rely, c * rely - s * relx, hx, hy))
+                lx.append(c * relx + s * rely)
+                ly.append(c * rely - s * relx)
+            ox: list[float] = []  # the robot's corners in the box's frame
+            oy: list[float] = []
             for wx, wy in robot_world:
                 qx, qy = wx - px, wy - py
-                points.append((oc * qx + os_ * qy, oc * qy - os_ * qx, ax, ay))
-            lx = [p[0] for p in points[:4]]
-            ly = [p[1] for p in points[:4]]
-            ox = [p[0] for p in points[4:]]
-            oy = [p[1] for p in points[4:]]
+                ox.append(oc * qx + os_ * qy)
+                oy.append(oc * qy - os_ * qx)
             separated = (min(lx) >= hx or max(lx) <= -hx or min(ly) >= hy or max(ly) <= -hy
                          or min(ox) >= ax or max(ox) <= -ax or min(oy) >= ay
                          or max(oy) <= -ay)
             inner: list[float] = []
             start = len(legs_x)
-            for x, y, bx, by in points:
-                dx = abs(x) - bx
-                dy = abs(y) - by
-                if dx < 0 and dy < 0:
-                    inner.append(min(-dx, -dy))
-                elif separated:
-                    legs_x.append(max(dx, 0.0))
-                    legs_y.append(max(dy, 0.0))
+            for xs, ys, bx, by in ((lx, ly, hx, hy), (ox, oy, ax, ay)):
+                for x, y in zip(xs, ys, strict=True):
+                    dx = abs(x) - bx
+                    dy = abs(y) - by
+                    if dx < 0 and dy < 0:
+                        inner.append(min(-dx, -dy))
+                    elif separated:
+                        legs_x.append(max(dx, 0.0))
+                        legs_y.append(max(dy, 0.0))
             if separated:
                 pending.append((i, start, len(legs_x), inner, -1.0))
             else:
                 out[i] = -max(inner, default=0.0)
         if pending:
-            legs = np.hypot(np.array(legs_x), np.array(legs_y)).tolist()
+            legs = np.hypot(legs_x, legs_y).tolist()
             for i, start, end, inner, radius in pending:
                 if radius >= 0:
                     out[i] = legs[start] - radius
