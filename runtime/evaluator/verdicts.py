@@ -62,6 +62,12 @@ class RequirementChecker:
         self._whenever = [st for states in self.states.values() for st in states
                           if isinstance(st.clause, vm.Whenever)]
         """The ``whenever`` clauses, in order: the only ones a step concerns."""
+        self._answered_by_queries = [
+            st for st in self._whenever
+            if isinstance(st.clause, vm.Whenever) and any(t in queries
+                                                          for t in st.clause.targets)]
+        """Those a query holding can answer (a step can answer no other: their expiry is
+        decided at the window's end whenever it is checked)."""
         self.query_held: dict[str, float] = {}
         """The last time each watched query was seen holding (now, while it holds)."""
         self.holding: set[str] = set()
@@ -129,8 +135,10 @@ class RequirementChecker:
                             st.pending.append(time)
 
     def waiting(self) -> bool:
-        """True while a ``whenever`` trigger waits for its answer."""
-        return any(st.pending and st.status is None for st in self._whenever)
+        """True while a ``whenever`` trigger waits for an answer a query can give (a
+        trigger waiting for events is answered, or expires, in ``on_event``, or at the
+        end: a step changes nothing for it)."""
+        return any(st.pending and st.status is None for st in self._answered_by_queries)
 
     def on_step(self, time: float, holding: dict[str, bool]) -> None:
         """After an evaluation step where a watched query changed (or while a trigger

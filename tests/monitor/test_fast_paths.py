@@ -12,9 +12,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rei.catalogue import Box
+from rei.lang.vepl import model as vm
+from rei.runtime.evaluator.verdicts import RequirementChecker
 from rei.runtime.messages import SCHEMA_VERSION, MissionEvent, ObservedObject, StreamHeader
-from rei.runtime.monitor.automata import Matches, load_generated
-from rei.runtime.monitor.model import RuntimeModel, crossings
+from rei.runtime.monitor.automata import Matches, RequirementSpec, load_generated
+from rei.runtime.monitor.model import RuntimeModel, SampleProblems, crossings
 from tests.monitor.helpers import default_automata
 
 ROBOT = ObservedObject("robot", "static", "turtlebot3_waffle", Box(0.281, 0.306), 0.2)
@@ -78,3 +80,26 @@ def test_robot_floor_is_kept_only_well_inside_its_tile() -> None:
     mask = model._robot_floor(2.1, 0.0)
     assert not mask.flags.writeable  # shared between samples: nobody may change it
     assert np.flatnonzero(mask).tolist() == [2]
+
+
+def test_a_trigger_waiting_for_events_needs_no_steps() -> None:
+    """Steps answer only query targets: a checker told of every step and one told of none
+    give the same verdicts for triggers waiting on events (expiry at the window's end)."""
+    reqs = (RequirementSpec("R", "r", (vm.Whenever("T", ("A",), 1.0),)),
+            RequirementSpec("S", "s", (vm.Whenever("T", ("A",), None),)),
+            RequirementSpec("Q", "q", (vm.Whenever("T", ("held",), 1.0),)))
+    stepped = RequirementChecker(reqs, {"held"})
+    quiet = RequirementChecker(reqs, {"held"})
+    for checker in (stepped, quiet):
+        checker.on_event("T", 1.0)
+    assert quiet.waiting()  # Q waits for its query
+    for t in (1.5, 2.5, 3.0):
+        stepped.on_step(t, {"held": False})
+    for checker in (stepped, quiet):
+        checker.on_event("A", 3.0)
+        checker.on_event("T", 4.0)
+        checker.on_step(4.2, {"held": True})
+    assert not quiet.waiting()
+    ends = [c.verdicts(6.0, SampleProblems(), True) for c in (stepped, quiet)]
+    assert ends[0] == ends[1]
+    assert [v.status for v in ends[0]] == ["fail", "fail", "fail"]
