@@ -212,7 +212,7 @@ class _Writer:
             ref = f"q[{e.query!r}]"
             axes = tuple(None if a is None else self.axes[a] for a in e.args)
             if all(a is None for a in axes):
-                inner = f"{ref}.any()"
+                inner = f"any_match({ref})"
             elif axes == (0,) and self.n == 1:
                 inner = ref
             else:

@@ -213,6 +213,12 @@ class Matches(dict[str, Any]):
         self.inputs = inputs
 
 
+def any_match(matches: Any) -> np.bool_:
+    """``matches.any()``, the same numpy boolean, for a fraction of its cost on the small
+    arrays of a step (count_nonzero is one C call, ``any`` a reduction behind a wrapper)."""
+    return np.bool_(np.count_nonzero(matches))
+
+
 def demultiplex(atomic: Observable[Occurrence], names: tuple[str, ...]
                 ) -> dict[str, Observable[Occurrence]]:
     """One stream per query event name, fed from the stream of all query events: an event

@@ -459,7 +459,7 @@ def check_sample(s: Sample, header: StreamHeader) -> str | None:
             return "malformed"
         # NaN and +inf ranges are beams without a return (not counted); -inf is nonsense
         if not all(map(math.isfinite, (scan.angle_min, scan.angle_increment, scan.range_max))) \
-                or bool((ranges == -math.inf).any()):
+                or np.count_nonzero(ranges == -math.inf):
             return "non_finite"
     finite = np.logical_and.reduce  # the ufunc itself: no wrapper, no warnings to silence
     if not (finite(np.isfinite(poses), axis=None) and finite(np.isfinite(twists), axis=None)):

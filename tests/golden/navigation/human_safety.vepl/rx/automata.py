@@ -38,6 +38,7 @@ from rei.runtime.monitor.automata import (
     QuerySpec,
     RequirementSpec,
     SignalSpec,
+    any_match,
     demultiplex,
     raise_signal,
 )
