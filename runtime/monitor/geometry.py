@@ -223,7 +223,8 @@ class FootprintSet:
         if self.count == 0:
             return np.empty(0)
         rx, ry, _ = robot_pose
-        out = np.hypot(poses[:, 0] - rx, poses[:, 1] - ry)
+        rel = poses[:, :2] - (rx, ry)
+        out = np.hypot(rel[:, 0], rel[:, 1])
         out -= self.bound_radius
         out -= self.robot_bound
         return self.refine(out, out <= cutoff, robot_pose, poses)

@@ -95,6 +95,9 @@ class RuntimeModel:
         self.kind_masks = masks
         self.human_mask = masks.get("human", np.zeros(len(header.objects), dtype=bool))
         self._any_human = bool(self.human_mask.any())
+        self._humans = np.flatnonzero(self.human_mask)
+        self._no_approach = np.zeros(len(header.objects))
+        self._no_approach.setflags(write=False)  # shared by every sample nothing approaches
         self.floor_names = tuple(f[0] for f in header.floors)
         self._floor_xy = np.array([(f[1], f[2]) for f in header.floors], dtype=float).reshape(
             -1, 2)
@@ -162,11 +165,11 @@ class RuntimeModel:
         """How fast the robot's own commanded motion (as the motor executes it: clipped to
         the limits) closes the footprint distance to each near object, m/s. A body that
         moves into a robot standing still gets 0: the contact is not the robot's doing."""
-        out = np.zeros(len(distance))
-        near = distance < APPROACH_RANGE
         linear, angular = s.belief.cmd
-        if not near.any() or (linear == 0.0 and angular == 0.0):
-            return out
+        near = distance < APPROACH_RANGE
+        if (linear == 0.0 and angular == 0.0) or not np.count_nonzero(near):
+            return self._no_approach
+        out = np.zeros(len(distance))
         v = min(max(linear, -self.speed_limit), self.speed_limit)
         w = min(max(angular, -self.turn_limit), self.turn_limit)
         x, y, yaw = s.robot_pose
@@ -216,7 +219,7 @@ class RuntimeModel:
     def _nearest_human(self, s: Sample, distance: np.ndarray, moving: bool) -> None:
         """Update the closest approach to a person (and, while moving, personal space). The
         exact distance is worked out once, and only when a person might beat a minimum."""
-        bound = float(distance[self.human_mask].min())
+        bound = float(np.minimum.reduce(distance.take(self._humans)))
         if bound >= self.min_distance_to_human and not (
                 moving and bound < self.min_distance_to_human_moving):
             return
