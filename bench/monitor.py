@@ -1,7 +1,8 @@
 """Benchmark of the monitor: samples per second through the default .vepl automata.
 
-For 10, 30 (the recording benchmark's stream), 200 and 2,000 observed objects, a robot drives a zig-zag among boxes, walls and
-humans (transitions happen, most samples change nothing). Measured in the same run:
+For 10, 30 (the recording benchmark's stream), 200 and 2,000 observed objects, a robot
+drives a zig-zag among boxes, walls and humans (transitions happen, most samples change
+nothing). Measured in the same run:
 
 * live: Sample objects fed to ``MonitorSink`` (generated automata, default.vepl);
 * replay: the same stream read back from a trace file and fed the same way
