@@ -412,7 +412,6 @@ def render_module(spec: vm.Specification, source_name: str) -> str:
     kept, kept_fields = kept_queries(queries)
     text = render(env, "automata.py.j2", spec=spec, source_name=source_name,
                   format_version=FORMAT_VERSION, queries=queries, kept=kept,
-                  pure=not spec.functions and all(q.relaxed is None for q in queries),
                   kept_fields=kept_fields,
                   margins=list(dict.fromkeys(margins)), complex=complex_events,
                   cutoff="math.inf" if math.isinf(cutoff) else repr(cutoff),

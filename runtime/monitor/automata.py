@@ -130,10 +130,6 @@ class QueryInputs:
         default=lambda: np.zeros((0, 0), dtype=bool))
     """Floors by floors, the two tiles share an edge: worked out on first use (a large room
     has thousands of floors, and most specifications never ask)."""
-    matches: Matches | None = field(default=None, init=False, repr=False, compare=False)
-    """The matches already evaluated on exactly these inputs, where they depend on nothing
-    else (no hysteresis, no user functions): the host evaluates a sample's inputs again
-    after replaying the crossings before it. Never copied by ``replace``."""
 
     @property
     def object_floor(self) -> np.ndarray:
