@@ -1,7 +1,8 @@
 """Benchmark of the monitor: samples per second through the default .vepl automata.
 
-For 10, 200 and 2,000 observed objects, a robot drives a zig-zag among boxes, walls and
-humans (transitions happen, most samples change nothing). Measured in the same run:
+For 10, 30 (the recording benchmark's stream), 200 and 2,000 observed objects, a robot
+drives a zig-zag among boxes, walls and humans (transitions happen, most samples change
+nothing). Measured in the same run:
 
 * live: Sample objects fed to ``MonitorSink`` (generated automata, default.vepl);
 * replay: the same stream read back from a trace file and fed the same way
@@ -17,7 +18,7 @@ run's 5 Hz laser does at 10 Hz sampling, so the laser clearance is computed as i
 Rates are samples per CPU second of this process (time.process_time), so other load on
 the machine does not distort them.
 
-Usage: python bench/monitor.py [--samples N] [--out DIR]
+Usage: python bench/monitor.py [--samples N] [--objects N [N ...]] [--out DIR]
 """
 
 from __future__ import annotations
@@ -195,17 +196,20 @@ def bench(n_objects: int, n_samples: int, work: Path) -> dict[str, float]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--samples", type=int, default=3000)
+    parser.add_argument("--objects", type=int, nargs="+", default=[10, 30, 200, 2000],
+                        help="observed object counts to measure (default: 10 30 200 2000)")
     parser.add_argument("--out", type=Path, default=None)
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         work = args.out or Path(tmp)
-        print("| objects | samples | live samples/s | replay samples/s | hand-written samples/s "
-              "| live / hand time | geometric signals (automata / hand) "
+        print("| objects | samples | live samples/s | live µs/sample | replay samples/s "
+              "| hand-written samples/s | live / hand time | geometric signals (automata / hand) "
               "| laser signals (automata / hand) |")
-        print("|---:|---:|---:|---:|---:|---:|---:|---:|")
-        for n in (10, 200, 2000):
+        print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+        for n in args.objects:
             r = bench(n, args.samples, work)
-            print(f"| {n:,} | {r['samples']:,} | {r['live']:,.0f} | {r['replay']:,.0f} | "
+            print(f"| {n:,} | {r['samples']:,} | {r['live']:,.0f} | {1e6 / r['live']:.0f} | "
+                  f"{r['replay']:,.0f} | "
                   f"{r['hand']:,.0f} | {r['ratio']:.2f} | {r['geom_signals']} / "
                   f"{r['geom_signals_hand']} | {r['laser_signals']} / "
                   f"{r['laser_signals_hand']} |")

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any
@@ -37,6 +38,42 @@ def _states(kind: str) -> tuple[str, ...]:
     if kind == "task_failure":
         return vm.TASK_FAILURES
     return vm.TASK_STATES if kind == "task_state" else NAMED_STATES[kind]
+
+
+KEPT_READS = {
+    # what a query reads -> the inputs field that decides it: the model hands out the
+    # same object until the value changes (task arrays are copied on write, the states
+    # and the scenario's facts are the same objects, the laser clearance is kept between
+    # scans), so 'is' tells an unchanged input for sure
+    "task_state": "task_state", "n_task": "task_state", "task_failure": "task_failure",
+    "mission_state": "mission_state", "nav_state": "nav_state", "kind": "kind_masks",
+    "goal_floor": "goal_floor", "humans": "humans", "dynamic_objects": "dynamic_objects",
+    "cycles": "cycles", "headed_goals": "headed_goals", "goals": "goals",
+    "neighbouring_goals": "neighbouring_goals", "speed_limit": "speed_limit",
+    "turn_limit": "turn_limit", "robot_inradius": "robot_inradius",
+    "robot_circumradius": "robot_circumradius", "laser_clearance": "laser_clearance",
+}
+"""Inputs that stay the same objects over many samples: a query reading nothing else (and
+finding only such queries) keeps its matches from the previous step while they are the
+same, instead of being evaluated again."""
+_READS = re.compile(r"\bw\.(\w+)")
+_FINDS = re.compile(r"\bq\['(\w+)'\]")
+
+
+def kept_queries(queries: list[_QueryCode]) -> tuple[dict[str, tuple[str, ...]], list[str]]:
+    """Per query that may keep its matches, the inputs fields that must be the same for it
+    (its own reads and those of the queries it finds); and every such field, sorted."""
+    kept: dict[str, tuple[str, ...]] = {}
+    for q in queries:
+        reads = _READS.findall(q.strict)
+        finds = _FINDS.findall(q.strict)
+        if q.relaxed is None and all(r in KEPT_READS for r in reads) \
+                and all(f in kept for f in finds):
+            fields = {KEPT_READS[r] for r in reads}
+            for f in finds:
+                fields.update(kept[f])
+            kept[q.name] = tuple(sorted(fields))
+    return kept, sorted({f for fields in kept.values() for f in fields})
 
 
 @dataclass(frozen=True)
@@ -175,7 +212,7 @@ class _Writer:
             ref = f"q[{e.query!r}]"
             axes = tuple(None if a is None else self.axes[a] for a in e.args)
             if all(a is None for a in axes):
-                inner = f"{ref}.any()"
+                inner = f"any_match({ref})"
             elif axes == (0,) and self.n == 1:
                 inner = ref
             else:
@@ -372,8 +409,10 @@ def render_module(spec: vm.Specification, source_name: str) -> str:
     env = make_environment(template_loader("rx"), xml=False)
     env.filters["pyrepr"] = _pyrepr
     cutoff = distance_cutoff(spec)
+    kept, kept_fields = kept_queries(queries)
     text = render(env, "automata.py.j2", spec=spec, source_name=source_name,
-                  format_version=FORMAT_VERSION, queries=queries,
+                  format_version=FORMAT_VERSION, queries=queries, kept=kept,
+                  kept_fields=kept_fields,
                   margins=list(dict.fromkeys(margins)), complex=complex_events,
                   cutoff="math.inf" if math.isinf(cutoff) else repr(cutoff),
                   functions=repr(dict(spec.functions)))

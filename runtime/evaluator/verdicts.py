@@ -59,6 +59,15 @@ class RequirementChecker:
         self.describe = describe or (lambda objects: ", ".join(objects))
         """Words for the objects of a deciding event (a failed task: the executor's reason)."""
         self.states = {r.name: [_ClauseState(c) for c in r.clauses] for r in requirements}
+        self._whenever = [st for states in self.states.values() for st in states
+                          if isinstance(st.clause, vm.Whenever)]
+        """The ``whenever`` clauses, in order: the only ones a step concerns."""
+        self._answered_by_queries = [
+            st for st in self._whenever
+            if isinstance(st.clause, vm.Whenever) and any(t in queries
+                                                          for t in st.clause.targets)]
+        """Those a query holding can answer (a step can answer no other: their expiry is
+        decided at the window's end whenever it is checked)."""
         self.query_held: dict[str, float] = {}
         """The last time each watched query was seen holding (now, while it holds)."""
         self.holding: set[str] = set()
@@ -126,9 +135,10 @@ class RequirementChecker:
                             st.pending.append(time)
 
     def waiting(self) -> bool:
-        """True while a ``whenever`` trigger waits for its answer."""
-        return any(st.pending and st.status is None for states in self.states.values()
-                   for st in states)
+        """True while a ``whenever`` trigger waits for an answer a query can give (a
+        trigger waiting for events is answered, or expires, in ``on_event``, or at the
+        end: a step changes nothing for it)."""
+        return any(st.pending and st.status is None for st in self._answered_by_queries)
 
     def on_step(self, time: float, holding: dict[str, bool]) -> None:
         """After an evaluation step where a watched query changed (or while a trigger
@@ -140,15 +150,15 @@ class RequirementChecker:
                 self.holding.add(q)
             else:
                 self.holding.discard(q)
-        for states in self.states.values():
-            for st in states:
-                c = st.clause
-                if not isinstance(c, vm.Whenever):
-                    continue
-                self._expire(st, time)
-                if st.pending and any(holding.get(q) for q in c.targets):
-                    window = c.window if c.window is not None else math.inf
-                    st.pending = [t for t in st.pending if time > t + window]
+        for st in self._whenever:
+            if not st.pending:  # nothing to expire or answer
+                continue
+            c = st.clause
+            assert isinstance(c, vm.Whenever)
+            self._expire(st, time)
+            if st.pending and any(holding.get(q) for q in c.targets):
+                window = c.window if c.window is not None else math.inf
+                st.pending = [t for t in st.pending if time > t + window]
 
     def verdicts(self, end_time: float, problems: SampleProblems, finished: bool,
                  why_unfinished: str = "") -> tuple[Verdict, ...]:

@@ -17,6 +17,8 @@ from types import ModuleType
 from typing import Any, cast
 
 import numpy as np
+from reactivex import Observable
+from reactivex.subject import Subject
 
 from rei.lang.vepl import model as vm
 from rei.runtime.monitor.cep import Occurrence
@@ -198,6 +200,47 @@ class QueryInputs:
         for axis, size in zip(sorted(kept), result.shape, strict=True):
             shape[axis] = size
         return np.reshape(result, shape)
+
+
+class Matches(dict[str, Any]):
+    """One step's query matches (name -> boolean array), with the inputs they were
+    evaluated on: the next step keeps the matches of queries whose inputs are the same."""
+
+    __slots__ = ("inputs",)
+
+    def __init__(self, inputs: QueryInputs) -> None:
+        super().__init__()
+        self.inputs = inputs
+
+
+def any_match(matches: Any) -> np.bool_:
+    """``matches.any()``, the same numpy boolean, for a fraction of its cost on the small
+    arrays of a step (count_nonzero is one C call, ``any`` a reduction behind a wrapper)."""
+    return np.bool_(np.count_nonzero(matches))
+
+
+def demultiplex(atomic: Observable[Occurrence], names: tuple[str, ...]
+                ) -> dict[str, Observable[Occurrence]]:
+    """One stream per query event name, fed from the stream of all query events: an event
+    goes only to its own name's subscribers, in the order they subscribed (as a filter per
+    subscriber would give, without every subscriber looking at every event)."""
+    subjects: dict[str, Subject[Occurrence]] = {n: Subject() for n in names}
+
+    def route(e: Occurrence) -> None:
+        subject = subjects.get(e.name)
+        if subject is not None:
+            subject.on_next(e)
+
+    def error(exc: Exception) -> None:
+        for subject in subjects.values():
+            subject.on_error(exc)
+
+    def completed() -> None:
+        for subject in subjects.values():
+            subject.on_completed()
+
+    atomic.subscribe(route, error, completed)
+    return dict(subjects)
 
 
 def named(name: str) -> Callable[[Occurrence], bool]:

@@ -22,6 +22,9 @@ import numpy as np
 from rei.catalogue import Box, Cylinder, Footprint, Polygon, Tile
 
 FloatArray = np.ndarray
+SCALAR_NARROW = 6
+"""Up to this many objects in the narrow phase, a box robot's exact distances are worked
+out in Python floats (numpy's per-call cost dominates on a few elements)."""
 
 
 def local_shape(footprint: Footprint, tile: float) -> tuple[np.ndarray | None, float]:
@@ -95,6 +98,19 @@ class _WorldCache:
     world: np.ndarray | None = None
     robot_inner: float | None = None
     """The robot footprint's inner radius (computed on first use)."""
+    placed: dict[int, tuple[list[float], float, float, list[tuple[float, float]]]] = field(
+        default_factory=dict)
+    """Per box object the scalar narrow phase saw: (its pose, cos and sin of its yaw, its
+    world corners), kept while the pose stays the same."""
+
+
+def _same_place(placed: tuple[list[float], float, float, list[tuple[float, float]]] | None,
+                pose: list[float]) -> bool:
+    """``pose`` is the one the box was placed at, to the bit (a signed zero too)."""
+    if placed is None:
+        return False
+    return all(a == b and math.copysign(1.0, a) == math.copysign(1.0, b)
+               for a, b in zip(placed[0], pose, strict=True))
 
 
 @dataclass(frozen=True)
@@ -119,6 +135,13 @@ class FootprintSet:
     """Half extents when the robot is a box (the fast path), else None."""
     poly_half: np.ndarray | None = None
     """(P, 2) half extents when every polygon footprint is a box, else None."""
+    narrow: tuple[tuple[int, float, float], ...] = ()
+    """Per object, for the scalar narrow phase: (row in the polygon arrays, half extents)
+    of a box, (-1, radius, 0) of a circle."""
+    robot_corners: tuple[tuple[float, float], ...] = ()
+    """The robot's polygon as tuples (the scalar narrow phase)."""
+    poly_corners: tuple[tuple[tuple[float, float], ...], ...] = ()
+    """Each polygon's local vertices as tuples, padded as ``poly_local``."""
     cache: _WorldCache = field(default_factory=_WorldCache, compare=False, repr=False)
 
     @staticmethod
@@ -156,10 +179,19 @@ class FootprintSet:
         boxes = [Box(tile, tile) if isinstance(fp, Tile) else fp for fp in objects]
         halves = [fp.half_extents() for fp in boxes if isinstance(fp, Box)]
         poly_half = np.array(halves).reshape(-1, 2) if len(halves) == len(pidx) else None
+        narrow = [(-1, 0.0, 0.0)] * len(objects)
+        for j, i in enumerate(cidx):
+            narrow[i] = (-1, crad[j], 0.0)
+        if poly_half is not None:
+            for j, i in enumerate(pidx):
+                narrow[i] = (j, float(poly_half[j, 0]), float(poly_half[j, 1]))
+        corners = () if rpoly is None else tuple((float(x), float(y)) for x, y in rpoly)
         return FootprintSet(rpoly, rrad, np.array(pidx, dtype=np.intp), padded,
                             np.array(cidx, dtype=np.intp), np.array(crad), bound, robot_bound,
                             len(objects), inner_radius=inner, robot_half=robot_half,
-                            poly_half=poly_half)
+                            poly_half=poly_half, narrow=tuple(narrow), robot_corners=corners,
+                            poly_corners=tuple(tuple((float(x), float(y)) for x, y in p)
+                                               for p in padded))
 
     def nearest(self, distance: np.ndarray, exact: np.ndarray, group: np.ndarray,
                 robot_pose: tuple[float, float, float], poses: np.ndarray) -> float:
@@ -191,15 +223,24 @@ class FootprintSet:
         if self.count == 0:
             return np.empty(0)
         rx, ry, _ = robot_pose
-        out = np.hypot(poses[:, 0] - rx, poses[:, 1] - ry)
+        rel = poses[:, :2] - (rx, ry)
+        out = np.hypot(rel[:, 0], rel[:, 1])
         out -= self.bound_radius
         out -= self.robot_bound
         return self.refine(out, out <= cutoff, robot_pose, poses)
 
     def refine(self, out: np.ndarray, wanted: np.ndarray,
-               robot_pose: tuple[float, float, float], poses: np.ndarray) -> np.ndarray:
-        """Exact distances into ``out`` for the objects in the boolean mask ``wanted``."""
-        if not wanted.any():
+               robot_pose: tuple[float, float, float], poses: np.ndarray,
+               scalar_limit: int = SCALAR_NARROW) -> np.ndarray:
+        """Exact distances into ``out`` for the objects in the boolean mask ``wanted`` (up
+        to ``scalar_limit`` of them in Python floats when the robot and objects are boxes
+        and circles: the same bits either way)."""
+        if self.robot_half is not None and self.poly_half is not None:
+            which = np.flatnonzero(wanted)
+            if len(which) <= scalar_limit:
+                return self._scalar_boxes(out, which.tolist(), robot_pose, poses) \
+                    if len(which) else out
+        elif not wanted.any():
             return out
         rx, ry, ryaw = robot_pose
         robot_world = None
@@ -224,6 +265,91 @@ class FootprintSet:
                     out[near] = self._boxes(robot_pose, near, sel, poses, world)
                 else:
                     out[near] = self._to_polygons(robot_world, (rx, ry), world)
+        return out
+
+    def _scalar_boxes(self, out: np.ndarray, which: list[int],
+                      robot_pose: tuple[float, float, float], poses: np.ndarray) -> np.ndarray:
+        """``_boxes`` and ``_to_circles`` (box robot, box and circle objects) for a few
+        objects, in Python floats: the same operations in the same order, so the same
+        bits (IEEE arithmetic, comparisons, abs, min and max are exact in both; the
+        hypotenuses and the objects' cos/sin still come from numpy), without the fixed
+        cost of ~40 numpy calls on arrays of a few elements. A box's world corners are
+        kept while it stands still (most objects, most samples)."""
+        assert self.robot_half is not None and self.poly_half is not None
+        hx, hy = self.robot_half
+        rx, ry, ryaw = robot_pose
+        c, s = math.cos(ryaw), math.sin(ryaw)
+        rows = poses[which].tolist()
+        placed = self.cache.placed
+        moved = [k for k, i in enumerate(which) if self.narrow[i][0] >= 0
+                 and not _same_place(placed.get(i), rows[k])]
+        if moved:
+            # placed as _transform places them (numpy's cos and sin, the same order)
+            yaws = [rows[k][2] for k in moved]
+            for k, oc, os_ in zip(moved, np.cos(yaws).tolist(), np.sin(yaws).tolist(),
+                                  strict=True):
+                px, py, _ = rows[k]
+                placed[which[k]] = (rows[k], oc, os_, [
+                    (oc * x - os_ * y + px, os_ * x + oc * y + py)
+                    for x, y in self.poly_corners[self.narrow[which[k]][0]]])
+        robot_world = [(c * x - s * y + rx, s * x + c * y + ry) for x, y in self.robot_corners]
+        legs_x: list[float] = []
+        legs_y: list[float] = []
+        # objects whose value needs hypotenuses: (index, legs from, legs to, distances of
+        # the inside points, a circle's radius or -1 for a box)
+        pending: list[tuple[int, int, int, list[float], float]] = []
+        for k, i in enumerate(which):
+            row, ax, ay = self.narrow[i]
+            px, py, _ = rows[k]
+            if row < 0:  # a circle of radius ax against the robot's box
+                relx, rely = px - rx, py - ry
+                dx = abs(c * relx + s * rely) - hx
+                dy = abs(c * rely - s * relx) - hy
+                if dx < 0 and dy < 0:
+                    out[i] = -min(-dx, -dy) - ax
+                else:
+                    pending.append((i, len(legs_x), len(legs_x) + 1, [], ax))
+                    legs_x.append(max(dx, 0.0))
+                    legs_y.append(max(dy, 0.0))
+                continue
+            _, oc, os_, world = placed[i]
+            lx: list[float] = []  # the box's corners in the robot's frame
+            ly: list[float] = []
+            for wx, wy in world:
+                relx, rely = wx - rx, wy - ry
+                lx.append(c * relx + s * rely)
+                ly.append(c * rely - s * relx)
+            ox: list[float] = []  # the robot's corners in the box's frame
+            oy: list[float] = []
+            for wx, wy in robot_world:
+                qx, qy = wx - px, wy - py
+                ox.append(oc * qx + os_ * qy)
+                oy.append(oc * qy - os_ * qx)
+            separated = (min(lx) >= hx or max(lx) <= -hx or min(ly) >= hy or max(ly) <= -hy
+                         or min(ox) >= ax or max(ox) <= -ax or min(oy) >= ay
+                         or max(oy) <= -ay)
+            inner: list[float] = []
+            start = len(legs_x)
+            for xs, ys, bx, by in ((lx, ly, hx, hy), (ox, oy, ax, ay)):
+                for x, y in zip(xs, ys, strict=True):
+                    dx = abs(x) - bx
+                    dy = abs(y) - by
+                    if dx < 0 and dy < 0:
+                        inner.append(min(-dx, -dy))
+                    elif separated:
+                        legs_x.append(max(dx, 0.0))
+                        legs_y.append(max(dy, 0.0))
+            if separated:
+                pending.append((i, start, len(legs_x), inner, -1.0))
+            else:
+                out[i] = -max(inner, default=0.0)
+        if pending:
+            legs = np.hypot(legs_x, legs_y).tolist()
+            for i, start, end, inner, radius in pending:
+                if radius >= 0:
+                    out[i] = legs[start] - radius
+                else:
+                    out[i] = min(inner + legs[start:end])
         return out
 
     def _world(self, poses: np.ndarray) -> np.ndarray:
@@ -294,34 +420,43 @@ class FootprintSet:
     def _boxes(self, robot_pose: tuple[float, float, float], near: np.ndarray,
                sel: np.ndarray, poses: np.ndarray, world: np.ndarray) -> np.ndarray:
         """The same distances as ``_to_polygons`` for a box robot and box objects, computed
-        in each box's own frame (fewer operations: the hot path of rooms of walls)."""
+        in each box's own frame (fewer operations: the hot path of rooms of walls).
+
+        Both directions (object corners in the robot's frame, robot corners in each
+        object's frame) go through one (P, 2, 4) array, so each step is one numpy call for
+        both: the same arithmetic per element as two separate passes, half the calls."""
         assert self.robot_half is not None and self.poly_half is not None
         hx, hy = self.robot_half
         rx, ry, ryaw = robot_pose
         c, s = math.cos(ryaw), math.sin(ryaw)
-        # object corners in the robot's frame
-        relx, rely = world[..., 0] - rx, world[..., 1] - ry
-        lx, ly = c * relx + s * rely, c * rely - s * relx
-        v1, in1 = _box_distance(lx, ly, hx, hy)
-        # robot corners in each object's frame
         corners = self.robot_polygon
         assert corners is not None
+        n = len(near)
+        # [:, 0]: the object's corners in the robot's frame; [:, 1]: the robot's corners in
+        # the object's frame (every footprint is a box here: four corners each)
+        x = np.empty((n, 2, 4))
+        y = np.empty_like(x)
+        relx, rely = world[..., 0] - rx, world[..., 1] - ry
+        x[:, 0] = c * relx + s * rely
+        y[:, 0] = c * rely - s * relx
         wx = c * corners[:, 0] - s * corners[:, 1] + rx
         wy = s * corners[:, 0] + c * corners[:, 1] + ry
         p = poses[near]
         oc = np.cos(p[:, 2:3])
         os_ = np.sin(p[:, 2:3])
         qx, qy = wx[None, :] - p[:, 0:1], wy[None, :] - p[:, 1:2]
-        ox, oy = oc * qx + os_ * qy, oc * qy - os_ * qx
-        half = self.poly_half[sel]
-        v2, in2 = _box_distance(ox, oy, half[:, 0:1], half[:, 1:2])
-        boundary = np.minimum(v1.min(axis=1), v2.min(axis=1))
-        separated = (lx.min(axis=1) >= hx) | (lx.max(axis=1) <= -hx) | (
-            ly.min(axis=1) >= hy) | (ly.max(axis=1) <= -hy) | (
-            ox.min(axis=1) >= half[:, 0]) | (ox.max(axis=1) <= -half[:, 0]) | (
-            oy.min(axis=1) >= half[:, 1]) | (oy.max(axis=1) <= -half[:, 1])
-        depth = np.maximum(np.where(in1, v1, 0.0).max(axis=1),
-                           np.where(in2, v2, 0.0).max(axis=1))
+        x[:, 1] = oc * qx + os_ * qy
+        y[:, 1] = oc * qy - os_ * qx
+        half = np.empty((n, 2, 2))
+        half[:, 0] = (hx, hy)
+        half[:, 1] = self.poly_half[sel]
+        hxs, hys = half[..., 0:1], half[..., 1:2]
+        v, inside = _box_distance(x, y, hxs, hys)
+        boundary = v.min(axis=(1, 2))
+        separated = ((x.min(axis=2) >= hxs[..., 0]) | (x.max(axis=2) <= -hxs[..., 0])
+                     | (y.min(axis=2) >= hys[..., 0]) | (y.max(axis=2) <= -hys[..., 0])
+                     ).any(axis=1)
+        depth = np.where(inside, v, 0.0).max(axis=(1, 2))
         return cast(np.ndarray, np.where(separated, boundary, -depth))
 
 

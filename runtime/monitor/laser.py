@@ -10,6 +10,7 @@ must never import the simulator or keep module-level state.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -79,10 +80,10 @@ def clearance(scan: LaserScan, edges: np.ndarray) -> float:
     """``min_i (range_i - edge_i)`` over the beams that hit something (a range below
     range_max); ``range_max`` when nothing was hit, as ``laser_min`` reads then."""
     ranges = np.asarray(scan.ranges, dtype=np.float64)
-    hit = ranges < scan.range_max  # also drops NaN beams: NaN compares false
-    if not bool(hit.any()):
-        return float(scan.range_max)
-    return float((ranges[hit] - edges[hit]).min())
+    # NaN beams compare false: no hit (NaN and inf arithmetic raise no warning); a hit's
+    # clearance is finite, so inf means none
+    nearest = float(np.where(ranges < scan.range_max, ranges - edges, np.inf).min())
+    return float(scan.range_max) if nearest == math.inf else nearest
 
 
 class BeamEdges:

@@ -12,10 +12,9 @@ samples are counted, never modelled. This module must never import the simulator
 
 from __future__ import annotations
 
-import functools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-from functools import partial
 
 import numpy as np
 
@@ -41,6 +40,9 @@ APPROACH_LOOKAHEAD = 0.05
 """s: the commanded motion is projected this far ahead to see whether it closes in."""
 MOVING = 0.05
 """m/s: above this ground-truth speed the robot counts as moving (personal space)."""
+FLOOR_MARGIN = 1e-5
+"""m: a robot this far inside the tile it stood on at the last sample is still on it (the
+floors of a grid are 1e-6 m from it at most, so no other tile can claim the point)."""
 
 
 @dataclass
@@ -93,10 +95,19 @@ class RuntimeModel:
         self.kind_masks = masks
         self.human_mask = masks.get("human", np.zeros(len(header.objects), dtype=bool))
         self._any_human = bool(self.human_mask.any())
+        self._humans = np.flatnonzero(self.human_mask)
+        self._no_approach = np.zeros(len(header.objects))
+        self._no_approach.setflags(write=False)  # shared by every sample nothing approaches
         self.floor_names = tuple(f[0] for f in header.floors)
         self._floor_xy = np.array([(f[1], f[2]) for f in header.floors], dtype=float).reshape(
             -1, 2)
         self.floors = FloorMap(self._floor_xy, header.tile_size)
+        self._floor_centres = [(float(fx), float(fy)) for fx, fy in self._floor_xy]
+        self._floor_masks: dict[int, np.ndarray] = {}
+        """The robot-floor mask of each floor index (-1: none), shared and read-only."""
+        self._floor_last = -1
+        self._floors_disjoint = self.floors.on_grid and len(
+            {(int(i), int(j)) for i, j in self.floors.cells}) == len(self.floor_names)
         self.no_floors = np.full(len(header.objects), -1, dtype=np.int64)
         self.inradius = self.footprints.robot_inradius()
         self.beam_edges = BeamEdges(header.robot.footprint, header.laser_mount)
@@ -154,11 +165,11 @@ class RuntimeModel:
         """How fast the robot's own commanded motion (as the motor executes it: clipped to
         the limits) closes the footprint distance to each near object, m/s. A body that
         moves into a robot standing still gets 0: the contact is not the robot's doing."""
-        out = np.zeros(len(distance))
-        near = distance < APPROACH_RANGE
         linear, angular = s.belief.cmd
-        if not near.any() or (linear == 0.0 and angular == 0.0):
-            return out
+        near = distance < APPROACH_RANGE
+        if (linear == 0.0 and angular == 0.0) or not np.count_nonzero(near):
+            return self._no_approach
+        out = np.zeros(len(distance))
         v = min(max(linear, -self.speed_limit), self.speed_limit)
         w = min(max(angular, -self.turn_limit), self.turn_limit)
         x, y, yaw = s.robot_pose
@@ -189,11 +200,11 @@ class RuntimeModel:
             self.laser_clearance = clearance(scan, self.beam_edges.of(scan))
         ox, oy, _ = s.belief.odom
         return QueryInputs(
-            distance, self.kind_masks, self._robot_floor(x, y), self.task_codes.copy(),
+            distance, self.kind_masks, self._robot_floor(x, y), self.task_codes,
             float(s.belief.laser_min), self.laser_clearance, speed,
             s.time, math.hypot(ox - x, oy - y), self.inradius, self.circumradius,
             self.mission_state, NAV_CODE.get(s.belief.nav_state.value, 0),
-            approach=approach, task_failure=self.task_failures.copy(),
+            approach=approach, task_failure=self.task_failures,
             cmd_speed=abs(s.belief.cmd[0]), cmd_turn=abs(s.belief.cmd[1]),
             turn_rate=abs(s.robot_twist[2]), yaw_rate=s.robot_twist[2], yaw=s.robot_pose[2],
             # the scenario's facts, constant through the run
@@ -201,14 +212,14 @@ class RuntimeModel:
             dynamic_objects=self.dynamic_objects, cycles=self.cycles,
             headed_goals=self.headed_goals, goals=self.goals,
             neighbouring_goals=self.neighbouring_goals,
-            object_floors=functools.cache(partial(self.floors.of, np.asarray(s.poses)[:, :2])),
+            object_floors=_Once(self.floors.of, s.poses),
             goal_floor=self.goal_floor,
             adjacency=self.floor_adjacent)
 
     def _nearest_human(self, s: Sample, distance: np.ndarray, moving: bool) -> None:
         """Update the closest approach to a person (and, while moving, personal space). The
         exact distance is worked out once, and only when a person might beat a minimum."""
-        bound = float(distance[self.human_mask].min())
+        bound = float(np.minimum.reduce(distance.take(self._humans)))
         if bound >= self.min_distance_to_human and not (
                 moving and bound < self.min_distance_to_human_moving):
             return
@@ -219,14 +230,28 @@ class RuntimeModel:
             self.min_distance_to_human_moving = min(self.min_distance_to_human_moving, nearest)
 
     def _robot_floor(self, x: float, y: float) -> np.ndarray:
-        mask = np.zeros(len(self.floor_names), dtype=bool)
-        if len(mask):
-            half = self.header.tile_size / 2
+        """The floor the robot stands on, as a mask over the floors (shared, read-only)."""
+        half = self.header.tile_size / 2
+        last = self._floor_last
+        if last >= 0 and self._floors_disjoint:
+            fx, fy = self._floor_centres[last]
+            if abs(fx - x) <= half - FLOOR_MARGIN and abs(fy - y) <= half - FLOOR_MARGIN:
+                return self._floor_masks[last]  # well inside last sample's tile: still on it
+        at = -1
+        if len(self.floor_names):
             inside = (np.abs(self._floor_xy[:, 0] - x) <= half) & (
                 np.abs(self._floor_xy[:, 1] - y) <= half)
             hits = np.flatnonzero(inside)
             if len(hits):
-                mask[hits[0]] = True  # on a shared edge the first floor in header order wins
+                at = int(hits[0])  # on a shared edge the first floor in header order wins
+        self._floor_last = at
+        mask = self._floor_masks.get(at)
+        if mask is None:
+            mask = np.zeros(len(self.floor_names), dtype=bool)
+            if at >= 0:
+                mask[at] = True
+            mask.setflags(write=False)
+            self._floor_masks[at] = mask
         return mask
 
     def apply(self, e: MissionEvent, w: QueryInputs) -> QueryInputs:
@@ -247,11 +272,13 @@ class RuntimeModel:
                     self.task_codes = np.append(self.task_codes, TASK_CODE["active"])
                     self.task_failures = np.append(self.task_failures, FAILURE_CODE["none"])
                 else:
+                    self._own_task_arrays()
                     record.status, record.started, record.ended = "active", e.time, None
                     record.cause, record.reason = "none", ""
                     self.task_codes[self.tasks.index(record)] = TASK_CODE["active"]
                     self.task_failures[self.tasks.index(record)] = FAILURE_CODE["none"]
             elif record is not None:
+                self._own_task_arrays()
                 record.status = "succeeded" if e.kind == "task_success" else "failed"
                 record.ended = e.time
                 self.task_codes[self.tasks.index(record)] = TASK_CODE[record.status]
@@ -261,8 +288,14 @@ class RuntimeModel:
                         else "aborted"
                     record.reason = e.reason
                     self.task_failures[self.tasks.index(record)] = FAILURE_CODE[record.cause]
-        return replace(w, task_state=self.task_codes.copy(), mission_state=self.mission_state,
-                       task_failure=self.task_failures.copy())
+        return replace(w, task_state=self.task_codes, mission_state=self.mission_state,
+                       task_failure=self.task_failures)
+
+    def _own_task_arrays(self) -> None:
+        """Copy the task arrays before changing them in place: the inputs handed out
+        share them (copy on write instead of a copy per sample)."""
+        self.task_codes = self.task_codes.copy()
+        self.task_failures = self.task_failures.copy()
 
     def describe(self, objects: tuple[str, ...]) -> str:
         """Words for the objects an event involved: a failed task adds the executor's
@@ -283,6 +316,23 @@ class RuntimeModel:
         if domain == "floor":
             return self.floor_names
         return tuple(t.name for t in self.tasks)
+
+
+class _Once:
+    """``of(poses[:, :2])``, worked out on the first call and kept (a sample's object
+    floors: most specifications never ask)."""
+
+    __slots__ = ("_of", "_poses", "_value")
+
+    def __init__(self, of: Callable[[np.ndarray], np.ndarray], poses: np.ndarray) -> None:
+        self._of = of
+        self._poses = poses
+        self._value: np.ndarray | None = None
+
+    def __call__(self) -> np.ndarray:
+        if self._value is None:
+            self._value = self._of(np.asarray(self._poses)[:, :2])
+        return self._value
 
 
 class FloorMap:
@@ -370,17 +420,25 @@ def crossings(before: list[np.ndarray], after: list[np.ndarray]) -> list[float]:
     visited)."""
     found: set[float] = set()
     for m0, m1 in zip(before, after, strict=False):
+        if np.ndim(m0) == 0 and np.ndim(m1) == 0:
+            # one number each (most margins): Python floats, the same IEEE arithmetic
+            a, b = float(m0), float(m1)
+            if math.copysign(1.0, a) != math.copysign(1.0, b) and a != b:
+                f = a / (a - b)
+                if math.isfinite(f) and 0 <= f <= 1:
+                    found.add(f)
+            continue
         m0 = np.broadcast_to(m0, np.shape(m1)) if np.shape(m0) != np.shape(m1) else m0
         if np.shape(m0) != np.shape(m1):
             continue
         flipped = np.signbit(m0) != np.signbit(m1)
         if not np.any(flipped):
             continue
-        a = np.asarray(m0)[flipped]
-        b = np.asarray(m1)[flipped]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            f = a / (a - b)
-        found.update(float(v) for v in f[np.isfinite(f) & (f >= 0) & (f <= 1)])
+        a_ = np.asarray(m0)[flipped]
+        b_ = np.asarray(m1)[flipped]
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            f_ = a_ / (a_ - b_)
+        found.update(float(v) for v in f_[np.isfinite(f_) & (f_ >= 0) & (f_ <= 1)])
     return sorted(found)
 
 
@@ -404,10 +462,9 @@ def check_sample(s: Sample, header: StreamHeader) -> str | None:
             return "malformed"
         # NaN and +inf ranges are beams without a return (not counted); -inf is nonsense
         if not all(map(math.isfinite, (scan.angle_min, scan.angle_increment, scan.range_max))) \
-                or bool(np.isneginf(ranges).any()):
+                or np.count_nonzero(ranges == -math.inf):
             return "non_finite"
-    # x * 0 is 0 for every finite x and NaN for inf and NaN: one reduction per array
-    with np.errstate(invalid="ignore"):
-        if (poses * 0.0).sum() != 0.0 or (twists * 0.0).sum() != 0.0:
-            return "non_finite"
+    finite = np.logical_and.reduce  # the ufunc itself: no wrapper, no warnings to silence
+    if not (finite(np.isfinite(poses), axis=None) and finite(np.isfinite(twists), axis=None)):
+        return "non_finite"
     return None

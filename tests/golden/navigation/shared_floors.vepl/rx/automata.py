@@ -32,12 +32,14 @@ from rei.lang.vepl.model import (  # noqa: F401  (the records the pattern data b
     Whenever,
 )
 from rei.runtime.monitor.automata import (
+    Matches,
     QueryEventSpec,
     QueryInputs,
     QuerySpec,
     RequirementSpec,
     SignalSpec,
-    named,
+    any_match,
+    demultiplex,
     raise_signal,
 )
 from rei.runtime.monitor.cep import Occurrence, match_pattern
@@ -93,8 +95,11 @@ def query_humanNextToRobot(w: QueryInputs, q: dict[str, Any], prev: dict[str, An
 
 
 def evaluate_queries(w: QueryInputs, prev: dict[str, Any]) -> dict[str, Any]:
-    """Every query's matches: a boolean array over its domain, or a boolean."""
-    q: dict[str, Any] = {}
+    """Every query's matches: a boolean array over its domain, or a boolean. A query that
+    reads only inputs which stay the same objects over many samples (task and mission
+    states, the scenario's facts, the laser clearance between scans) keeps the previous
+    step's matches while they are the same."""
+    q = Matches(w)
     q['humanOnRobotFloor'] = query_humanOnRobotFloor(w, q, prev)
     q['objectOnGoalFloor'] = query_objectOnGoalFloor(w, q, prev)
     q['humanOnFloor'] = query_humanOnFloor(w, q, prev)
@@ -133,10 +138,11 @@ PATTERNS = {
 def build_automata(atomic: Observable[Occurrence], scheduler: VirtualTimeScheduler
                    ) -> dict[str, Observable[Occurrence]]:
     """Every event's stream, from the stream of query events; time only via ``scheduler``."""
-    events: dict[str, Observable[Occurrence]] = {}
-    events['humanJoinsRobot'] = atomic.pipe(ops.filter(named('humanJoinsRobot')))
-    events['goalTaken'] = atomic.pipe(ops.filter(named('goalTaken')))
-    events['humanAlongside'] = atomic.pipe(ops.filter(named('humanAlongside')))
+    events: dict[str, Observable[Occurrence]] = demultiplex(atomic, (
+        'humanJoinsRobot',
+        'goalTaken',
+        'humanAlongside',
+    ))
     return events
 
 
