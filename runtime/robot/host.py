@@ -9,7 +9,8 @@ thread that started it, no file descriptor but its two pipe ends and stderr, its
 folder a fresh temporary one) and talks to it only through messages:
 
 * requests (simulation -> host) are pickles, length-prefixed: the simulation trusts its own
-  side;
+  side; a step's scan is sent once (the laser is slower than the control loop): the host
+  keeps the controller's read-only copy for the next steps that carry the same scan;
 * answers (host -> simulation) are one JSON line each, never a pickle (unpickling would let
   the controller run code in the simulation): plain numbers, strings and bools, decoded with
   NaN and Infinity refused, at most ``MAX_ANSWER`` bytes, then checked again by
@@ -55,7 +56,7 @@ from dataclasses import replace
 from typing import IO, Any, BinaryIO, TypeVar
 
 from rei.runtime.errors import RunError
-from rei.runtime.messages import NavState
+from rei.runtime.messages import LaserScan, NavState
 from rei.runtime.processes import start_child, stop_child
 from rei.runtime.robot.protocol import (
     ContractViolation,
@@ -168,6 +169,8 @@ class HostedController:
         """The controller's feedback as of its last state-changing call (None: unknown)."""
         self._pending = False
         """Whether the host sends a feedback line before the next request's answer."""
+        self._scan: LaserScan | None = None
+        """The scan of the last step sent: the host keeps its copy for the next steps."""
         self._home = tempfile.TemporaryDirectory(prefix="rei-controller-")
         self._process: subprocess.Popen[bytes] = start_child(
             [sys.executable, "-c", "from rei.runtime.robot.host import main; main()"],
@@ -264,8 +267,13 @@ class HostedController:
         return self._feedback
 
     def step(self, observation: Observation) -> VelocityCommand:
+        scan = observation.scan
+        if scan is not None and scan is self._scan:  # the host has it: not sent again
+            request: tuple[Any, ...] = (replace(observation, scan=None), True)
+        else:
+            request, self._scan = (observation, False), scan
         return self._checked("step", command_of, checked_command,
-                             self._call("step", "step", observation))
+                             self._call("step", "step", *request))
 
     def close(self) -> None:
         """Kill the host's process group and reap it (again: nothing happens)."""
@@ -431,8 +439,6 @@ def _stop(process: subprocess.Popen[bytes], home: tempfile.TemporaryDirectory[st
 
 def _answer_of(what: str, controller: Any, args: tuple[Any, ...]) -> dict[str, Any]:
     """Call the controller; its answer as a JSON-ready object (never raises)."""
-    if what == "step":  # the controller's own read-only copy of the scan, as in-process
-        args = (replace(args[0], scan=read_only_scan(args[0].scan)),)
     try:
         value = getattr(controller, what)(*args)
     except BaseException as exc:  # noqa: BLE001  (KeyboardInterrupt and SystemExit too)
@@ -470,6 +476,8 @@ def serve(requests: BinaryIO, answers: BinaryIO) -> None:
     from rei.runtime.robot.select import load_controller  # noqa: PLC0415
 
     controller: Any = None
+    scan: LaserScan | None = None
+    """The controller's own read-only copy of the last scan, as in-process: one per scan."""
     while True:
         head = _read_exactly(requests, _LENGTH.size)
         if head is None:
@@ -485,6 +493,11 @@ def serve(requests: BinaryIO, answers: BinaryIO) -> None:
             except RunError as exc:
                 answer = {"error": str(exc)}
         else:
+            if op == "step":  # (observation, whether its scan is the last step's)
+                observation, same = args
+                if not same:
+                    scan = read_only_scan(observation.scan)
+                args = (replace(observation, scan=scan),)
             answer = _answer_of(op, controller, args)
         answers.write(json.dumps(answer, allow_nan=False).encode("ascii") + b"\n")
         answers.flush()

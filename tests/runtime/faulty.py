@@ -332,6 +332,24 @@ class Progressing(StopsAtTwenty):
                             f"goal {self.goals}, step {self.calls}")
 
 
+class ScanWitness(StopsAtTwenty):
+    """Says in its feedback how many scan objects it was handed and what the last one held."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.scans: list[LaserScan] = []
+
+    def step(self, observation: Observation) -> VelocityCommand:
+        if observation.scan is not None and all(observation.scan is not s for s in self.scans):
+            self.scans.append(observation.scan)
+        return super().step(observation)
+
+    def feedback(self) -> GoalFeedback:
+        fb = self.tracker.feedback()
+        last = self.scans[-1].ranges.tolist() if self.scans else None
+        return GoalFeedback(fb.state, fb.goal, None, f"{len(self.scans)} {last}")
+
+
 class KillsTheSimulation(_Base):
     """Kills the process that runs the simulation (its host's parent): only the supervisor
     can report it. A deliberate attack, which running as the same OS user allows."""

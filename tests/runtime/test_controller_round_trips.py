@@ -15,10 +15,12 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 
 import tests.runtime.faulty as faulty
 from rei.runtime.collector import load_monitor_config
+from rei.runtime.messages import LaserScan
 from rei.runtime.robot import GoalFeedback, NavGoal, Observation
 from rei.runtime.robot.host import HostedController
 from rei.runtime.robot.watchdog import ControllerFault, GuardedController
@@ -205,3 +207,34 @@ def test_a_feedback_nobody_asked_for_is_no_fault_unless_it_hangs(where: str) -> 
                     controller.send_goal(OTHER)
         finally:
             controller.close()
+
+
+def test_a_scan_goes_to_the_robots_process_once_and_it_keeps_one_copy_per_scan() -> None:
+    """The laser is slower than the control loop: the steps between two scans carry the same
+    scan object, which the host keeps (one read-only copy per scan, as in-process)."""
+    first = LaserScan(0.0, 0.5, 0.1, 8.0, np.array([1.0, 2.0]))
+    second = LaserScan(0.0, 0.5, 0.1, 8.0, np.array([3.0, 4.0]))
+    twin = LaserScan(0.0, 0.5, 0.1, 8.0, np.array([3.0, 4.0]))  # equal, another object
+    host = CountingHost("tests.runtime.faulty:ScanWitness", str(REPO), timeout=30.0)
+    sizes: list[int] = []
+    original = host._send
+
+    def send(data: bytes, deadline: float | None) -> bool:
+        sizes.append(len(data))
+        return original(data, deadline)
+
+    host._send = send  # type: ignore[method-assign]
+    try:
+        host.reset(None)  # type: ignore[arg-type]
+        host.send_goal(GOAL)
+        messages = []
+        for t, scan in enumerate((None, first, first, second, second, twin, first)):
+            host.step(Observation(0.1 * t, (0.0, 0.0, 0.0), (0.0, 0.0), scan))
+            messages.append(host.feedback().message)
+    finally:
+        host.close()
+    assert messages == ["0 None", "1 [1.0, 2.0]", "1 [1.0, 2.0]", "2 [3.0, 4.0]",
+                        "2 [3.0, 4.0]", "3 [3.0, 4.0]", "4 [1.0, 2.0]"]
+    steps = sizes[2:]
+    assert steps[2] < steps[1] and steps[4] < steps[3]  # the same scan: not sent again
+    assert steps[5] == steps[3] and steps[6] == steps[1]  # another object: sent
