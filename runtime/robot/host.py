@@ -476,8 +476,7 @@ def serve(requests: BinaryIO, answers: BinaryIO) -> None:
     from rei.runtime.robot.select import load_controller  # noqa: PLC0415
 
     controller: Any = None
-    scan: LaserScan | None = None
-    """The controller's own read-only copy of the last scan, as in-process: one per scan."""
+    scan: LaserScan | None = None  # the controller's read-only copy of the last scan
     while True:
         head = _read_exactly(requests, _LENGTH.size)
         if head is None:
