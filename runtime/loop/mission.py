@@ -6,6 +6,11 @@ robot's true pose, and publishes the events and the navigation state; when the m
 finished it ends the run. In the last tick the run may reach (its time limit, or the user's
 duration limit) its deadline stage abandons the running task, after the robot's step. It
 also measures the path the robot travelled (from the true pose, every control tick).
+
+It asks for the robot's feedback twice a tick (the executor, to judge the running task; then
+the state it publishes), after the robot's last step and before its next: between them only
+the executor's own ``cancel_goal`` / ``send_goal`` can change the controller, so the robot
+answers both from one computation made after its step or goal (``rei.runtime.robot.host``).
 """
 
 from __future__ import annotations

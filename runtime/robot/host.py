@@ -9,12 +9,23 @@ thread that started it, no file descriptor but its two pipe ends and stderr, its
 folder a fresh temporary one) and talks to it only through messages:
 
 * requests (simulation -> host) are pickles, length-prefixed: the simulation trusts its own
-  side;
+  side; a step's scan is sent once (the laser is slower than the control loop): the host
+  keeps the controller's read-only copy for the next steps that carry the same scan;
 * answers (host -> simulation) are one JSON line each, never a pickle (unpickling would let
   the controller run code in the simulation): plain numbers, strings and bools, decoded with
   NaN and Infinity refused, at most ``MAX_ANSWER`` bytes, then checked again by
   ``checked_command`` / ``checked_feedback`` as an in-process answer would be. The host's
   ``print`` goes to stderr, so a chatty controller cannot break the framing.
+
+One round trip per control tick: the host answers ``step`` and ``send_goal`` (when they
+return normally), then calls the controller's ``feedback()`` itself and sends its answer as a
+second line (``FEEDBACK_AFTER``). ``feedback()`` on this side reads that line when it is
+asked for, and keeps the feedback until the next call that can change the controller's state
+(``reset``, ``send_goal``, ``cancel_goal``, ``step``); only when it holds none does it ask
+the host. This relies on the ``Controller`` contract that ``feedback()`` is a pure function of
+the controller's state. A feedback line nobody asked for before the next request is read and
+dropped: what it says is no fault (no feedback was asked for), but a host that does not
+finish it within the watchdog, dies or floods the pipe meanwhile is, named ``feedback()``.
 
 Each answer is awaited at most ``timeout`` wall seconds (select on the pipe): a hang, even in
 C holding the interpreter lock, stalls only the host, and the fault names the call. A host
@@ -45,7 +56,7 @@ from dataclasses import replace
 from typing import IO, Any, BinaryIO, TypeVar
 
 from rei.runtime.errors import RunError
-from rei.runtime.messages import NavState
+from rei.runtime.messages import LaserScan, NavState
 from rei.runtime.processes import start_child, stop_child
 from rei.runtime.robot.protocol import (
     ContractViolation,
@@ -72,6 +83,9 @@ MAX_REASON = 2000
 _ANSWERS = {"load": ("ok", "error"), "step": ("ok", "violation"),
             "feedback": ("ok", "violation")}
 """The keys an answer to each request may have besides "raised" (other requests: "ok": null)."""
+
+FEEDBACK_AFTER = frozenset({"step", "send_goal"})
+"""Requests after whose normal answer the host sends the controller's feedback as well."""
 
 _LENGTH = struct.Struct("!I")
 """The length prefix of a request."""
@@ -151,6 +165,12 @@ class HostedController:
         self.spec = spec
         self._broken: str | None = None
         self._buffer = b""
+        self._feedback: GoalFeedback | None = None
+        """The controller's feedback as of its last state-changing call (None: unknown)."""
+        self._pending = False
+        """Whether the host sends a feedback line before the next request's answer."""
+        self._scan: LaserScan | None = None
+        """The scan of the last step sent: the host keeps its copy for the next steps."""
         self._home = tempfile.TemporaryDirectory(prefix="rei-controller-")
         self._process: subprocess.Popen[bytes] = start_child(
             [sys.executable, "-c", "from rei.runtime.robot.host import main; main()"],
@@ -233,10 +253,27 @@ class HostedController:
         self._call("cancel_goal", "cancel_goal")
 
     def feedback(self) -> GoalFeedback:
-        return self._checked("feedback", feedback_of, checked_feedback)
+        """The feedback the host sent after the last step or goal, else asked for; kept
+        until the next call that can change the controller's state."""
+        if self._broken is not None:
+            raise ControllerFault(self._broken)
+        if self._feedback is None:
+            if self._pending:
+                self._pending = False
+                answer = self._answer("feedback", "feedback", self._deadline())
+            else:
+                answer = self._call("feedback", "feedback")
+            self._feedback = self._checked("feedback", feedback_of, checked_feedback, answer)
+        return self._feedback
 
     def step(self, observation: Observation) -> VelocityCommand:
-        return self._checked("step", command_of, checked_command, observation)
+        scan = observation.scan
+        if scan is not None and scan is self._scan:  # the host has it: not sent again
+            request: tuple[Any, ...] = (replace(observation, scan=None), True)
+        else:
+            request, self._scan = (observation, False), scan
+        return self._checked("step", command_of, checked_command,
+                             self._call("step", "step", *request))
 
     def close(self) -> None:
         """Kill the host's process group and reap it (again: nothing happens)."""
@@ -245,8 +282,8 @@ class HostedController:
     # -- messages ---------------------------------------------------------------------------
 
     def _checked(self, what: str, decode: Callable[[Any], Any],
-                 check: Callable[[Any], Answer], *args: Any) -> Answer:
-        answer = self._call(what, what, *args)
+                 check: Callable[[Any], Answer], answer: dict[str, Any]) -> Answer:
+        """The value of an answer to ``what`` (step or feedback), decoded and checked."""
         if "violation" in answer:
             reason = answer["violation"]
             non_finite = False
@@ -271,18 +308,28 @@ class HostedController:
         request = pickle.dumps((op, args), protocol=pickle.HIGHEST_PROTOCOL)
         return _LENGTH.pack(len(request)) + request
 
+    def _deadline(self) -> float | None:
+        return None if self.timeout is None else time.monotonic() + self.timeout
+
     def _call(self, what: str, op: str, *args: Any) -> dict[str, Any]:
         if self._broken is not None:
             raise ControllerFault(self._broken)
         self._loaded()
-        deadline = None if self.timeout is None else time.monotonic() + self.timeout
+        if op != "feedback":  # the controller's state may change: its feedback with it
+            self._feedback = None
         try:
+            if self._pending:  # a feedback nobody asked for: dropped, unless it hangs
+                self._pending = False
+                self._receive("feedback", self._deadline())
+            deadline = self._deadline()
             if not self._send(self._request(op, args), deadline):
                 raise self._fault(self._late(what))
         except KeyboardInterrupt:  # the user's Ctrl-C, in this process: its answer is lost
             self._fault(f"controller {what}() was interrupted by the user")
             raise
-        return self._answer(what, op, deadline)
+        answer = self._answer(what, op, deadline)
+        self._pending = op in FEEDBACK_AFTER and "ok" in answer
+        return answer
 
     def _answer(self, what: str, op: str, deadline: float | None) -> dict[str, Any]:
         """The answer to the request sent last, checked for its framing and keys."""
@@ -392,8 +439,6 @@ def _stop(process: subprocess.Popen[bytes], home: tempfile.TemporaryDirectory[st
 
 def _answer_of(what: str, controller: Any, args: tuple[Any, ...]) -> dict[str, Any]:
     """Call the controller; its answer as a JSON-ready object (never raises)."""
-    if what == "step":  # the controller's own read-only copy of the scan, as in-process
-        args = (replace(args[0], scan=read_only_scan(args[0].scan)),)
     try:
         value = getattr(controller, what)(*args)
     except BaseException as exc:  # noqa: BLE001  (KeyboardInterrupt and SystemExit too)
@@ -431,6 +476,7 @@ def serve(requests: BinaryIO, answers: BinaryIO) -> None:
     from rei.runtime.robot.select import load_controller  # noqa: PLC0415
 
     controller: Any = None
+    scan: LaserScan | None = None  # the controller's read-only copy of the last scan
     while True:
         head = _read_exactly(requests, _LENGTH.size)
         if head is None:
@@ -446,9 +492,18 @@ def serve(requests: BinaryIO, answers: BinaryIO) -> None:
             except RunError as exc:
                 answer = {"error": str(exc)}
         else:
+            if op == "step":  # (observation, whether its scan is the last step's)
+                observation, same = args
+                if not same:
+                    scan = read_only_scan(observation.scan)
+                args = (replace(observation, scan=scan),)
             answer = _answer_of(op, controller, args)
         answers.write(json.dumps(answer, allow_nan=False).encode("ascii") + b"\n")
         answers.flush()
+        if op in FEEDBACK_AFTER and "ok" in answer:  # what the next tick asks first
+            feedback = _answer_of("feedback", controller, ())
+            answers.write(json.dumps(feedback, allow_nan=False).encode("ascii") + b"\n")
+            answers.flush()
 
 
 def main() -> None:

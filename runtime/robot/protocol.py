@@ -110,7 +110,15 @@ class Observation:
 
 @runtime_checkable
 class Controller(Protocol):
-    """The robot's navigation software as REI drives it."""
+    """The robot's navigation software as REI drives it.
+
+    ``feedback()`` must not change the controller's state: it answers a pure function of
+    what ``reset``, ``send_goal``, ``cancel_goal`` and ``step`` made of the controller. REI
+    relies on it to ask once per state: the run computes the feedback right after each
+    ``step`` and ``send_goal`` and answers every ``feedback()`` until the next of those
+    calls from it (one round trip to the robot's process per control tick), so a
+    controller that counts or otherwise reacts to its feedback calls sees fewer of them.
+    """
 
     name: str
 
@@ -120,7 +128,9 @@ class Controller(Protocol):
 
     def cancel_goal(self) -> None: ...
 
-    def feedback(self) -> GoalFeedback: ...
+    def feedback(self) -> GoalFeedback:
+        """The goal's state; a pure function of the controller's state (changes nothing)."""
+        ...
 
     def step(self, observation: Observation) -> VelocityCommand: ...
 

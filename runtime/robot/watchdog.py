@@ -16,6 +16,15 @@ A KeyboardInterrupt raised in the worker is the controller's own (the user's Ctr
 the main thread), so it is a fault too. The run loop turns a fault into the outcome ``error``
 with its reason.
 
+The feedback is kept from one ``feedback()`` to the next call that can change the
+controller's state (``reset``, ``send_goal``, ``cancel_goal``, ``step``): the mission asks for
+it twice a tick, and the ``Controller`` contract makes it a pure function of that state. The
+worker thread also computes it right after a ``step`` or ``send_goal`` that returned, so the
+next tick's ``feedback()`` finds it waiting: one hand-off per control tick. Its faults are
+raised when it is asked for, as if it were computed then; one nobody asks for before the next
+call is dropped, unless it has not returned within the watchdog by then (a fault of
+``feedback()``: the worker is stuck in it).
+
 What this in-process thread cannot catch is a call that never gives the interpreter back (a
 loop in C holding the GIL) or that ends the process (``os._exit``, a signal): the main thread
 is then stopped too, so those are caught one level up, by the process that supervises the
@@ -53,6 +62,10 @@ def raised(what: str, exc: BaseException) -> str:
     return f"controller {what}() raised {type(exc).__name__}: {text}"
 
 
+_Job = tuple[Callable[..., Any], tuple[Any, ...], Callable[[], Any] | None]
+"""What the worker thread calls: a controller method, its arguments, and what to call after."""
+
+
 class ControllerFault(Exception):
     """The controller raised, hung or answered nonsense; ``str(fault)`` is the reason."""
 
@@ -67,10 +80,13 @@ class GuardedController:
         if isinstance(controller, HostedController):
             self._hosted = controller
             controller.timeout = timeout  # it waits for its own answers
-        self._jobs: queue.SimpleQueue[tuple[Callable[..., Any], tuple[Any, ...]] | None] = \
-            queue.SimpleQueue()
+        self._jobs: queue.SimpleQueue[_Job | None] = queue.SimpleQueue()
         self._answers: queue.SimpleQueue[tuple[bool, Any]] = queue.SimpleQueue()
         self._broken: str | None = None
+        self._feedback: GoalFeedback | None = None
+        """The feedback as of the controller's last state-changing call (None: unknown)."""
+        self._pending = False
+        """Whether the worker answers a feedback() of its own before the next call's."""
         self._worker: threading.Thread | None = None
         if timeout is not None and self._hosted is None:
             self._worker = threading.Thread(target=self._serve, name="rei-controller",
@@ -82,15 +98,31 @@ class GuardedController:
             job = self._jobs.get()
             if job is None:
                 return
-            fn, args = job
+            fn, args, then = job
             try:
                 self._answers.put((True, fn(*args)))
             except BaseException as exc:  # noqa: BLE001  (reported to the run, not lost)
                 self._answers.put((False, exc))
+                continue
+            if then is not None:  # the feedback the next tick asks for first
+                try:
+                    self._answers.put((True, then()))
+                except BaseException as exc:  # noqa: BLE001  (reported when asked for)
+                    self._answers.put((False, exc))
 
-    def _call(self, what: str, fn: Callable[..., Any], *args: Any) -> Any:
+    def _late(self, what: str) -> ControllerFault:
+        self._broken = (f"controller {what}() did not return within the watchdog's "
+                        f"{self.timeout:g} s")
+        return ControllerFault(self._broken)
+
+    def _call(self, what: str, fn: Callable[..., Any], *args: Any,
+              then: Callable[[], Any] | None = None) -> Any:
+        """Call ``fn`` (the controller's ``what``) under the watchdog; ``then``: what the
+        worker calls after it returned, its answer read by ``feedback()``."""
         if self._broken is not None:
             raise ControllerFault(self._broken)
+        if what != "feedback":  # the controller's state may change: its feedback with it
+            self._feedback = None
         if self._hosted is not None:  # its faults are ControllerFaults already
             return fn(*args)
         if self._worker is None:
@@ -101,16 +133,21 @@ class GuardedController:
             except BaseException as exc:  # noqa: BLE001  (SystemExit too: a fault, not an exit)
                 self._broken = raised(what, exc)
                 raise ControllerFault(self._broken) from None
-        self._jobs.put((fn, args))
+        if self._pending:  # a feedback nobody asked for: dropped, unless it hangs
+            self._pending = False
+            try:
+                self._answers.get(timeout=self.timeout)
+            except queue.Empty:
+                raise self._late("feedback") from None
+        self._jobs.put((fn, args, then))
         try:
             ok, value = self._answers.get(timeout=self.timeout)
         except queue.Empty:
-            self._broken = (f"controller {what}() did not return within the watchdog's "
-                            f"{self.timeout:g} s")
-            raise ControllerFault(self._broken) from None
+            raise self._late(what) from None
         if not ok:  # a KeyboardInterrupt here is the controller's own: a fault too
             self._broken = raised(what, value)
             raise ControllerFault(self._broken)
+        self._pending = then is not None
         return value
 
     def _violated(self, what: str, problem: ContractViolation) -> ControllerFault:
@@ -131,13 +168,37 @@ class GuardedController:
         self._call("reset", self.controller.reset, context)
 
     def send_goal(self, goal: NavGoal) -> None:
-        self._call("send_goal", self.controller.send_goal, goal)
+        self._call("send_goal", self.controller.send_goal, goal, then=self.controller.feedback)
 
     def cancel_goal(self) -> None:
         self._call("cancel_goal", self.controller.cancel_goal)
 
     def feedback(self) -> GoalFeedback:
-        answer = self._call("feedback", self.controller.feedback)
+        """The controller's feedback, kept until its next state-changing call."""
+        if self._broken is not None:
+            raise ControllerFault(self._broken)
+        if self._feedback is None:
+            answer = self._fresh_feedback()
+            # a hosted controller's answers are checked as they arrive
+            self._feedback = answer if self._hosted is not None else \
+                self._checked_feedback(answer)
+        return self._feedback
+
+    def _fresh_feedback(self) -> Any:
+        """What the controller's feedback() answers now (the worker's, if it computed it)."""
+        if not self._pending:
+            return self._call("feedback", self.controller.feedback)
+        self._pending = False
+        try:
+            ok, value = self._answers.get(timeout=self.timeout)
+        except queue.Empty:
+            raise self._late("feedback") from None
+        if not ok:
+            self._broken = raised("feedback", value)
+            raise ControllerFault(self._broken)
+        return value
+
+    def _checked_feedback(self, answer: Any) -> GoalFeedback:
         try:
             return checked_feedback(answer)
         except ContractViolation as problem:
@@ -147,7 +208,10 @@ class GuardedController:
             raise ControllerFault(self._broken) from None
 
     def step(self, observation: Observation) -> VelocityCommand:
-        answer = self._call("step", self.controller.step, observation)
+        answer = self._call("step", self.controller.step, observation,
+                            then=self.controller.feedback)
+        if self._hosted is not None:  # checked as it arrived
+            return answer  # type: ignore[no-any-return]
         try:
             return checked_command(answer)
         except ContractViolation as problem:

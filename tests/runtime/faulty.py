@@ -296,6 +296,60 @@ class AnswersHugeString(StopsAtTwenty):
         return fb
 
 
+class RaisesInFeedback(StopsAtTwenty):
+    """Its feedback raises once it has made 19 steps (asked before its 20th step)."""
+
+    def feedback(self) -> GoalFeedback:
+        if self.calls >= 19:
+            raise RuntimeError("the goal's state is lost")
+        return self.tracker.feedback()
+
+
+class HangsInFeedback(StopsAtTwenty):
+    """Its feedback sleeps forever once it has made 19 steps (asked before its 20th step)."""
+
+    def feedback(self) -> GoalFeedback:
+        if self.calls >= 19:
+            threading.Event().wait()
+        return self.tracker.feedback()
+
+
+class Progressing(StopsAtTwenty):
+    """An honest controller whose feedback changes with every step and every goal: what it
+    has done, in its distance and message (a pure function of its state, as promised)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.goals = 0
+
+    def send_goal(self, goal: NavGoal) -> None:
+        super().send_goal(goal)
+        self.goals += 1
+
+    def feedback(self) -> GoalFeedback:
+        fb = self.tracker.feedback(max(0.0, 5.0 - 0.1 * self.calls))
+        return GoalFeedback(fb.state, fb.goal, fb.distance_remaining,
+                            f"goal {self.goals}, step {self.calls}")
+
+
+class ScanWitness(StopsAtTwenty):
+    """Says in its feedback how many scan objects it was handed and what the last one held."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.scans: list[LaserScan] = []
+
+    def step(self, observation: Observation) -> VelocityCommand:
+        if observation.scan is not None and all(observation.scan is not s for s in self.scans):
+            self.scans.append(observation.scan)
+        return super().step(observation)
+
+    def feedback(self) -> GoalFeedback:
+        fb = self.tracker.feedback()
+        last = self.scans[-1].ranges.tolist() if self.scans else None
+        return GoalFeedback(fb.state, fb.goal, None, f"{len(self.scans)} {last}")
+
+
 class KillsTheSimulation(_Base):
     """Kills the process that runs the simulation (its host's parent): only the supervisor
     can report it. A deliberate attack, which running as the same OS user allows."""

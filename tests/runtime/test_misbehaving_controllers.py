@@ -73,6 +73,10 @@ MISBEHAVIOURS = [
     ("MutatesScan", "step() raised ValueError: assignment destination is read-only"),
     ("InterruptsItself", "controller step() raised KeyboardInterrupt"),
     ("AnswersHugeString", "controller feedback() sent an answer longer than 1048576 bytes"),
+    # The feedback is computed after the step, in the controller's process; its faults are
+    # still feedback()'s, reported when it is asked for (the next tick, t = 1.9 s).
+    ("RaisesInFeedback", "controller feedback() raised RuntimeError: the goal's state is lost"),
+    ("HangsInFeedback", "controller feedback() did not return within the watchdog's 0.5 s"),
     # Deliberate attacks on the simulation's process: the supervisor still reports them.
     ("KillsTheSimulation", "the simulation process was killed by signal 9 (SIGKILL) at "
                            "t≈1.9 s"),
@@ -91,6 +95,8 @@ def test_a_misbehaving_controller_is_a_run_error_with_a_summary(
     assert summary["verdict"] == "error" and summary["outcome"] == "error"
     assert reason in str(summary["reason"]), summary["reason"]
     assert summary["mission"] == "to_the_elevator" and summary["room"] == "navigation"
+    log = (tmp_path / "run.log").read_text(encoding="utf-8")
+    assert "\nt=    1.900  error: " in log  # at the 20th control tick, whatever broke
     # the result is on stdout, and it is the same reason
     assert done.stdout.splitlines()[-1].startswith("verdict: ERROR (")
     assert reason in done.stdout
