@@ -23,7 +23,10 @@ CORPUS_FILES = sorted(p for folder in (CORPUS, VEPL_CORPUS) for p in folder.iter
 # VEPL-FUNCTION (it needs a Python module), tests/runtime/test_collected_data.py VEPL-DATA (it
 # needs a mission or a trace beside the .vepl).
 COVERED_ELSEWHERE = {"INPUT-READ", "INPUT-KIND", "INPUT-EMPTY", "INPUT-SIZE", "INPUT-ENCODING",
-                     "SYNTAX-DEPTH", "INTERNAL", "VEPL-FUNCTION", "VEPL-DATA"}
+                     "SYNTAX-DEPTH", "INTERNAL", "VEPL-FUNCTION", "VEPL-DATA",
+                     # checked by `rei run` against the run's specification and --fault
+                     # options, not in one file: tests/runtime/test_fault_runs.py
+                     "FAULT-NAME", "FAULT-SIGNAL"}
 
 
 def expectation(path: Path) -> tuple[str, int]:
