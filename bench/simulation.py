@@ -162,6 +162,10 @@ def controllers(make: Callable[[str, str | None], Controller]) -> Iterator[None]
         robot_package.make_controller = saved
 
 
+def _figure(value: float | None) -> str:
+    return "n/a" if value is None else f"{value:.0f}"
+
+
 def full_mission(mission_file: Path, work: Path) -> dict[str, Any]:
     """One `rei run` of the mission, everything on, the robot in its own process."""
     hosts: list[MeteredHost] = []
@@ -176,12 +180,15 @@ def full_mission(mission_file: Path, work: Path) -> dict[str, Any]:
         # the controller's reset): a run cut after one step measures that part.
         _, cut = run_into(mission_file, work / "cut", duration=0.01)
     cpu = record.cpu_seconds + hosts[0].loop_cpu
-    steady = max(cpu - cut.cpu_seconds, 1e-9)
+    # A noisy cut run can cost about as much as a short mission's loop: then the two cannot
+    # be told apart and the figure is left out rather than shown as nonsense.
+    steady = cpu - cut.cpu_seconds if cpu - cut.cpu_seconds > 0.1 * cpu else None
     # The robot's process starts while the world is built; what is left of its start-up is
     # waited for in the loop's first call: that wait is start-up, not the loop's.
     wall = record.wall_seconds - getattr(hosts[0], "load_wait", 0.0)  # older hosts: none
     return {"record": record, "rtf": record.duration / wall,
-            "cpu_rtf": record.duration / cpu, "cpu": cpu, "steady_rtf": record.duration / steady,
+            "cpu_rtf": record.duration / cpu, "cpu": cpu,
+            "steady_rtf": record.duration / steady if steady is not None else None,
             "in_loop_setup": cut.cpu_seconds}
 
 
@@ -434,7 +441,7 @@ def main(argv: list[str] | None = None) -> int:
         ratio = f"{equal['cpu_rtf'] / peer[1]:.2f}" if peer else "n/a"
         print(f"| {name} | {bodies} | {record.outcome}, {record.measurements['collisions']} "
               f"collisions | {record.duration:.1f} | {full['rtf']:.0f} ({full['cpu_rtf']:.0f}) | "
-              f"{full['steady_rtf']:.0f} | "
+              f"{_figure(full['steady_rtf'])} | "
               f"{bare[0]:.0f} ({bare[1]:.0f}) | {full['cpu_rtf'] / bare[1]:.2f} | "
               f"{ours_ms:.3f} | {bullet_ms:.3f} | {equal['rtf']:.0f} ({equal['cpu_rtf']:.0f}) | "
               f"{peer_text} | {ratio} |", flush=True)
