@@ -211,6 +211,12 @@ def equal_rate(mission_file: Path, work: Path, laser_rate: float) -> dict[str, A
 
 COMPONENTS = (
     ("pybullet", "physics"), ("rei/runtime/world/", "physics"),
+    # the run's components (rei.runtime.loop), each under its own name
+    ("rei/runtime/loop/world", "physics"), ("rei/runtime/loop/laser", "laser"),
+    ("rei/runtime/loop/odometry", "odometry"), ("rei/runtime/loop/faults", "faults"),
+    ("rei/runtime/loop/mission", "mission"), ("rei/runtime/loop/animator", "animator"),
+    ("rei/runtime/loop/collector", "collector"), ("rei/runtime/loop/", "run loop"),
+    ("rei/runtime/faults", "faults"),
     ("rei/runtime/sensors/laser", "laser"), ("rei/runtime/sensors/odometry", "odometry"),
     ("rei/runtime/robot/host", "controller IPC"), ("rei/runtime/robot/watchdog", "run loop"),
     ("rei/runtime/robot/", "navigator"), ("rei/runtime/mission", "mission"),
