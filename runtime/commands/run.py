@@ -236,7 +236,9 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
     injected = run_faults(mission.faults, faults,
                           None if specification is None
                           else tuple(s.name for s in specification.signals),
-                          str(mission_path), str(vepl) if vepl is not None else "default.vepl")
+                          str(mission_path), str(vepl) if vepl is not None else "default.vepl",
+                          mission.time_limit if duration is None
+                          else min(duration, mission.time_limit))
     robot = make_controller(controller)
     config = RunConfig(seed=seed, physics_rate=physics_rate, duration=duration,
                        watchdog=watchdog, odom_drift=odom_drift, laser_noise=laser_noise,

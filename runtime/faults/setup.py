@@ -19,10 +19,12 @@ from rei.lang.suggest import did_you_mean
 
 def run_faults(mission: Iterable[FaultDefinition], extra: Iterable[FaultDefinition],
                signals: Sequence[str] | None, mission_file: str,
-               specification: str) -> tuple[FaultDefinition, ...]:
+               specification: str, end: float | None = None) -> tuple[FaultDefinition, ...]:
     """The mission's faults then ``extra`` (``--fault``), checked: ``signals`` are the
-    names the monitoring ``specification`` defines, None when the run is not monitored.
-    LanguageError (FAULT-NAME, FAULT-SIGNAL), located at each fault, when a check fails."""
+    names the monitoring ``specification`` defines, None when the run is not monitored;
+    ``end`` the simulated second the run stops at the latest (its time limit or duration).
+    LanguageError (FAULT-NAME, FAULT-SIGNAL, FAULT-WINDOW), located at each fault, when a
+    check fails."""
     own, added = tuple(mission), tuple(extra)
     problems: list[Diagnostic] = []
     seen: set[str] = set()
@@ -34,6 +36,12 @@ def run_faults(mission: Iterable[FaultDefinition], extra: Iterable[FaultDefiniti
                 f"twice (the mission's fault section and --fault together; name one with "
                 f"'as NAME')")))
         seen.add(fault.name)
+        start = fault.activation.start
+        if end is not None and fault.activation.signal is None and start >= end:
+            problems.append(Diagnostic(where, "FAULT-WINDOW", (
+                f"expected the fault '{fault.name}' to start before the run ends at {end:g} s "
+                f"(the time limit or --duration), found 'from {start:g}' (the fault would "
+                f"never act)")))
         for signal in (fault.activation.signal, fault.activation.stop):
             if signal is None:
                 continue

@@ -117,6 +117,7 @@ def test_a_run_without_faults_keeps_five_columns(tmp_path: Path) -> None:
      ["FAULT-SIGNAL", "--no-monitor"]),
     (["--fault", "laser_freeze", "--fault", "laser_freeze from 2"], ["FAULT-NAME", "twice"]),
     (["--fault", "laser_dropout share 2"], ["--fault", "share"]),
+    (["--fault", "laser_freeze from 5 to 6"], ["FAULT-WINDOW", "ends at 1 s", "from 5"]),
     (["--fault", "laser_dropout"], ["--fault", "expected the parameter 'share'"]),
 ])
 def test_a_fault_the_run_cannot_deliver_is_refused_before_anything_runs(
