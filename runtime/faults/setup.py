@@ -10,6 +10,7 @@ never silently run.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Sequence
 
 from rei.lang.errors import Diagnostic, LanguageError, Span
@@ -19,10 +20,12 @@ from rei.lang.suggest import did_you_mean
 
 def run_faults(mission: Iterable[FaultDefinition], extra: Iterable[FaultDefinition],
                signals: Sequence[str] | None, mission_file: str,
-               specification: str, end: float | None = None) -> tuple[FaultDefinition, ...]:
+               specification: str, end: float | None = None,
+               periods: tuple[float, float, float] | None = None) -> tuple[FaultDefinition, ...]:
     """The mission's faults then ``extra`` (``--fault``), checked: ``signals`` are the
     names the monitoring ``specification`` defines, None when the run is not monitored;
-    ``end`` the simulated second the run stops at the latest (its time limit or duration).
+    ``end`` the simulated second the run stops at the latest (its time limit or duration);
+    ``periods`` (seconds; see ``_too_short``): a window no fault call falls in is refused.
     LanguageError (FAULT-NAME, FAULT-SIGNAL, FAULT-WINDOW), located at each fault, when a
     check fails."""
     own, added = tuple(mission), tuple(extra)
@@ -42,6 +45,9 @@ def run_faults(mission: Iterable[FaultDefinition], extra: Iterable[FaultDefiniti
                 f"expected the fault '{fault.name}' to start before the run ends at {end:g} s "
                 f"(the time limit or --duration), found 'from {start:g}' (the fault would "
                 f"never act)")))
+        short = None if periods is None else _too_short(fault, periods)
+        if short is not None:
+            problems.append(Diagnostic(where, "FAULT-WINDOW", short))
         for signal in (fault.activation.signal, fault.activation.stop):
             if signal is None:
                 continue
@@ -58,3 +64,28 @@ def run_faults(mission: Iterable[FaultDefinition], extra: Iterable[FaultDefiniti
     if problems:
         raise LanguageError(problems)
     return own + added
+
+
+def _too_short(fault: FaultDefinition, periods: tuple[float, float, float]) -> str | None:
+    """Why ``fault``'s window is too short to act in, or None. ``periods``: the shortest
+    time from a sample (where a signal fires) to the next control tick after it, the control
+    tick and the scan period. The stage acts at control ticks (a scan fault once per new
+    scan, a delay every tick); a signal fired at a sample acts from the next tick after it.
+    A Poisson fault counts occurrences in continuous time: any window of it can act."""
+    if fault.kind == "laser_poisson":
+        return None
+    gap, tick, scan = periods
+    a = fault.activation
+    if a.duration is not None and a.duration <= gap + 1e-9:
+        return (f"expected 'for' longer than {gap:g} s for the fault '{fault.name}', found "
+                f"{a.duration:g} s (a signal acts from the next control tick after the sample "
+                f"it fired at, {gap:g} s later or more, so the fault would never act)")
+    per_scan = fault.channel == "scan" and fault.kind != "laser_delay"
+    period, what = (scan, "scan") if per_scan else (tick, "control tick")
+    if a.signal is None and a.end is not None:
+        first = math.ceil(a.start / period - 1e-9) * period
+        if first >= a.end - 1e-9:
+            return (f"expected the window of the fault '{fault.name}' to hold a {what} "
+                    f"(every {period:g} s), found 'from {a.start:g} to {a.end:g}' (the fault "
+                    f"would never act)")
+    return None
