@@ -25,6 +25,9 @@ from rei.lang.suggest import did_you_mean
 Channel = Literal["scan", "odometry", "command"]
 MAX_FAULT_TIME = 1e7
 """Seconds: the latest a fault window may start or end, and the longest a duration or delay."""
+MAX_NAME_LENGTH = 100
+"""Characters of a fault's name at most (as a room's names): events.csv joins the active
+faults' names into one field, which Python's csv reader refuses beyond 128 KiB."""
 MIN_PERIOD = 0.01
 """Seconds: the shortest impulse period of ``laser_poisson``. The run lists every high phase
 (timeline, samples), so a shorter one (1e-9 s) would make millions of phases a second and
@@ -228,6 +231,16 @@ def parameter_problems(kind: str, values: dict[str, float]) -> list[tuple[str | 
     return out
 
 
+def fault_name_problem(name: str) -> str | None:
+    """What is wrong with a fault's name ('expected ..., found ...'), or None."""
+    if not (name.isidentifier() and name.isascii()):
+        return f"expected a fault name (letters, digits, '_'), found '{_shown(name)}'"
+    if len(name) > MAX_NAME_LENGTH:
+        return (f"expected a fault name of at most {MAX_NAME_LENGTH} characters, found "
+                f"{len(name)} ('{_shown(name)}')")
+    return None
+
+
 def _unknown_parameter(spec: FaultKind, name: str) -> str:
     names = [p.name for p in spec.parameters]
     accepted = ", ".join(names) if names else "none"
@@ -259,9 +272,8 @@ class FaultDefinition:
             problems.append(f"{self.kind}: expected each parameter once, found "
                             f"{[n for n, _ in self.params]}")
         problems.extend(activation_problems(self.activation))
-        if self.name and not (self.name.isidentifier() and self.name.isascii()):
-            problems.append(f"expected a fault name (letters, digits, '_'), found "
-                            f"'{self.name}'")
+        if self.name and fault_name_problem(self.name) is not None:
+            problems.append(str(fault_name_problem(self.name)))
         if problems:
             where = self.span or Span.point("<fault>")
             raise LanguageError([Diagnostic(where, "FAULT-PARAM", m) for m in problems])
@@ -347,6 +359,9 @@ def link_fault_entry(entry: Any, span: Callable[[Any], Span],
             diagnostics.append(Diagnostic(where[name] if name in where else span(entry.kind),
                                           "FAULT-PARAM", message))
     activation = _activation(entry.activation, span, number, diagnostics)
+    wrong = fault_name_problem(entry.label) if entry.label else None
+    if wrong is not None:
+        diagnostics.append(Diagnostic(span(entry), "FAULT-PARAM", wrong))
     if len(diagnostics) != before or activation is None:
         return None
     return FaultDefinition(kind, tuple(values.items()), activation, entry.label or "",

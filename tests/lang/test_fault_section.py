@@ -245,3 +245,12 @@ def test_faults_that_change_nothing_or_hang_the_run_are_refused(text: str, words
     with pytest.raises(LanguageError) as err:
         parse_fault_option(text)
     assert words in str(err.value) and str(err.value).count("\n") == 0
+
+
+def test_a_fault_name_is_at_most_100_characters(tmp_path: Path) -> None:
+    """events.csv joins the active faults' names into one field: a 140,000-letter one made
+    the run's report fail to read it back (an internal error after the run)."""
+    found = problems(tmp_path, f"laser_freeze as n{'x' * 140_000}")
+    assert [(rule, line) for rule, line, _, _ in found] == [("FAULT-PARAM", 3)]
+    assert "at most 100 characters, found 140001" in found[0][3] and len(found[0][3]) < 200
+    assert parse_fault_option(f"laser_freeze as n{'x' * 99}").name == "n" + "x" * 99
