@@ -506,3 +506,13 @@ def test_activation_follows_the_signals(events: list[tuple[float, str]],
         assert tracker.active(t) == bool(expected), (t, events)
     for name, start, end in stage.timeline():
         assert name == "laser_freeze" and (end is None or end > start)
+
+
+def test_every_kind_reports_its_statistics() -> None:
+    """A laser_sector run ended in an internal error while writing its summary: the
+    statistics took the model's ``beams`` method for a counter (int() of a method)."""
+    definitions = [FaultDefinition.of("laser_sector", min_deg=-30.0, max_deg=30.0),
+                   FaultDefinition.of("laser_dropout", name="drop", share=0.5)]
+    stage = FaultPlan(definitions, seed=0)
+    assert [(s.name, s.counts) for s in stage.statistics()] == [
+        ("laser_sector", ()), ("drop", (("dropped", 0), ("beams", 0)))]
