@@ -242,7 +242,9 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
                           str(mission_path), str(vepl) if vepl is not None else "default.vepl",
                           mission.time_limit if duration is None
                           else min(duration, mission.time_limit),
-                          _fault_periods(config, monitor_config.rate, manifest.laser.rate))
+                          _fault_periods(config, monitor_config.rate, manifest.laser.rate),
+                          (-manifest.laser.fov / 2, manifest.laser.fov / manifest.laser.beams,
+                           manifest.laser.beams))
     robot = make_controller(controller)
     for stale in (out_dir / SUMMARY, out_dir / TRACE, out_dir / EVENTS, out_dir / PAGE,
                   out_dir / RECORDING):

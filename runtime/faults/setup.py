@@ -13,6 +13,8 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Sequence
 
+import numpy as np
+
 from rei.lang.errors import Diagnostic, LanguageError, Span
 from rei.lang.mission.faults import FaultDefinition
 from rei.lang.suggest import did_you_mean
@@ -21,11 +23,13 @@ from rei.lang.suggest import did_you_mean
 def run_faults(mission: Iterable[FaultDefinition], extra: Iterable[FaultDefinition],
                signals: Sequence[str] | None, mission_file: str,
                specification: str, end: float | None = None,
-               periods: tuple[float, float, float] | None = None) -> tuple[FaultDefinition, ...]:
+               periods: tuple[float, float, float] | None = None,
+               beams: tuple[float, float, int] | None = None) -> tuple[FaultDefinition, ...]:
     """The mission's faults then ``extra`` (``--fault``), checked: ``signals`` are the
     names the monitoring ``specification`` defines, None when the run is not monitored;
     ``end`` the simulated second the run stops at the latest (its time limit or duration);
-    ``periods`` (seconds; see ``_too_short``): a window no fault call falls in is refused.
+    ``periods`` (seconds; see ``_too_short``): a window no fault call falls in is refused;
+    ``beams`` the scanner's (angle_min, angle_increment, count): a sector holding none is.
     LanguageError (FAULT-NAME, FAULT-SIGNAL, FAULT-WINDOW), located at each fault, when a
     check fails."""
     own, added = tuple(mission), tuple(extra)
@@ -48,6 +52,13 @@ def run_faults(mission: Iterable[FaultDefinition], extra: Iterable[FaultDefiniti
         short = None if periods is None else _too_short(fault, periods)
         if short is not None:
             problems.append(Diagnostic(where, "FAULT-WINDOW", short))
+        if beams is not None and fault.kind == "laser_sector" and not _covers_a_beam(fault,
+                                                                                      beams):
+            low, high = fault.value("min_deg"), fault.value("max_deg")
+            problems.append(Diagnostic(where, "FAULT-PARAM", (
+                f"expected the sector of the fault '{fault.name}' to hold a beam of the "
+                f"scanner (one every {math.degrees(beams[1]):g} deg), found "
+                f"[{low:g}, {high:g}] deg between two (the fault would never act)")))
         for signal in (fault.activation.signal, fault.activation.stop):
             if signal is None:
                 continue
@@ -89,3 +100,16 @@ def _too_short(fault: FaultDefinition, periods: tuple[float, float, float]) -> s
                     f"(every {period:g} s), found 'from {a.start:g} to {a.end:g}' (the fault "
                     f"would never act)")
     return None
+
+
+def _covers_a_beam(fault: FaultDefinition, beams: tuple[float, float, int]) -> bool:
+    """Whether a ``laser_sector`` covers at least one beam of a scanner laid out as
+    ``beams``, by the model's own rule (``LaserSector.beams``)."""
+    from rei.runtime.faults.activation import ActivationTracker  # noqa: PLC0415
+    from rei.runtime.faults.models import LaserSector  # noqa: PLC0415
+    from rei.runtime.messages import LaserScan  # noqa: PLC0415
+
+    angle_min, increment, count = beams
+    probe = LaserScan(angle_min, increment, 0.0, 1.0, np.zeros(count))
+    return bool(LaserSector(fault, ActivationTracker(fault.activation),
+                            np.random.default_rng(0)).covers(probe).any())

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import csv
 import json
+import math
 import subprocess
 import sys
 from functools import partial
@@ -142,6 +143,22 @@ def test_run_faults_locates_each_problem() -> None:
     codes = sorted(d.rule for d in err.value.diagnostics)
     assert codes == ["FAULT-NAME", "FAULT-SIGNAL"]
     assert run_faults(mission, (), ("SIG_A",), "m.mission", "spec.vepl") == mission
+
+
+@pytest.mark.parametrize(("entry", "refused"), [
+    ("laser_sector min_deg 0.2 max_deg 0.8", True),  # between two beams 1 deg apart
+    ("laser_sector min_deg 10 max_deg 10", False),
+    ("laser_sector min_deg -0.5 max_deg 0.5", False),
+])
+def test_run_faults_refuses_a_sector_holding_no_beam(entry: str, refused: bool) -> None:
+    fault = (parse_fault_option(entry),)
+    check = partial(run_faults, (), fault, (), "m.mission", "spec.vepl", 100.0, None,
+                    (-math.pi, math.tau / 360, 360))
+    if refused:
+        with pytest.raises(LanguageError, match="hold a beam of the scanner"):
+            check()
+    else:
+        assert check() == fault
 
 
 @pytest.mark.parametrize(("entry", "refused"), [
