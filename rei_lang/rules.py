@@ -105,6 +105,10 @@ RULES: tuple[Rule, ...] = (
          "the monitoring specification does not define, or by any signal on a run without "
          "the monitor: it would never fire, and the fault would silently never act",
          "issue 17"),
+    Rule("FAULT-WINDOW", "mission", "`rei run` refuses a fault whose time window starts at or "
+         "after the run's end (the mission's time limit, or --duration), holds no control "
+         "tick (no scan for a scan fault), or lasts ('for') no longer than a signal takes to "
+         "act: it would silently never act", "issue 17"),
     Rule("FAULT-NAME", "mission", "`rei run` refuses two faults of one run (the mission's and "
          "--fault's) with the same name: the summary and events.csv tell faults by name",
          "issue 17"),

@@ -25,6 +25,13 @@ from rei.lang.suggest import did_you_mean
 Channel = Literal["scan", "odometry", "command"]
 MAX_FAULT_TIME = 1e7
 """Seconds: the latest a fault window may start or end, and the longest a duration or delay."""
+MAX_NAME_LENGTH = 100
+"""Characters of a fault's name at most (as a room's names): events.csv joins the active
+faults' names into one field, which Python's csv reader refuses beyond 128 KiB."""
+MIN_PERIOD = 0.01
+"""Seconds: the shortest impulse period of ``laser_poisson``. The run lists every high phase
+(timeline, samples), so a shorter one (1e-9 s) would make millions of phases a second and
+hang the run; no sensor's impulse is faster than one physics step at 100 Hz."""
 
 
 @dataclass(frozen=True)
@@ -68,13 +75,12 @@ FAULT_KINDS: tuple[FaultKind, ...] = (
                      "is high", low_open=True),
                   _p("gain", -100.0, 100.0, None, "m", "metres added to every range per "
                      "occurrence (negative: obstacles look nearer)"),
-                  _p("period", 0.0, MAX_FAULT_TIME, 1.0, "s", "the impulse's period",
-                     low_open=True),
+                  _p("period", MIN_PERIOD, MAX_FAULT_TIME, 1.0, "s", "the impulse's period"),
                   _p("width", 0.0, 1.0, 1.0, "share", "the impulse's pulse width, a share of "
                      "the period (0.01 = 1 %)", low_open=True),
                   _p("phase", 0.0, MAX_FAULT_TIME, 0.0, "s", "delay of the first pulse after "
                      "the fault becomes active"),
-              )),
+              ), nonzero_one_of=("gain",)),
     FaultKind("laser_noise", "scan",
               "Gaussian noise on every range that hit something", (
                   _p("sigma", 0.0, 10.0, None, "m", "standard deviation", low_open=True),
@@ -82,7 +88,8 @@ FAULT_KINDS: tuple[FaultKind, ...] = (
     FaultKind("laser_dropout", "scan",
               "a share of beams, drawn anew for every scan, read the maximum range (nothing "
               "seen)", (
-                  _p("share", 0.0, 1.0, None, "share", "probability that a beam is dropped"),
+                  _p("share", 0.0, 1.0, None, "share", "probability that a beam is dropped",
+                     low_open=True),
               )),
     FaultKind("laser_freeze", "scan",
               "the robot keeps getting the scan it had when the fault started (stamp "
@@ -117,7 +124,8 @@ FAULT_KINDS: tuple[FaultKind, ...] = (
     FaultKind("cmd_drop", "command",
               "a share of velocity commands is lost: the motors keep the previous command "
               "that reached them", (
-                  _p("share", 0.0, 1.0, None, "share", "probability that a command is lost"),
+                  _p("share", 0.0, 1.0, None, "share", "probability that a command is lost",
+                     low_open=True),
               )),
     FaultKind("cmd_delay", "command",
               "the motors get the command the robot asked for at least `seconds` ago (a stop "
@@ -211,13 +219,26 @@ def parameter_problems(kind: str, values: dict[str, float]) -> list[tuple[str | 
         if p.name not in values and p.default is None:
             out.append((None, f"{kind}: expected the parameter '{p.name}' ({p.doc}), found "
                        f"none"))
-    if spec.nonzero_one_of and all(values.get(n, 0.0) == 0.0 for n in spec.nonzero_one_of):
+    defaults = {p.name: p.default for p in spec.parameters}
+    given = all(n in values or defaults.get(n) is not None for n in spec.nonzero_one_of)
+    if spec.nonzero_one_of and given and all(values.get(n, 0.0) == 0.0
+                                             for n in spec.nonzero_one_of):
         out.append((None, f"{kind}: expected at least one of {', '.join(spec.nonzero_one_of)} "
-                   f"not 0, found none"))
+                   f"not 0, found none (the fault would change nothing)"))
     if kind == "laser_sector" and values.get("min_deg", 0.0) > values.get("max_deg", 0.0):
         out.append(("max_deg", f"laser_sector: expected max_deg >= min_deg "
                     f"({values['min_deg']!r}), found {values['max_deg']!r}"))
     return out
+
+
+def fault_name_problem(name: str) -> str | None:
+    """What is wrong with a fault's name ('expected ..., found ...'), or None."""
+    if not (name.isidentifier() and name.isascii()):
+        return f"expected a fault name (letters, digits, '_'), found '{_shown(name)}'"
+    if len(name) > MAX_NAME_LENGTH:
+        return (f"expected a fault name of at most {MAX_NAME_LENGTH} characters, found "
+                f"{len(name)} ('{_shown(name)}')")
+    return None
 
 
 def _unknown_parameter(spec: FaultKind, name: str) -> str:
@@ -251,9 +272,8 @@ class FaultDefinition:
             problems.append(f"{self.kind}: expected each parameter once, found "
                             f"{[n for n, _ in self.params]}")
         problems.extend(activation_problems(self.activation))
-        if self.name and not (self.name.isidentifier() and self.name.isascii()):
-            problems.append(f"expected a fault name (letters, digits, '_'), found "
-                            f"'{self.name}'")
+        if self.name and fault_name_problem(self.name) is not None:
+            problems.append(str(fault_name_problem(self.name)))
         if problems:
             where = self.span or Span.point("<fault>")
             raise LanguageError([Diagnostic(where, "FAULT-PARAM", m) for m in problems])
@@ -339,6 +359,9 @@ def link_fault_entry(entry: Any, span: Callable[[Any], Span],
             diagnostics.append(Diagnostic(where[name] if name in where else span(entry.kind),
                                           "FAULT-PARAM", message))
     activation = _activation(entry.activation, span, number, diagnostics)
+    wrong = fault_name_problem(entry.label) if entry.label else None
+    if wrong is not None:
+        diagnostics.append(Diagnostic(span(entry), "FAULT-PARAM", wrong))
     if len(diagnostics) != before or activation is None:
         return None
     return FaultDefinition(kind, tuple(values.items()), activation, entry.label or "",

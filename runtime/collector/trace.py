@@ -36,6 +36,7 @@ import numpy as np
 
 from rei.catalogue import Box, Cylinder, Footprint, Polygon, Tile
 from rei.generators.output import open_output
+from rei.lang.mission.faults import fault_name_problem
 from rei.lang.mission.model import COLLECTED_DATA, REQUIRED_DATA
 from rei.lang.source import file_kind, repeated_key
 from rei.runtime.errors import RunError
@@ -422,7 +423,10 @@ def _faults(value: Any, where: str) -> tuple[tuple[str, str], ...]:
     for i, item in enumerate(value):
         f = _Fields(item, where, f"faults[{i}]", _FAULT_KEYS, "a fault (a JSON object)")
         name = f.text("name")
-        if not name or any(name == n for n, _ in faults):
+        wrong = fault_name_problem(name)
+        if wrong is not None:  # as `rei run` names them: events.csv joins them with ';'
+            raise TraceError(f"{where}: faults[{i}].name: {wrong}")
+        if any(name == n for n, _ in faults):
             raise TraceError(f"{where}: faults[{i}].name: expected a name no other fault has, "
                              f"found {_show(name)}")
         faults.append((name, f.text("entry")))

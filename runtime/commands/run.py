@@ -43,7 +43,7 @@ from rei.runtime.results import RunSummary, judge
 if TYPE_CHECKING:
     from rei.runtime.collector import SampleSink
     from rei.runtime.evaluator.signal_log import SignalRow
-    from rei.runtime.run import RunProbe, RunRecord
+    from rei.runtime.run import RunConfig, RunProbe, RunRecord
     from rei.runtime.supervisor import RunRequest
 
 # The simulator, the monitor and the generators are imported where they are used: `rei run`
@@ -233,14 +233,19 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
         # Never judge on data the collector will not forward (a false PASS): refuse first.
         check_needs(specification, monitor_config.data, f"the mission '{mission.name}' to "
                     f"collect", "name that data in the mission's monitor block, or drop the query")
-    injected = run_faults(mission.faults, faults,
-                          None if specification is None
-                          else tuple(s.name for s in specification.signals),
-                          str(mission_path), str(vepl) if vepl is not None else "default.vepl")
-    robot = make_controller(controller)
     config = RunConfig(seed=seed, physics_rate=physics_rate, duration=duration,
                        watchdog=watchdog, odom_drift=odom_drift, laser_noise=laser_noise,
                        jitter=START_JITTER if variation else None, vary=variation)
+    injected = run_faults(mission.faults, faults,
+                          None if specification is None
+                          else tuple(s.name for s in specification.signals),
+                          str(mission_path), str(vepl) if vepl is not None else "default.vepl",
+                          mission.time_limit if duration is None
+                          else min(duration, mission.time_limit),
+                          _fault_periods(config, monitor_config.rate, manifest.laser.rate),
+                          (-manifest.laser.fov / 2, manifest.laser.fov / manifest.laser.beams,
+                           manifest.laser.beams))
+    robot = make_controller(controller)
     for stale in (out_dir / SUMMARY, out_dir / TRACE, out_dir / EVENTS, out_dir / PAGE,
                   out_dir / RECORDING):
         stale.unlink(missing_ok=True)
@@ -445,3 +450,15 @@ def print_results(summary: RunSummary, out_dir: Path, *, monitored: bool = True,
             say(f"  run page: {page}")
     say(final_line(summary, out_dir, monitored))
     return exit_code(summary, monitored)
+
+
+def _fault_periods(config: RunConfig, sample_rate: float, scan_rate: float
+                   ) -> tuple[float, float, float]:
+    """(shortest time from a sample to the next control tick after it, control tick, scan
+    period) in seconds, as ``run_faults`` checks fault windows against them. Samples and
+    ticks fall on physics steps: from a sample the next tick is gcd(steps per sample, steps
+    per tick) steps away at the least (a whole tick when every sample is on a tick)."""
+    steps = config.physics_rate
+    tick, sample = max(1, round(steps / config.control_rate)), max(1, round(steps / sample_rate))
+    gap = tick if sample % tick == 0 else math.gcd(tick, sample)
+    return gap / steps, tick / steps, 1.0 / scan_rate

@@ -215,7 +215,7 @@ class LaserSector:
         self.low, self.high = d.value("min_deg"), d.value("max_deg")
         self.distance, self.when = d.value("distance"), when
 
-    def beams(self, scan: LaserScan) -> np.ndarray:
+    def covers(self, scan: LaserScan) -> np.ndarray:
         """Which beams of ``scan`` the sector covers."""
         bearing = np.degrees(scan.angle_min + scan.angle_increment * np.arange(len(scan.ranges)))
         if self.high - self.low >= 360.0:
@@ -227,7 +227,7 @@ class LaserSector:
               ) -> tuple[LaserScan | None, float | None]:
         if not self.when.active(time):
             return scan, stamp
-        return _with_ranges(scan, np.where(self.beams(scan), self.distance, scan.ranges)), stamp
+        return _with_ranges(scan, np.where(self.covers(scan), self.distance, scan.ranges)), stamp
 
 
 def _motion(last: Pose, pose: Pose) -> tuple[float, float, float]:

@@ -128,7 +128,7 @@ class FaultPlan:
             for attribute in ("occurrences", "corrupted", "dropped", "beams", "lost", "asked",
                               "jumps"):
                 value = getattr(m, attribute, None)
-                if value is not None:
+                if isinstance(value, int):  # a counter (LaserSector.covers is a method)
                     counts.append((attribute, int(value)))
             out.append(FaultStatistics(d.name, d.kind, tuple(counts)))
         return tuple(out)

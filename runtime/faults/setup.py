@@ -10,7 +10,10 @@ never silently run.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Sequence
+
+import numpy as np
 
 from rei.lang.errors import Diagnostic, LanguageError, Span
 from rei.lang.mission.faults import FaultDefinition
@@ -19,10 +22,16 @@ from rei.lang.suggest import did_you_mean
 
 def run_faults(mission: Iterable[FaultDefinition], extra: Iterable[FaultDefinition],
                signals: Sequence[str] | None, mission_file: str,
-               specification: str) -> tuple[FaultDefinition, ...]:
+               specification: str, end: float | None = None,
+               periods: tuple[float, float, float] | None = None,
+               beams: tuple[float, float, int] | None = None) -> tuple[FaultDefinition, ...]:
     """The mission's faults then ``extra`` (``--fault``), checked: ``signals`` are the
-    names the monitoring ``specification`` defines, None when the run is not monitored.
-    LanguageError (FAULT-NAME, FAULT-SIGNAL), located at each fault, when a check fails."""
+    names the monitoring ``specification`` defines, None when the run is not monitored;
+    ``end`` the simulated second the run stops at the latest (its time limit or duration);
+    ``periods`` (seconds; see ``_too_short``): a window no fault call falls in is refused;
+    ``beams`` the scanner's (angle_min, angle_increment, count): a sector holding none is.
+    LanguageError (FAULT-NAME, FAULT-SIGNAL, FAULT-WINDOW), located at each fault, when a
+    check fails."""
     own, added = tuple(mission), tuple(extra)
     problems: list[Diagnostic] = []
     seen: set[str] = set()
@@ -34,6 +43,22 @@ def run_faults(mission: Iterable[FaultDefinition], extra: Iterable[FaultDefiniti
                 f"twice (the mission's fault section and --fault together; name one with "
                 f"'as NAME')")))
         seen.add(fault.name)
+        start = fault.activation.start
+        if end is not None and fault.activation.signal is None and start >= end:
+            problems.append(Diagnostic(where, "FAULT-WINDOW", (
+                f"expected the fault '{fault.name}' to start before the run ends at {end:g} s "
+                f"(the time limit or --duration), found 'from {start:g}' (the fault would "
+                f"never act)")))
+        short = None if periods is None else _too_short(fault, periods)
+        if short is not None:
+            problems.append(Diagnostic(where, "FAULT-WINDOW", short))
+        if beams is not None and fault.kind == "laser_sector" and not _covers_a_beam(fault,
+                                                                                      beams):
+            low, high = fault.value("min_deg"), fault.value("max_deg")
+            problems.append(Diagnostic(where, "FAULT-PARAM", (
+                f"expected the sector of the fault '{fault.name}' to hold a beam of the "
+                f"scanner (one every {math.degrees(beams[1]):g} deg), found "
+                f"[{low:g}, {high:g}] deg between two (the fault would never act)")))
         for signal in (fault.activation.signal, fault.activation.stop):
             if signal is None:
                 continue
@@ -50,3 +75,41 @@ def run_faults(mission: Iterable[FaultDefinition], extra: Iterable[FaultDefiniti
     if problems:
         raise LanguageError(problems)
     return own + added
+
+
+def _too_short(fault: FaultDefinition, periods: tuple[float, float, float]) -> str | None:
+    """Why ``fault``'s window is too short to act in, or None. ``periods``: the shortest
+    time from a sample (where a signal fires) to the next control tick after it, the control
+    tick and the scan period. The stage acts at control ticks (a scan fault once per new
+    scan, a delay every tick); a signal fired at a sample acts from the next tick after it.
+    A Poisson fault counts occurrences in continuous time: any window of it can act."""
+    if fault.kind == "laser_poisson":
+        return None
+    gap, tick, scan = periods
+    a = fault.activation
+    if a.duration is not None and a.duration <= gap + 1e-9:
+        return (f"expected 'for' longer than {gap:g} s for the fault '{fault.name}', found "
+                f"{a.duration:g} s (a signal acts from the next control tick after the sample "
+                f"it fired at, {gap:g} s later or more, so the fault would never act)")
+    per_scan = fault.channel == "scan" and fault.kind != "laser_delay"
+    period, what = (scan, "scan") if per_scan else (tick, "control tick")
+    if a.signal is None and a.end is not None:
+        first = math.ceil(a.start / period - 1e-9) * period
+        if first >= a.end - 1e-9:
+            return (f"expected the window of the fault '{fault.name}' to hold a {what} "
+                    f"(every {period:g} s), found 'from {a.start:g} to {a.end:g}' (the fault "
+                    f"would never act)")
+    return None
+
+
+def _covers_a_beam(fault: FaultDefinition, beams: tuple[float, float, int]) -> bool:
+    """Whether a ``laser_sector`` covers at least one beam of a scanner laid out as
+    ``beams``, by the model's own rule (``LaserSector.beams``)."""
+    from rei.runtime.faults.activation import ActivationTracker  # noqa: PLC0415
+    from rei.runtime.faults.models import LaserSector  # noqa: PLC0415
+    from rei.runtime.messages import LaserScan  # noqa: PLC0415
+
+    angle_min, increment, count = beams
+    probe = LaserScan(angle_min, increment, 0.0, 1.0, np.zeros(count))
+    return bool(LaserSector(fault, ActivationTracker(fault.activation),
+                            np.random.default_rng(0)).covers(probe).any())

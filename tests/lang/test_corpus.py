@@ -26,7 +26,7 @@ COVERED_ELSEWHERE = {"INPUT-READ", "INPUT-KIND", "INPUT-EMPTY", "INPUT-SIZE", "I
                      "SYNTAX-DEPTH", "INTERNAL", "VEPL-FUNCTION", "VEPL-DATA",
                      # checked by `rei run` against the run's specification and --fault
                      # options, not in one file: tests/runtime/test_fault_runs.py
-                     "FAULT-NAME", "FAULT-SIGNAL"}
+                     "FAULT-NAME", "FAULT-SIGNAL", "FAULT-WINDOW"}
 
 
 def expectation(path: Path) -> tuple[str, int]:

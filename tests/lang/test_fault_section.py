@@ -216,7 +216,7 @@ def test_fault_argument_is_an_argparse_type() -> None:
                               "laser_freeze when SIG_A for 1"])
     assert [d.kind for d in args.fault] == ["cmd_drop", "laser_freeze"]
     with pytest.raises(argparse.ArgumentError, match=r"column 10: cmd_drop share \(share\): "
-                       r"expected a number >= 0 and <= 1, found 2"):
+                       r"expected a number > 0 and <= 1, found 2"):
         parser.parse_args(["--fault", "cmd_drop share 2"])
 
 
@@ -231,3 +231,26 @@ def test_the_outline_lists_faults_among_the_goals(tmp_path: Path) -> None:
     assert [(s.name, s.kind, s.span.line) for s in outline.children] == [
         ("cmd_drop", "fault", 3), ("stuck", "fault", 4), ("a", "goal", 6), ("b", "goal", 7)]
     assert outline.children[1].detail == "laser_freeze as stuck from 3.0"
+
+
+@pytest.mark.parametrize(("text", "words"), [
+    ("laser_poisson rate 20 gain 0", "gain not 0"),
+    ("laser_dropout share 0", "share (share): expected a number > 0"),
+    ("cmd_drop share 0 from 5", "share (share): expected a number > 0"),
+    ("laser_poisson rate 1 gain 0.1 period 1e-7 width 0.5", "expected a number >= 0.01"),
+])
+def test_faults_that_change_nothing_or_hang_the_run_are_refused(text: str, words: str) -> None:
+    """A zero gain or share silently tests nothing; an impulse period of 1e-7 s made the run
+    list ten million high phases a second and the supervisor killed it as hung."""
+    with pytest.raises(LanguageError) as err:
+        parse_fault_option(text)
+    assert words in str(err.value) and str(err.value).count("\n") == 0
+
+
+def test_a_fault_name_is_at_most_100_characters(tmp_path: Path) -> None:
+    """events.csv joins the active faults' names into one field: a 140,000-letter one made
+    the run's report fail to read it back (an internal error after the run)."""
+    found = problems(tmp_path, f"laser_freeze as n{'x' * 140_000}")
+    assert [(rule, line) for rule, line, _, _ in found] == [("FAULT-PARAM", 3)]
+    assert "at most 100 characters, found 140001" in found[0][3] and len(found[0][3]) < 200
+    assert parse_fault_option(f"laser_freeze as n{'x' * 99}").name == "n" + "x" * 99

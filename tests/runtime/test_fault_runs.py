@@ -7,8 +7,10 @@ from __future__ import annotations
 
 import csv
 import json
+import math
 import subprocess
 import sys
+from functools import partial
 from pathlib import Path
 
 import pytest
@@ -117,6 +119,10 @@ def test_a_run_without_faults_keeps_five_columns(tmp_path: Path) -> None:
      ["FAULT-SIGNAL", "--no-monitor"]),
     (["--fault", "laser_freeze", "--fault", "laser_freeze from 2"], ["FAULT-NAME", "twice"]),
     (["--fault", "laser_dropout share 2"], ["--fault", "share"]),
+    (["--fault", "laser_freeze from 5 to 6"], ["FAULT-WINDOW", "ends at 1 s", "from 5"]),
+    (["--fault", "cmd_drop share 1 when SIG_MISSION_BEGIN for 0.1"],
+     ["FAULT-WINDOW", "'for' longer than 0.1 s", "found 0.1 s"]),
+    (["--fault", "laser_freeze from 0.25 to 0.35"], ["FAULT-WINDOW", "hold a scan (every 0.2 s)"]),
     (["--fault", "laser_dropout"], ["--fault", "expected the parameter 'share'"]),
 ])
 def test_a_fault_the_run_cannot_deliver_is_refused_before_anything_runs(
@@ -137,6 +143,42 @@ def test_run_faults_locates_each_problem() -> None:
     codes = sorted(d.rule for d in err.value.diagnostics)
     assert codes == ["FAULT-NAME", "FAULT-SIGNAL"]
     assert run_faults(mission, (), ("SIG_A",), "m.mission", "spec.vepl") == mission
+
+
+@pytest.mark.parametrize(("entry", "refused"), [
+    ("laser_sector min_deg 0.2 max_deg 0.8", True),  # between two beams 1 deg apart
+    ("laser_sector min_deg 10 max_deg 10", False),
+    ("laser_sector min_deg -0.5 max_deg 0.5", False),
+])
+def test_run_faults_refuses_a_sector_holding_no_beam(entry: str, refused: bool) -> None:
+    fault = (parse_fault_option(entry),)
+    check = partial(run_faults, (), fault, (), "m.mission", "spec.vepl", 100.0, None,
+                    (-math.pi, math.tau / 360, 360))
+    if refused:
+        with pytest.raises(LanguageError, match="hold a beam of the scanner"):
+            check()
+    else:
+        assert check() == fault
+
+
+@pytest.mark.parametrize(("entry", "refused"), [
+    ("cmd_drop share 1 when SIG_A for 0.1", True),  # one tick: the summary said 'active'
+    ("cmd_drop share 1 when SIG_A for 0.15", False),  # with 'asked 0': it never acted
+    ("laser_dropout share 1 from 1.05 to 1.15", True),
+    ("laser_dropout share 1 from 1.05 to 1.25", False),
+    ("laser_delay seconds 1 from 1.05 to 1.15", False),  # a delay acts at every tick
+    ("odom_jump dx 1 from 1.01 to 1.09", True),
+    ("laser_poisson rate 5 gain 1 when SIG_A for 0.01", False),  # occurrences: any time
+])
+def test_run_faults_refuses_windows_no_tick_falls_in(entry: str, refused: bool) -> None:
+    fault = (parse_fault_option(entry),)
+    check = partial(run_faults, (), fault, ("SIG_A",), "m.mission", "spec.vepl", 100.0,
+                    (0.1, 0.1, 0.2))
+    if refused:
+        with pytest.raises(LanguageError, match="FAULT-WINDOW"):
+            check()
+    else:
+        assert check() == fault
 
 
 def test_active_at_follows_the_pulses() -> None:

@@ -682,3 +682,21 @@ def test_only_a_regular_file_is_read_as_a_trace(tmp_path: Path) -> None:
                        (tmp_path, "a folder")):
         with pytest.raises(TraceError, match=re.escape(f"expected a regular file, found {kind}")):
             read_trace(path)
+
+
+@pytest.mark.parametrize(("name", "message"), [
+    ("x" * 200_000, "expected a fault name of at most 100 characters, found 200000"),
+    ("<b>a;b</b>", r"expected a fault name \(letters, digits, '_'\), found '<b>a;b</b>'"),
+])
+def test_a_hand_edited_fault_name_is_an_input_error(
+        passing: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], name: str,
+        message: str) -> None:
+    """A 200,000-letter name made events.csv a field Python's csv reader refuses (a
+    traceback after the verdicts were written); a ';' split it into two faults on reading."""
+    def change(lines: list[Any]) -> None:
+        lines[0]["faults"] = [{"name": name, "entry": "cmd_drop share 0.5"}]
+        lines[1]["faults"] = [name]
+
+    trace = _corrupt(passing, change, tmp_path / "trace.jsonl")
+    status, err = _replay_cli(trace, tmp_path / "out", capsys)
+    _assert_input_error(status, err, trace, f":1: faults\\[0\\].name: {message}", tmp_path / "out")
