@@ -117,6 +117,19 @@ class FaultPlan:
         rows.sort(key=lambda r: (r[1], r[3]))
         return tuple((name, start, end) for name, start, end, _ in rows)
 
+    def active_now(self, time: float) -> tuple[str, ...]:
+        """The faults acting at ``time``, in declaration order (an impulse-switched one only
+        while its impulse is high): ``active_at(self.timeline(), ...)`` without building the
+        whole timeline every control tick."""
+        out = []
+        for d, tracker, model in zip(self.definitions, self.trackers, self.models, strict=True):
+            if not tracker.active(time):
+                continue
+            high = getattr(model, "pulse_high", None)
+            if high is None or high(time):
+                out.append(d.name)
+        return tuple(out)
+
     def described(self) -> tuple[tuple[str, str], ...]:
         return tuple((d.name, d.text()) for d in self.definitions)
 

@@ -41,6 +41,9 @@ class FaultsRun:
     def __init__(self, spec: Faults, board: Board) -> None:
         self.stage, self.board = spec.stage, board
         self._names = tuple(name for name, _ in spec.stage.described())
+        quick = getattr(spec.stage, "active_now", None)
+        self._active: Callable[[float], tuple[str, ...]] = quick if callable(quick) else (
+            lambda now: active_at(self.stage.timeline(), now, self._names))
         self._seq = 0
         self._signal_seq = 0
         self._measured: object = None
@@ -64,7 +67,7 @@ class FaultsRun:
         board.view = RobotView(self._seq, now, scan, at, pose, twist)
         self._seq += 1
         if self._names:
-            board.faults = active_at(self.stage.timeline(), now, self._names)
+            board.faults = self._active(now)
 
     def refresh(self, clock: Clock) -> None:
         """At a sample: the view of a scan measured since the last control tick."""

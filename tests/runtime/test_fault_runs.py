@@ -192,3 +192,15 @@ def test_active_at_follows_the_pulses() -> None:
     assert active_at(timeline, 0.5, order) == ()
     assert active_at(timeline, 6.4, order) == order
     assert active_at(timeline, 6.6, order) == ()
+
+
+def test_the_loops_quick_active_set_agrees_with_the_timeline() -> None:
+    """The loop asks the plan which faults act now (``active_now``) instead of building the
+    whole timeline every control tick; both must say the same at every tick."""
+    stage = fault_stage([parse_fault_option(PULSED), parse_fault_option(WINDOW),
+                         parse_fault_option("odom_jump dx 0.2 from 2.5")], seed=3)
+    order = tuple(name for name, _ in stage.described())
+    for k in range(81):
+        now = k / 10
+        stage.command(now, (0.0, 0.0))
+        assert stage.active_now(now) == active_at(stage.timeline(), now, order), now
