@@ -34,7 +34,7 @@ from rei.catalogue import Box, Cylinder
 from rei.generators.concrete import ConcreteMission
 from rei.runtime.collector import MonitorConfig, SampleSink
 from rei.runtime.errors import RunError
-from rei.runtime.faults.stage import NO_FAULTS, FaultStage
+from rei.runtime.faults.stage import NO_FAULTS, FaultStage, fault_measurements
 from rei.runtime.loop import (
     Animator,
     Board,
@@ -308,10 +308,7 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
     variations["start_jitter"] = started.to_json()
     described = stage.described()
     if described:  # a run without faults keeps the summary it always had
-        measurements["faults_injected"] = [{"fault": name, "entry": entry}
-                                           for name, entry in described]
-        measurements["faults"] = [{"fault": name, "start": begin, "end": end}
-                                  for name, begin, end in stage.timeline()]
+        measurements.update(fault_measurements(described, stage.timeline()))
         statistics = getattr(stage, "statistics", None)
         if callable(statistics):
             measurements["fault_statistics"] = {s.name: dict(s.counts) for s in statistics()}

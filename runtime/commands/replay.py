@@ -19,7 +19,7 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-from typing import Any, cast
+from typing import cast
 
 from rei.lang.cli_support import EXIT_RUN_ERROR
 from rei.lang.errors import printable_lines
@@ -60,7 +60,7 @@ def replay(trace: Path, vepl: Path | None, out_dir: Path,
     from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
     from rei.runtime.collector.needs import check_needs  # noqa: PLC0415
     from rei.runtime.evaluator.summary import merge_summary, write_summary  # noqa: PLC0415
-    from rei.runtime.faults.stage import SampledTimeline  # noqa: PLC0415
+    from rei.runtime.faults.stage import SampledTimeline, fault_measurements  # noqa: PLC0415
     from rei.runtime.monitor import MonitorSink, generate_automata  # noqa: PLC0415
     from rei.runtime.monitor.functions import load_functions  # noqa: PLC0415
     from rei.runtime.recording import read_stream  # noqa: PLC0415
@@ -103,21 +103,10 @@ def replay(trace: Path, vepl: Path | None, out_dir: Path,
     # The end line was written by `rei run` from its summary's outcome; read back as is.
     base = RunSummary(RESULTS_VERSION, header.mission, header.world, header.seed, "replay",
                       cast(Outcome, outcome), reason, sink.result.duration, 0.0, {}, (),
-                      _fault_measurements(header.faults, seen.timeline()))
+                      fault_measurements(header.faults, seen.timeline()))
     summary = merge_summary(base, sink.result)
     write_summary(summary, out_dir)
     return summary
-
-
-def _fault_measurements(injected: tuple[tuple[str, str], ...],
-                        timeline: tuple[tuple[str, float, float | None], ...]
-                        ) -> dict[str, Any]:
-    """What a replay can say of the faults: those the header lists, and when the samples
-    saw each active (to the sample period; the live run's summary has the exact times)."""
-    if not injected:
-        return {}
-    return {"faults_injected": [{"fault": n, "entry": e} for n, e in injected],
-            "faults": [{"fault": n, "start": a, "end": b} for n, a, b in timeline]}
 
 
 def run(args: argparse.Namespace) -> int:

@@ -17,7 +17,7 @@ This module must never import pybullet.
 
 from __future__ import annotations
 
-from typing import Protocol
+from typing import Any, Protocol
 
 from rei.runtime.messages import LaserScan
 
@@ -91,6 +91,18 @@ def active_at(timeline: tuple[tuple[str, float, float | None], ...], time: float
 
 
 NO_FAULTS: FaultStage = NoFaults()
+
+
+def fault_measurements(described: tuple[tuple[str, str], ...],
+                       timeline: tuple[tuple[str, float, float | None], ...]
+                       ) -> dict[str, Any]:
+    """The summary's ``faults_injected`` (name, entry) and ``faults`` (the timeline) of a run,
+    live or replayed; empty without faults, so such a run keeps the summary it always had."""
+    if not described:
+        return {}
+    return {"faults_injected": [{"fault": name, "entry": entry} for name, entry in described],
+            "faults": [{"fault": name, "start": start, "end": end}
+                       for name, start, end in timeline]}
 
 
 class SampledTimeline:
