@@ -458,7 +458,11 @@ def _fault_periods(config: RunConfig, sample_rate: float, scan_rate: float
     period) in seconds, as ``run_faults`` checks fault windows against them. Samples and
     ticks fall on physics steps: from a sample the next tick is gcd(steps per sample, steps
     per tick) steps away at the least (a whole tick when every sample is on a tick)."""
+    from rei.runtime.loop.scheduler import every  # noqa: PLC0415
+
     steps = config.physics_rate
-    tick, sample = max(1, round(steps / config.control_rate)), max(1, round(steps / sample_rate))
+    # the scheduler's own step counts (and its check that each rate divides the physics rate)
+    tick = every(steps, config.control_rate, "the control rate")
+    sample = every(steps, sample_rate, "the monitor's sample rate")
     gap = tick if sample % tick == 0 else math.gcd(tick, sample)
     return gap / steps, tick / steps, 1.0 / scan_rate
