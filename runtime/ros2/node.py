@@ -61,6 +61,9 @@ def client_config(router: str, config_file: str | None = None) -> Any:
         config.insert_json5("mode", '"client"')
         config.insert_json5("connect/endpoints", f'["{router}"]')
         config.insert_json5("scouting/multicast/enabled", "false")
+        # an advanced publisher's cache (TRANSIENT_LOCAL) orders samples by timestamp, as
+        # rmw_zenoh's DEFAULT_RMW_ZENOH_SESSION_CONFIG enables it
+        config.insert_json5("timestamping/enabled", "true")
     except Exception as exc:  # noqa: BLE001  (zenoh reports a bad file or endpoint so)
         raise Ros2Error(f"zenoh configuration: {exc}") from None
     return config

@@ -1,0 +1,281 @@
+"""A stand-in ROS 2 navigation node written directly on Zenoh and rosbags' CDR (no REI code).
+
+It follows rmw_zenoh's published format (ros2/rmw_zenoh docs/design.md @ 99a6a2bd): key
+expressions ``<domain>/<name>/<pkg>::<kind>::dds_::<Type>_/<hash>``, liveliness tokens
+``@ros2_lv/...``, the attachment as Zenoh's own serializer writes it (``z_serialize`` of
+int64, int64 and a sequence of 16 uint8), services as complete queryables answered with
+the request's sequence number and client GID. It imports nothing from ``rei.runtime.ros2``:
+a mistake there cannot cancel out here.
+
+Like a small Nav2 it subscribes ``/odom``, ``/scan`` and ``/clock``, publishes ``/cmd_vel``
+(a turn-then-drive law toward the goal, one command per odometry message, as a controller
+on sim time answers each new state), and serves ``navigate_to_pose``: send_goal accepts,
+get_result answers SUCCEEDED (4) when odometry is within ``reach`` metres of the goal, the
+status topic follows, cancel_goal cancels.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from typing import Any
+
+import numpy as np
+import zenoh
+from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+from zenoh.ext import Int64, UInt8, z_serialize
+
+HASHLESS = "TypeHashNotSupported"  # ROS 2 Humble's rmw_zenoh_cpp
+ACTION = "nav2_msgs/action/NavigateToPose"
+
+# ros-navigation/navigation2 nav2_msgs/action/NavigateToPose.action, branch humble
+# (3c3db59d6969d8ecee8e68468693d006397f4a0c), and the types rosidl derives from it.
+_HUMBLE_ACTION = {
+    "Goal": "geometry_msgs/PoseStamped pose\nstring behavior_tree\n",
+    "Result": "std_msgs/Empty result\n",
+    "Feedback": "geometry_msgs/PoseStamped current_pose\nbuiltin_interfaces/Duration "
+                "navigation_time\nbuiltin_interfaces/Duration estimated_time_remaining\n"
+                "int16 number_of_recoveries\nfloat32 distance_remaining\n",
+    "SendGoal_Request": "unique_identifier_msgs/UUID goal_id\nnav2msgs_placeholder_Goal goal\n",
+    "SendGoal_Response": "bool accepted\nbuiltin_interfaces/Time stamp\n",
+    "GetResult_Request": "unique_identifier_msgs/UUID goal_id\n",
+    "GetResult_Response": "int8 status\nnav2msgs_placeholder_Result result\n",
+    "FeedbackMessage": "unique_identifier_msgs/UUID goal_id\n"
+                       "nav2msgs_placeholder_Feedback feedback\n",
+}
+_CANCEL = {"Request": "action_msgs/GoalInfo goal_info\n",
+           "Response": "int8 response\naction_msgs/GoalInfo[] goals_canceling\n"}
+
+
+def humble_store() -> Any:
+    """rosbags' Humble store with NavigateToPose and CancelGoal, registered under the
+    names the wire uses (rosbags' parser files every type under .../msg/)."""
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    types: dict[str, Any] = {}
+    for part, text in _HUMBLE_ACTION.items():
+        text = text.replace("nav2msgs_placeholder_", "nav2_msgs/msg/NavigateToPose_")
+        types.update(get_types_from_msg(text, f"nav2_msgs/msg/NavigateToPose_{part}"))
+    for part, text in _CANCEL.items():
+        types.update(get_types_from_msg(text, f"action_msgs/msg/CancelGoal_{part}"))
+    store.register({_wire(name): _wire(definition) for name, definition in types.items()})
+    return store
+
+
+def _wire(item: Any) -> Any:
+    if isinstance(item, str):
+        return (item.replace("nav2_msgs/msg/NavigateToPose_", "nav2_msgs/action/NavigateToPose_")
+                .replace("action_msgs/msg/CancelGoal_", "action_msgs/srv/CancelGoal_"))
+    if isinstance(item, tuple):
+        return tuple(_wire(part) for part in item)
+    if isinstance(item, list):
+        return [_wire(part) for part in item]
+    return item
+
+
+def key(domain: int, name: str, dds_type: str, type_hash: str = HASHLESS) -> str:
+    return f"{domain}/{name}/{dds_type}/{type_hash}"
+
+
+def attachment(sequence: int, gid: bytes) -> bytes:
+    return z_serialize((Int64(sequence), Int64(time.time_ns()),
+                        [UInt8(b) for b in gid])).to_bytes()
+
+
+def read_attachment(data: bytes) -> tuple[int, int, bytes]:
+    """(sequence, timestamp, gid) -- parsed by hand from the documented layout."""
+    assert len(data) == 33 and data[16] == 16, data
+    return (int.from_bytes(data[0:8], "little", signed=True),
+            int.from_bytes(data[8:16], "little", signed=True), bytes(data[17:33]))
+
+
+class StandInNav2:
+    """The stand-in: ``start()``, then it drives whoever publishes /odom; ``close()``."""
+
+    def __init__(self, router: str, domain: int = 0, reach: float = 0.12,
+                 type_hash: dict[str, str] | None = None) -> None:
+        self.router, self.domain, self.reach = router, domain, reach
+        self.max_linear = 0.22  # under the robot's drive limit, as a Nav2 config would be
+        self.hashes = type_hash or {}
+        self.store = humble_store()
+        self.lock = threading.Lock()
+        self.goal: tuple[bytes, float, float] | None = None
+        self.result_queries: dict[bytes, Any] = {}
+        self.counts = {"odom": 0, "scan": 0, "clock": 0, "cmd_vel": 0, "goals": 0,
+                       "cancels": 0, "bad_attachment": 0}
+        self.scan_beams: set[int] = set()
+        self.clock_ns: list[int] = []
+        self.gid = bytes(range(200, 216))
+        self.sequence = 0
+        self.declared: list[Any] = []
+
+    def _hash(self, dds: str) -> str:
+        return self.hashes.get(dds, HASHLESS)
+
+    def start(self) -> StandInNav2:
+        config = zenoh.Config()
+        config.insert_json5("mode", '"client"')
+        config.insert_json5("connect/endpoints", f'["{self.router}"]')
+        config.insert_json5("scouting/multicast/enabled", "false")
+        self.session = zenoh.open(config)
+        d, s = self.domain, self.session
+        zid = str(s.zid())
+        twist = "geometry_msgs::msg::dds_::Twist_"
+        self.cmd_key = key(d, "cmd_vel", twist, self._hash(twist))
+        self.cmd_pub = s.declare_publisher(self.cmd_key)
+        odom = "nav_msgs::msg::dds_::Odometry_"
+        scan = "sensor_msgs::msg::dds_::LaserScan_"
+        clock = "rosgraph_msgs::msg::dds_::Clock_"
+        action = "navigate_to_pose/_action"
+        tokens = [f"@ros2_lv/{d}/{zid}/0/0/NN/%/%/standin_nav2",
+                  f"@ros2_lv/{d}/{zid}/0/10/MP/%/%/standin_nav2/%cmd_vel/{twist}/"
+                  f"{self._hash(twist)}/::,10:,:,:,,"]
+        self.declared += [s.liveliness().declare_token(t) for t in tokens]
+        self.declared += [
+            s.declare_subscriber(key(d, "odom", odom, self._hash(odom)), self._on_odom),
+            s.declare_subscriber(key(d, "scan", scan, self._hash(scan)), self._on_scan),
+            s.declare_subscriber(key(d, "clock", clock, self._hash(clock)), self._on_clock),
+            s.declare_queryable(key(d, f"{action}/send_goal",
+                                    "nav2_msgs::action::dds_::NavigateToPose_SendGoal_"),
+                                self._on_send_goal, complete=True),
+            s.declare_queryable(key(d, f"{action}/get_result",
+                                    "nav2_msgs::action::dds_::NavigateToPose_GetResult_"),
+                                self._on_get_result, complete=True),
+            s.declare_queryable(key(d, f"{action}/cancel_goal",
+                                    "action_msgs::srv::dds_::CancelGoal_"),
+                                self._on_cancel, complete=True),
+        ]
+        self.status_pub = s.declare_publisher(
+            key(d, f"{action}/status", "action_msgs::msg::dds_::GoalStatusArray_"))
+        return self
+
+    def close(self) -> None:
+        for item in reversed(self.declared):
+            item.undeclare()
+        self.session.close()
+
+    # ---- topics ---------------------------------------------------------------------------
+
+    def _decode(self, sample: Any, msgtype: str) -> Any:
+        try:
+            read_attachment(sample.attachment.to_bytes())
+        except (AssertionError, AttributeError):
+            self.counts["bad_attachment"] += 1
+        return self.store.deserialize_cdr(sample.payload.to_bytes(), msgtype)
+
+    def _on_clock(self, sample: Any) -> None:
+        message = self._decode(sample, "rosgraph_msgs/msg/Clock")
+        with self.lock:
+            self.counts["clock"] += 1
+            self.clock_ns.append(message.clock.sec * 10**9 + message.clock.nanosec)
+
+    def _on_scan(self, sample: Any) -> None:
+        message = self._decode(sample, "sensor_msgs/msg/LaserScan")
+        with self.lock:
+            self.counts["scan"] += 1
+            self.scan_beams.add(len(message.ranges))
+
+    def _on_odom(self, sample: Any) -> None:
+        message = self._decode(sample, "nav_msgs/msg/Odometry")
+        p, q = message.pose.pose.position, message.pose.pose.orientation
+        yaw = 2.0 * math.atan2(q.z, q.w)
+        with self.lock:
+            self.counts["odom"] += 1
+            goal = self.goal
+        linear = angular = 0.0
+        if goal is not None:
+            uuid, gx, gy = goal
+            distance = math.hypot(gx - p.x, gy - p.y)
+            if distance <= self.reach:
+                self._finish(uuid, 4)
+            else:
+                error = math.remainder(math.atan2(gy - p.y, gx - p.x) - yaw, math.tau)
+                angular = max(-1.0, min(1.0, 2.0 * error))
+                linear = 0.0 if abs(error) > 0.35 else min(self.max_linear, distance)
+        t = self.store.types
+        vector = t["geometry_msgs/msg/Vector3"]
+        payload = bytes(self.store.serialize_cdr(
+            t["geometry_msgs/msg/Twist"](vector(linear, 0.0, 0.0), vector(0.0, 0.0, angular)),
+            "geometry_msgs/msg/Twist"))
+        with self.lock:
+            self.sequence += 1
+            sequence = self.sequence
+            self.counts["cmd_vel"] += 1
+        self.cmd_pub.put(payload, attachment=attachment(sequence, self.gid))
+
+    # ---- the action -----------------------------------------------------------------------
+
+    def _reply(self, query: Any, message: Any, msgtype: str) -> None:
+        sequence, _, client_gid = read_attachment(query.attachment.to_bytes())
+        query.reply(query.key_expr, bytes(self.store.serialize_cdr(message, msgtype)),
+                    attachment=attachment(sequence, client_gid))
+
+    def _on_send_goal(self, query: Any) -> None:
+        request = self.store.deserialize_cdr(
+            query.payload.to_bytes(), f"{ACTION}_SendGoal_Request")
+        uuid = bytes(request.goal_id.uuid)
+        position = request.goal.pose.pose.position
+        assert request.goal.pose.header.frame_id == "map"
+        with self.lock:
+            self.goal = (uuid, float(position.x), float(position.y))
+            self.counts["goals"] += 1
+        t = self.store.types
+        self._reply(query, t[f"{ACTION}_SendGoal_Response"](
+            True, t["builtin_interfaces/msg/Time"](0, 0)), f"{ACTION}_SendGoal_Response")
+        query.drop()
+        self._status(uuid, 2)
+
+    def _on_get_result(self, query: Any) -> None:
+        request = self.store.deserialize_cdr(
+            query.payload.to_bytes(), f"{ACTION}_GetResult_Request")
+        with self.lock:  # answered when the goal ends (the query stays open until then)
+            self.result_queries[bytes(request.goal_id.uuid)] = query
+
+    def _on_cancel(self, query: Any) -> None:
+        request = self.store.deserialize_cdr(query.payload.to_bytes(),
+                                             "action_msgs/srv/CancelGoal_Request")
+        uuid = bytes(request.goal_info.goal_id.uuid)
+        with self.lock:
+            self.counts["cancels"] += 1
+        t = self.store.types
+        self._reply(query, t["action_msgs/srv/CancelGoal_Response"](0, []),
+                    "action_msgs/srv/CancelGoal_Response")
+        query.drop()
+        self._finish(uuid, 5)
+
+    def _finish(self, uuid: bytes, status: int) -> None:
+        with self.lock:
+            if self.goal is not None and self.goal[0] == uuid:
+                self.goal = None
+            query = self.result_queries.pop(uuid, None)
+        self._status(uuid, status)
+        if query is not None:
+            t = self.store.types
+            self._reply(query, t[f"{ACTION}_GetResult_Response"](
+                status, t[f"{ACTION}_Result"](t["std_msgs/msg/Empty"]())),
+                f"{ACTION}_GetResult_Response")
+            query.drop()
+
+    def _status(self, uuid: bytes, status: int) -> None:
+        t = self.store.types
+        info = t["action_msgs/msg/GoalInfo"](
+            t["unique_identifier_msgs/msg/UUID"](np.frombuffer(uuid, dtype=np.uint8).copy()),
+            t["builtin_interfaces/msg/Time"](0, 0))
+        message = t["action_msgs/msg/GoalStatusArray"]([t["action_msgs/msg/GoalStatus"](
+            info, status)])
+        with self.lock:
+            self.sequence += 1
+            sequence = self.sequence
+        self.status_pub.put(bytes(self.store.serialize_cdr(
+            message, "action_msgs/msg/GoalStatusArray")), attachment=attachment(sequence,
+                                                                                 self.gid))
+
+
+def wait_for(condition: Any, seconds: float) -> bool:
+    """Poll ``condition`` for at most ``seconds`` (bounded; never a wall-clock assertion)."""
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        if condition():
+            return True
+        time.sleep(0.02)
+    return bool(condition())

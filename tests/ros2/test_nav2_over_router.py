@@ -1,0 +1,234 @@
+"""A ROS 2 navigation stack over a real Zenoh router as REI's robot under test.
+
+The stack is ``standin.StandInNav2``: written on Zenoh and rosbags alone from rmw_zenoh's
+published format, it shares no code with ``rei.runtime.ros2``. The tests prove that what
+REI puts on the wire is what such a node reads (topics, attachments, liveliness tokens,
+the action's services), that a mission driven through it reaches its goals with REI's own
+verdict, and that a missing stack or a wrong option ends as a located error, not a hang.
+Every wait is bounded.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+import subprocess
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+
+import numpy as np
+import pytest
+import zenoh
+from rosbags.typesys import Stores, get_typestore
+
+from rei.catalogue import DriveSpec, LaserSpec
+from rei.runtime.messages import LaserScan, NavState
+from rei.runtime.robot.protocol import ControllerContext, NavGoal, Observation
+from rei.runtime.ros2.adapter import Ros2Controller, parse_options
+from rei.runtime.ros2.errors import Ros2Error
+from tests.ros2.standin import StandInNav2, wait_for
+
+REPO = Path(__file__).resolve().parents[2]
+LASER = LaserSpec(beams=36, min_range=0.1, max_range=5.0, rate=10.0, fov=2 * math.pi,
+                  mount_x=0.1)
+CONTEXT = ControllerContext(robot_size=(0.4, 0.3), drive=DriveSpec(0.5, 1.5, 0.3, 0.05),
+                            laser=LASER, start_pose=(0.0, 0.0, 0.0), obstacles=(),
+                            bounds=(-5.0, -5.0, 5.0, 5.0), tile_size=1.0, control_rate=10.0,
+                            seed=3)
+
+
+@pytest.fixture
+def standin(zenoh_router: str) -> Iterator[StandInNav2]:
+    node = StandInNav2(zenoh_router).start()
+    try:
+        yield node
+    finally:
+        node.close()
+
+
+def observation(time: float, pose: tuple[float, float, float]) -> Observation:
+    scan = LaserScan(-math.pi, 2 * math.pi / 36, 0.1, 5.0, np.full(36, 5.0))
+    return Observation(time, pose, (0.0, 0.0), scan, time)
+
+
+def tokens(router: str) -> list[str]:
+    config = zenoh.Config()
+    config.insert_json5("mode", '"client"')
+    config.insert_json5("connect/endpoints", f'["{router}"]')
+    config.insert_json5("scouting/multicast/enabled", "false")
+    with zenoh.open(config) as session:
+        return [str(r.ok.key_expr) for r in session.liveliness().get("@ros2_lv/0/**",
+                                                                       timeout=2.0)
+                if r.ok is not None]
+
+
+def run_mission(router: str, out: Path) -> tuple[subprocess.CompletedProcess[str], dict]:
+    spec = f"ros2:router={router},distro=humble,cmd-wait=1,server-wait=5"
+    run = subprocess.run([sys.executable, "-m", "rei.runtime.cli", "run",
+                          str(REPO / "examples/simple_wall/simple_wall.mission"), "-o", str(out),
+                          "--controller", spec, "--no-variation"],
+                         capture_output=True, text=True, timeout=600)
+    return run, json.loads((out / "summary.json").read_text())
+
+
+def test_a_mission_driven_through_a_ros2_node_reaches_its_goals(
+        zenoh_router: str, standin: StandInNav2, tmp_path: Path) -> None:
+    run, summary = run_mission(zenoh_router, tmp_path / "out")
+    assert run.returncode == 0, (run.stdout[-2000:], run.stderr[-2000:], summary)
+    assert summary["verdict"] == "pass" and summary["outcome"] == "completed"
+    # what the stand-in saw came in rmw_zenoh's format, on simulated time
+    assert standin.counts["goals"] == 2 and standin.counts["bad_attachment"] == 0
+    assert standin.counts["odom"] > 10 and standin.counts["scan"] > 5
+    assert standin.counts["cmd_vel"] >= standin.counts["odom"] - 1
+    assert standin.clock_ns == sorted(standin.clock_ns) and standin.clock_ns[0] >= 0
+
+
+def test_a_ros2_stack_that_breaks_a_requirement_fails_by_reis_own_rules(
+        zenoh_router: str, standin: StandInNav2, tmp_path: Path) -> None:
+    # The same stand-in, configured faster than the robot's drive (0.26 m/s): the goals are
+    # still reached, and the default .vepl's SPEED_LIMIT fails the run (exit 1).
+    standin.max_linear = 0.4
+    run, summary = run_mission(zenoh_router, tmp_path / "out")
+    assert run.returncode == 1, (run.stdout[-2000:], run.stderr[-2000:])
+    failed = {v["requirement"] for v in summary["verdicts"] if v["status"] == "fail"}
+    assert summary["outcome"] == "completed" and failed == {"SPEED_LIMIT"}
+
+
+def test_the_adapter_announces_itself_in_the_ros_graph(
+        zenoh_router: str, standin: StandInNav2) -> None:
+    robot = Ros2Controller(parse_options(f"router={zenoh_router},distro=humble", {}))
+    robot.reset(CONTEXT)
+    try:
+        seen = "\n".join(tokens(zenoh_router))
+    finally:
+        robot.close()
+    zid = r"[0-9a-f]+"
+    for pattern in [
+        rf"@ros2_lv/0/{zid}/0/0/NN/%/%/rei_sim",
+        rf"@ros2_lv/0/{zid}/0/\d+/MP/%/%/rei_sim/%clock/rosgraph_msgs::msg::dds_::Clock_/"
+        r"TypeHashNotSupported/::,10:,:,:,,",
+        rf"@ros2_lv/0/{zid}/0/\d+/MP/%/%/rei_sim/%scan/sensor_msgs::msg::dds_::LaserScan_/"
+        r"TypeHashNotSupported/2::,5:,:,:,,",
+        rf"@ros2_lv/0/{zid}/0/\d+/MP/%/%/rei_sim/%tf_static/tf2_msgs::msg::dds_::TFMessage_/"
+        r"TypeHashNotSupported/:1:,1:,:,:,,",
+        rf"@ros2_lv/0/{zid}/0/\d+/MS/%/%/rei_sim/%cmd_vel/geometry_msgs::msg::dds_::Twist_/"
+        r"TypeHashNotSupported/::,10:,:,:,,",
+        rf"@ros2_lv/0/{zid}/0/\d+/SC/%/%/rei_sim/%navigate_to_pose%_action%send_goal/"
+        r"nav2_msgs::action::dds_::NavigateToPose_SendGoal_/TypeHashNotSupported/::,10:,:,:,,",
+        rf"@ros2_lv/0/{zid}/0/\d+/MS/%/%/rei_sim/%navigate_to_pose%_action%status/"
+        r"action_msgs::msg::dds_::GoalStatusArray_/TypeHashNotSupported/:1:,1:,:,:,,",
+        # and the stand-in's own tokens are visible to the same query
+        rf"@ros2_lv/0/{zid}/0/0/NN/%/%/standin_nav2",
+    ]:
+        assert re.search(f"^{pattern}$", seen, re.MULTILINE), (pattern, seen)
+
+
+def test_jazzy_key_expressions_carry_rihs01_hashes(zenoh_router: str) -> None:
+    # the stand-in computes its hashes with rosbags directly, not with rei.runtime.ros2
+    store = get_typestore(Stores.ROS2_JAZZY)
+    hashes = {f"{t.replace('/msg/', '::msg::dds_::')}_": store.hash_rihs01(t)
+              for t in ("geometry_msgs/msg/Twist", "nav_msgs/msg/Odometry",
+                        "sensor_msgs/msg/LaserScan", "rosgraph_msgs/msg/Clock")}
+    node = StandInNav2(zenoh_router, type_hash=hashes).start()
+    robot = Ros2Controller(parse_options(f"router={zenoh_router},distro=jazzy,cmd-wait=2",
+                                         {}))
+    try:
+        robot.reset(CONTEXT)
+        wait_for(lambda: False, 0.3)  # let the subscriptions meet
+        command = robot.step(observation(0.1, (0.0, 0.0, 0.0)))
+        assert node.counts["odom"] == 1 and node.counts["scan"] == 1
+        assert node.counts["clock"] == 1 and node.clock_ns == [100_000_000]
+        assert robot.cmd_sub.received.messages == 1 and command.linear == 0.0
+    finally:
+        robot.close()
+        node.close()
+
+
+def test_goals_follow_the_action_and_a_cancel_preempts(
+        zenoh_router: str, standin: StandInNav2) -> None:
+    robot = Ros2Controller(parse_options(f"router={zenoh_router},distro=humble,cmd-wait=1",
+                                         {}))
+    robot.reset(CONTEXT)
+    try:
+        wait_for(lambda: False, 0.3)
+        robot.send_goal(NavGoal("east", 1.0, 0.0, None, 0.25, 30.0))
+        assert robot.feedback().state == NavState.PENDING
+        states, pose, time = [], [0.0, 0.0, 0.0], 0.0
+        for _ in range(400):
+            time += 0.1
+            command = robot.step(observation(time, (pose[0], pose[1], pose[2])))
+            pose[2] += command.angular * 0.1
+            pose[0] += command.linear * 0.1 * math.cos(pose[2])
+            pose[1] += command.linear * 0.1 * math.sin(pose[2])
+            states.append(robot.feedback().state)
+            if states[-1] == NavState.SUCCEEDED:
+                break
+        assert states[-1] == NavState.SUCCEEDED, states[-20:]
+        assert NavState.ACTIVE in states and math.hypot(pose[0] - 1.0, pose[1]) <= 0.25
+        robot.send_goal(NavGoal("back", 0.0, 0.0, None, 0.25, 30.0))
+        assert wait_for(lambda: standin.counts["goals"] == 2, 5)
+        robot.cancel_goal()
+        assert wait_for(lambda: (robot.step(observation(time, tuple(pose))),  # type: ignore
+                                 robot.feedback().state)[1] == NavState.PREEMPTED, 5)
+        assert standin.counts["cancels"] == 1
+    finally:
+        robot.close()
+
+
+def test_a_goal_nobody_serves_is_aborted_with_what_to_check(zenoh_router: str) -> None:
+    robot = Ros2Controller(parse_options(
+        f"router={zenoh_router},domain=7,cmd-wait=0,server-wait=0.5", {}))
+    robot.reset(CONTEXT)
+    try:
+        robot.send_goal(NavGoal("g", 1.0, 0.0, None, 0.25, 30.0))
+        assert wait_for(lambda: (robot.step(observation(0.1, (0.0, 0.0, 0.0))),
+                                 robot.feedback().state)[1] == NavState.ABORTED, 5)
+        message = robot.feedback().message
+        assert "no navigate_to_pose action server" in message and "ROS_DOMAIN_ID=7" in message
+        # no cmd_vel either: the base stays stopped
+        assert robot.step(observation(0.2, (0.0, 0.0, 0.0))).linear == 0.0
+    finally:
+        robot.close()
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    ("domian=1", "unknown option 'domian'"),
+    ("domain=300", "expected a ROS domain id 0..232, found '300'"),
+    ("distro=iron", "expected one of humble, jazzy, found 'iron'"),
+    ("cmd-wait=nan", "expected seconds >= 0, found 'nan'"),
+    ("namespace=robot1", "namespace: expected '/'"),
+    ("goals=service", "expected action or topic"),
+    ("router", "expected key=value"),
+])
+def test_bad_options_are_named(text: str, message: str) -> None:
+    with pytest.raises(Ros2Error, match=re.escape(message)):
+        parse_options(text, {})
+
+
+def test_ros_domain_id_of_the_environment_is_the_default() -> None:
+    assert parse_options("", {"ROS_DOMAIN_ID": "5"}).domain == 5
+    assert parse_options("domain=2", {"ROS_DOMAIN_ID": "5"}).domain == 2
+
+
+def test_rei_run_names_a_bad_option_and_exits_2(tmp_path: Path) -> None:
+    run = subprocess.run([sys.executable, "-m", "rei.runtime.cli", "run",
+                          str(REPO / "examples/simple_wall/simple_wall.mission"), "-o",
+                          str(tmp_path / "out"), "--controller", "ros2:distro=iron"],
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 2, run.stderr
+    assert "distro: expected one of humble, jazzy, found 'iron'" in run.stderr
+
+
+def test_an_unreachable_router_is_a_run_error_with_the_address(tmp_path: Path) -> None:
+    from tests.ros2.conftest import free_port
+    port = free_port()
+    run = subprocess.run([sys.executable, "-m", "rei.runtime.cli", "run",
+                          str(REPO / "examples/simple_wall/simple_wall.mission"), "-o",
+                          str(tmp_path / "out"), "--controller",
+                          f"ros2:router=tcp/127.0.0.1:{port}"],
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 3, (run.stdout, run.stderr)
+    assert f"tcp/127.0.0.1:{port}" in run.stdout + run.stderr + (
+        tmp_path / "out" / "summary.json").read_text()
