@@ -94,8 +94,11 @@ class Ros2Options:
     odom_frame: str = "odom"
     base_frame: str = "base_link"
     laser_frame: str = "base_scan"
+    credentials: str | None = None
+    """The folder `rei bus` printed (or the simulation role's file in it): REI's side joins
+    as the simulation role (default: $REI_BUS_CREDENTIALS when set, else no authentication)."""
     zenoh_config: str | None = None
-    """A Zenoh JSON5 configuration file to start from (credentials of `rei bus`)."""
+    """A Zenoh JSON5 configuration file to start from (TLS, timeouts, ...)."""
 
 
 _KEYS = {f.name.replace("_", "-"): f.name for f in fields(Ros2Options)}
@@ -165,6 +168,21 @@ def _value(name: str, key: str, value: str) -> Any:
     return value
 
 
+def _credentials(given: str | None) -> dict[str, Any] | None:
+    """The simulation role's credentials from `rei bus`'s folder, or None (no auth)."""
+    from pathlib import Path  # noqa: PLC0415
+
+    from rei.runtime.bus.client import CREDENTIALS_ENV, read_credentials  # noqa: PLC0415
+    from rei.runtime.bus.errors import BusError  # noqa: PLC0415
+    where = given or os.environ.get(CREDENTIALS_ENV)
+    if not where:
+        return None
+    try:
+        return read_credentials("simulation", Path(where))
+    except BusError as exc:
+        raise Ros2Error(f"--controller ros2: credentials: {exc}") from None
+
+
 def _topic(absolute: str) -> str:
     """A robot-facing topic of the shared mapping, relative so it follows the namespace."""
     return absolute.lstrip("/")
@@ -198,13 +216,16 @@ class Ros2Controller:
         self.close()
         zenoh = import_zenoh()
         o = self.options
+        secret = _credentials(o.credentials)
         try:
-            self._session = zenoh.open(client_config(o.router, o.zenoh_config))
+            self._session = zenoh.open(client_config(o.router, o.zenoh_config, secret))
         except Ros2Error:
             raise
         except Exception as exc:  # noqa: BLE001  (zenoh says why it could not connect)
-            raise Ros2Error(f"--controller ros2: cannot reach the Zenoh router at {o.router}: "
-                            f"{exc} (start one with `rei bus`, or give router=...)") from None
+            who = f" as {secret['user']}" if secret else ""
+            raise Ros2Error(f"--controller ros2: cannot join the Zenoh router at {o.router}"
+                            f"{who}: {exc} (start one with `rei bus` and give router=... and "
+                            f"credentials=...)") from None
         node = RmwNode(self._session, o.node, namespace=o.namespace, domain=o.domain,
                        distro=o.distro)
         self._node, self._context = node, context

@@ -17,6 +17,7 @@ This module must never import pybullet or anything of the simulation: it carries
 from __future__ import annotations
 
 import itertools
+import json
 import threading
 import time
 from collections.abc import Callable
@@ -52,12 +53,20 @@ def import_zenoh() -> Any:
     return zenoh
 
 
-def client_config(router: str, config_file: str | None = None) -> Any:
-    """A Zenoh client configuration connecting to ``router`` only (no multicast scouting);
-    ``config_file`` (a Zenoh JSON5 file, e.g. with the credentials `rei bus` wrote) first."""
+def client_config(router: str, config_file: str | None = None,
+                  credentials: dict[str, Any] | None = None) -> Any:
+    """A Zenoh client configuration connecting to ``router`` only (no multicast scouting),
+    starting from ``config_file`` (a Zenoh JSON5 file) when given, and authenticating with
+    ``credentials`` (a role's file of `rei bus`: user, password, and the CA for TLS)."""
     zenoh = import_zenoh()
     try:
         config = zenoh.Config.from_file(config_file) if config_file else zenoh.Config()
+        if credentials is not None:
+            config.insert_json5("transport/auth/usrpwd", json.dumps(
+                {"user": credentials["user"], "password": credentials["password"]}))
+            if isinstance(credentials.get("ca"), str):
+                config.insert_json5("transport/link/tls/root_ca_certificate",
+                                    json.dumps(credentials["ca"]))
         config.insert_json5("mode", '"client"')
         config.insert_json5("connect/endpoints", f'["{router}"]')
         config.insert_json5("scouting/multicast/enabled", "false")

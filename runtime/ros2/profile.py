@@ -13,14 +13,17 @@ split by who may do what, so the bus's access-control configuration can include 
   other through the router, parameters, /rosout) is everything else in its domain
   (``graph``); the bus decides whether to open it.
 
-Both sides declare liveliness tokens under ``@ros2_lv/<domain>/**``. This module only
-computes key expressions; it must never open a session or write a configuration file.
+Both sides declare liveliness tokens under ``@ros2_lv/<domain>/**``. ``with_ros2`` adds all
+of it to the bus's rules (``rei.runtime.bus.access``), so `rei bus` enforces the profile
+with the same router. This module only computes key expressions; it must never open a
+session or write a configuration file.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+from rei.runtime.bus.access import AccessRules
 from rei.runtime.recording.ros import TOPICS
 from rei.runtime.ros2.names import ADMIN_SPACE, Distro, qualified, topic_keyexpr
 from rei.runtime.ros2.nav2 import ACTION
@@ -99,3 +102,35 @@ def access_rules(domain: int = 0, namespace: str = "/", distro: Distro = Distro.
                           subscribe=sensors, query=(), reply=services, liveliness=liveliness,
                           deny_put=sensors, graph=f"{domain}/**"),
     }
+
+
+def with_ros2(access: AccessRules, domain: int = 0, namespace: str = "/",
+              distro: Distro = Distro.JAZZY) -> AccessRules:
+    """The bus's access rules with the ROS 2 profile's keys added: the ``simulation`` role
+    (REI's adapter) and the ``robot`` role (the ROS 2 stack) as ``access_rules`` splits them,
+    and read access to the profile's topics for the ``monitor`` and ``viewer`` roles.
+
+    A TRANSIENT_LOCAL publisher (REI's tf_static, the stack's action status) keeps its last
+    sample in a Zenoh advanced-publisher cache under ``<key>/@adv/...``, which late
+    subscribers query and whose liveliness they watch: those keys go with the topic (``@adv``
+    is a hermetic chunk, so ``<key>/**`` would not include them)."""
+    rules = access_rules(domain, namespace, distro)
+    sim, robot = rules["simulation"], rules["robot"]
+    e = endpoints(domain, namespace, distro)
+    # the cache answers on <key>/@adv/... with the samples' own key
+    tf_static = (e["tf_static"].keyexpr, f"{e['tf_static'].keyexpr}/@adv/**")
+    status = (e["status"].keyexpr, f"{e['status'].keyexpr}/@adv/**")
+    added = (
+        ("simulation", "publish", sim.put), ("simulation", "subscribe", sim.subscribe),
+        ("simulation", "query", (*sim.query, *status)), ("simulation", "answer", tf_static),
+        ("simulation", "liveliness", (sim.liveliness, tf_static[1], status[1])),
+        ("robot", "publish", robot.put), ("robot", "subscribe", robot.subscribe),
+        ("robot", "answer", (*robot.reply, *status)), ("robot", "query", tf_static),
+        ("robot", "liveliness", (robot.liveliness, tf_static[1], status[1])),
+    )
+    for role, action, keys in added:
+        access = access.with_keys(role, action, keys)
+    readable = tuple(dict.fromkeys((*sim.put, *robot.put)))
+    for role in ("monitor", "viewer"):
+        access = access.with_keys(role, "subscribe", readable)
+    return access

@@ -93,7 +93,9 @@ class StandInNav2:
     """The stand-in: ``start()``, then it drives whoever publishes /odom; ``close()``."""
 
     def __init__(self, router: str, domain: int = 0, reach: float = 0.12,
-                 type_hash: dict[str, str] | None = None) -> None:
+                 type_hash: dict[str, str] | None = None,
+                 auth: tuple[str, str] | None = None) -> None:
+        self.auth = auth
         self.router, self.domain, self.reach = router, domain, reach
         self.max_linear = 0.22  # under the robot's drive limit, as a Nav2 config would be
         self.hashes = type_hash or {}
@@ -117,6 +119,9 @@ class StandInNav2:
         config.insert_json5("mode", '"client"')
         config.insert_json5("connect/endpoints", f'["{self.router}"]')
         config.insert_json5("scouting/multicast/enabled", "false")
+        if self.auth is not None:
+            config.insert_json5("transport/auth/usrpwd/user", f'"{self.auth[0]}"')
+            config.insert_json5("transport/auth/usrpwd/password", f'"{self.auth[1]}"')
         self.session = zenoh.open(config)
         d, s = self.domain, self.session
         zid = str(s.zid())
