@@ -91,7 +91,10 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.add_argument("--seed", type=int, default=0, help="seed of the run (default 0)")
     parser.add_argument("--controller", default="reference", metavar="NAME",
                         help="robot under test: reference, teleop, teleop:SCRIPT (a scripted "
-                             "drive), or module:Class of your own navigator (default reference)")
+                             "drive), module:Class of your own navigator, or ros2[:KEY=VALUE,...] "
+                             "a ROS 2 stack (Nav2) on rmw_zenoh_cpp over a Zenoh router, e.g. "
+                             "ros2:router=tcp/127.0.0.1:7447,domain=0,distro=jazzy,cmd-wait=0.2 "
+                             "(docs/ros2.md) (default reference)")
     parser.add_argument("--duration", type=float, default=None, metavar="S",
                         help="stop after S simulated seconds (default: the mission's time limit)")
     parser.add_argument("--watchdog", type=float, default=5.0, metavar="S",
