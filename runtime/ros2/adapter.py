@@ -279,6 +279,7 @@ class Ros2Controller:
     def cancel_goal(self) -> None:
         if self._action is not None:
             self._action.cancel()
+            self._feedback = self._action.snapshot()
         elif self._topic_goal_state in (NavState.PENDING, NavState.ACTIVE):
             self._topic_goal_state = NavState.PREEMPTED
             self._feedback = GoalFeedback(NavState.PREEMPTED, self._goal.name

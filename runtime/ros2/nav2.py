@@ -13,9 +13,9 @@ action_msgs/GoalStatus                 REI NavState
 =====================================  ================================================
 goal sent, no answer yet               PENDING
 accepted (1), executing (2)            ACTIVE
-canceling (3)                          ACTIVE (until the server says canceled)
+canceling (3)                          ACTIVE
 succeeded (4)                          SUCCEEDED
-canceled (5)                           PREEMPTED
+canceled (5), or cancelled by REI      PREEMPTED (at once when REI cancels)
 aborted (6), rejected, no server       ABORTED (with the reason)
 =====================================  ================================================
 
@@ -104,6 +104,7 @@ class NavigateToPoseClient:
             current = _Goal(goal.name, goal_uuid(self._seed, self._count), time.monotonic())
             self._goal = current
         if previous is not None and previous.state not in _TERMINAL:
+            previous.state = NavState.PREEMPTED  # a new goal preempts (nobody reads it now)
             self._request_cancel(previous.uuid)
         t = self._node.store.types
         x, y, z, w = yaw_quaternion(goal.yaw if goal.yaw is not None else 0.0)
@@ -119,9 +120,14 @@ class NavigateToPoseClient:
                                                       f"send_goal failed: {error}"))
 
     def cancel(self) -> None:
+        """Cancel the running goal: PREEMPTED at once (REI's contract: the caller decided),
+        and the server is asked to cancel it too."""
         with self._lock:
             goal = self._goal
-        if goal is not None and goal.state not in _TERMINAL:
+            running = goal is not None and goal.state not in _TERMINAL
+            if goal is not None and running:
+                goal.state, goal.message = NavState.PREEMPTED, "cancelled"
+        if goal is not None and running:
             self._request_cancel(goal.uuid)
 
     def snapshot(self) -> GoalFeedback:

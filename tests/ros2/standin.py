@@ -104,7 +104,7 @@ class StandInNav2:
         self.goal: tuple[bytes, float, float] | None = None
         self.result_queries: dict[bytes, Any] = {}
         self.counts = {"odom": 0, "scan": 0, "clock": 0, "cmd_vel": 0, "goals": 0,
-                       "cancels": 0, "bad_attachment": 0}
+                       "cancels": 0, "bad_attachment": 0, "goal_pose": 0}
         self.scan_beams: set[int] = set()
         self.clock_ns: list[int] = []
         self.gid = bytes(range(200, 216))
@@ -150,6 +150,9 @@ class StandInNav2:
                                     "action_msgs::srv::dds_::CancelGoal_"),
                                 self._on_cancel, complete=True),
         ]
+        pose = "geometry_msgs::msg::dds_::PoseStamped_"
+        self.declared.append(s.declare_subscriber(key(d, "goal_pose", pose, self._hash(pose)),
+                                                  self._on_goal_pose))
         self.status_pub = s.declare_publisher(
             key(d, f"{action}/status", "action_msgs::msg::dds_::GoalStatusArray_"))
         return self
@@ -207,6 +210,14 @@ class StandInNav2:
             sequence = self.sequence
             self.counts["cmd_vel"] += 1
         self.cmd_pub.put(payload, attachment=attachment(sequence, self.gid))
+
+    def _on_goal_pose(self, sample: Any) -> None:
+        """RViz's "2D Goal Pose" topic: a goal without an answer (no action)."""
+        message = self._decode(sample, "geometry_msgs/msg/PoseStamped")
+        position = message.pose.position
+        with self.lock:
+            self.counts["goal_pose"] += 1
+            self.goal = (b"topic", float(position.x), float(position.y))
 
     # ---- the action -----------------------------------------------------------------------
 

@@ -232,3 +232,40 @@ def test_an_unreachable_router_is_a_run_error_with_the_address(tmp_path: Path) -
     assert run.returncode == 3, (run.stdout, run.stderr)
     assert f"tcp/127.0.0.1:{port}" in run.stdout + run.stderr + (
         tmp_path / "out" / "summary.json").read_text()
+
+
+def test_the_adapter_passes_the_controller_conformance_checker(
+        zenoh_router: str, standin: StandInNav2) -> None:
+    # REI's own checker of the robot contract, with the stand-in stack answering: the goal
+    # states, cancel, and two runs after reset() giving the same commands.
+    from rei.runtime.robot.conformance import check_controller
+    robot = Ros2Controller(parse_options(f"router={zenoh_router},distro=humble,cmd-wait=1",
+                                         {}))
+    try:
+        assert check_controller(robot, steps=300) == []
+    finally:
+        robot.close()
+
+
+def test_a_goal_on_the_simple_topic_ends_when_odometry_is_there(
+        zenoh_router: str, standin: StandInNav2) -> None:
+    robot = Ros2Controller(parse_options(
+        f"router={zenoh_router},distro=humble,cmd-wait=1,goals=topic", {}))
+    robot.reset(CONTEXT)
+    try:
+        wait_for(lambda: False, 0.3)
+        robot.send_goal(NavGoal("east", 0.6, 0.0, None, 0.25, 30.0))
+        assert robot.feedback().state == NavState.ACTIVE
+        assert wait_for(lambda: standin.counts["goal_pose"] == 1, 5)
+        pose, time, states = [0.0, 0.0, 0.0], 0.0, []
+        for _ in range(200):
+            time += 0.1
+            command = robot.step(observation(time, (pose[0], pose[1], pose[2])))
+            pose[0] += command.linear * 0.1
+            states.append(robot.feedback().state)
+            if states[-1] == NavState.SUCCEEDED:
+                break
+        assert states[-1] == NavState.SUCCEEDED and abs(pose[0] - 0.6) <= 0.25
+        assert standin.counts["goals"] == 0  # the action was not used
+    finally:
+        robot.close()
