@@ -18,8 +18,10 @@ ROS 2 stack is not lock-stepped with REI. Its timers run on /clock, so it comput
 clock moves, and REI gives it up to ``cmd-wait`` per tick to answer; an answer that comes
 later is used at the next tick. The latest command is held, as a real base holds it, for
 ``cmd-timeout`` simulated seconds, after which the base stops (a base's command watchdog).
-So a run with a ROS stack depends on wall-clock timing and is not byte-reproducible the way
-a Python controller's run is; the verdict is still REI's, from its own ground truth.
+A goal and a cancel are given the same ``cmd-wait`` for the server's answer, so a stack that
+answers in time knows them before simulated time moves on. So a run with a ROS stack depends
+on wall-clock timing: it repeats exactly only while the stack answers within the waits,
+unlike a Python controller's run; the verdict is still REI's, from its own ground truth.
 
 Goals go to Nav2's ``navigate_to_pose`` action (``nav2.NavigateToPoseClient``), or with
 ``goals=topic`` as a geometry_msgs/PoseStamped on ``goal_pose`` (what RViz's "2D Goal Pose"
@@ -268,7 +270,7 @@ class Ros2Controller:
     def send_goal(self, goal: NavGoal) -> None:
         self._goal = goal
         if self._action is not None:
-            self._action.send(goal, stamp_ns(self._sim_time))
+            self._action.send(goal, stamp_ns(self._sim_time), self.options.cmd_wait)
             self._feedback = self._action.snapshot()
             return
         assert self._goal_pub is not None
@@ -278,7 +280,7 @@ class Ros2Controller:
 
     def cancel_goal(self) -> None:
         if self._action is not None:
-            self._action.cancel()
+            self._action.cancel(self.options.cmd_wait)
             self._feedback = self._action.snapshot()
         elif self._topic_goal_state in (NavState.PENDING, NavState.ACTIVE):
             self._topic_goal_state = NavState.PREEMPTED

@@ -19,7 +19,8 @@ canceled (5), or cancelled by REI      PREEMPTED (at once when REI cancels)
 aborted (6), rejected, no server       ABORTED (with the reason)
 =====================================  ================================================
 
-This module must never import the simulation; it never blocks a caller for an answer.
+This module must never import the simulation; it blocks a caller at most the wait it is
+given (a goal's acceptance, a cancel's answer), never for a goal's result.
 """
 
 from __future__ import annotations
@@ -96,8 +97,10 @@ class NavigateToPoseClient:
 
     # ---- goals ----------------------------------------------------------------------------
 
-    def send(self, goal: NavGoal, stamp_ns: int) -> None:
-        """Send ``goal`` (preempting the current one); never waits for the server."""
+    def send(self, goal: NavGoal, stamp_ns: int, wait: float = 0.0) -> None:
+        """Send ``goal`` (preempting the current one) and wait at most ``wait`` wall seconds
+        for the server to answer, so a stack that answers in time knows the goal before
+        simulated time moves on (a later answer is taken when it comes)."""
         with self._lock:
             previous = self._goal
             self._count += 1
@@ -105,7 +108,7 @@ class NavigateToPoseClient:
             self._goal = current
         if previous is not None and previous.state not in _TERMINAL:
             previous.state = NavState.PREEMPTED  # a new goal preempts (nobody reads it now)
-            self._request_cancel(previous.uuid)
+            self._request_cancel(previous.uuid, wait)
         t = self._node.store.types
         x, y, z, w = yaw_quaternion(goal.yaw if goal.yaw is not None else 0.0)
         pose = t["geometry_msgs/msg/PoseStamped"](
@@ -115,11 +118,21 @@ class NavigateToPoseClient:
                                         t["geometry_msgs/msg/Quaternion"](x, y, z, w)))
         request = t[f"{NAVIGATE_TO_POSE}_SendGoal_Request"](
             self._uuid(current.uuid), t[f"{NAVIGATE_TO_POSE}_Goal"](pose, ""))
-        self._send.call_async(request, lambda response: self._on_accept(current, response),
-                              lambda error: self._end(current, NavState.ABORTED,
-                                                      f"send_goal failed: {error}"))
+        answered = threading.Event()
 
-    def cancel(self) -> None:
+        def accepted(response: Any) -> None:
+            self._on_accept(current, response)
+            answered.set()
+
+        def failed(error: str) -> None:
+            self._end(current, NavState.ABORTED, f"send_goal failed: {error}")
+            answered.set()
+
+        self._send.call_async(request, accepted, failed)
+        if wait > 0:
+            answered.wait(wait)
+
+    def cancel(self, wait: float = 0.0) -> None:
         """Cancel the running goal: PREEMPTED at once (REI's contract: the caller decided),
         and the server is asked to cancel it too."""
         with self._lock:
@@ -128,7 +141,7 @@ class NavigateToPoseClient:
             if goal is not None and running:
                 goal.state, goal.message = NavState.PREEMPTED, "cancelled"
         if goal is not None and running:
-            self._request_cancel(goal.uuid)
+            self._request_cancel(goal.uuid, wait)
 
     def snapshot(self) -> GoalFeedback:
         """The current goal's state as REI's GoalFeedback (a goal nobody answered within the
@@ -151,11 +164,15 @@ class NavigateToPoseClient:
     def _uuid(self, raw: bytes) -> Any:
         return self._uuid_t(np.frombuffer(raw, dtype=np.uint8).copy())
 
-    def _request_cancel(self, uuid: bytes) -> None:
+    def _request_cancel(self, uuid: bytes, wait: float) -> None:
         t = self._node.store.types
         request = t[f"{CANCEL_GOAL}_Request"](
             t["action_msgs/msg/GoalInfo"](self._uuid(uuid), self._time_t(0, 0)))
-        self._cancel.call_async(request, lambda response: None)
+        answered = threading.Event()
+        self._cancel.call_async(request, lambda response: answered.set(),
+                                lambda error: answered.set())
+        if wait > 0:
+            answered.wait(wait)
 
     def _end(self, goal: _Goal, state: NavState, message: str) -> None:
         with self._lock:

@@ -269,3 +269,16 @@ def test_a_goal_on_the_simple_topic_ends_when_odometry_is_there(
         assert standin.counts["goals"] == 0  # the action was not used
     finally:
         robot.close()
+
+
+def test_a_stack_that_answers_in_time_gives_byte_identical_runs(
+        zenoh_router: str, standin: StandInNav2, tmp_path: Path) -> None:
+    # Not lock-stepped, but REI waits (cmd-wait) for each answer: a stack that answers in
+    # time is driven by the same messages at the same simulated times, run after run.
+    outputs = []
+    for name in ("a", "b"):
+        run, summary = run_mission(zenoh_router, tmp_path / name)
+        assert run.returncode == 0, (run.stdout[-2000:], run.stderr[-2000:])
+        outputs.append(tuple((tmp_path / name / f).read_bytes()
+                             for f in ("events.csv", "trace.jsonl")))
+    assert outputs[0] == outputs[1]
