@@ -154,7 +154,8 @@ def test_goals_follow_the_action_and_a_cancel_preempts(
     try:
         wait_for(lambda: False, 0.3)
         robot.send_goal(NavGoal("east", 1.0, 0.0, None, 0.25, 30.0))
-        assert robot.feedback().state == NavState.PENDING
+        # send_goal waited (cmd-wait) for the server, which accepted it
+        assert robot.feedback().state == NavState.ACTIVE
         states, pose, time = [], [0.0, 0.0, 0.0], 0.0
         for _ in range(400):
             time += 0.1
