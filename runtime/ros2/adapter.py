@@ -389,7 +389,10 @@ class Ros2Controller:
         if scan is not None and observation.scan_time != self._scan_time:
             self._scan_time = observation.scan_time
             stamp = now if observation.scan_time is None else observation.scan_time
+            # REP 117: a beam without a return is +inf (REI's laser reports range_max),
+            # so a costmap never marks an obstacle where nothing was hit
             ranges = np.asarray(scan.ranges, dtype=np.float32)
+            ranges = np.where(ranges >= np.float32(scan.range_max), np.float32(np.inf), ranges)
             angle_max = scan.angle_min + scan.angle_increment * (len(ranges) - 1)
             self._scan.publish(t[SCAN](
                 self._header(stamp, o.laser_frame), scan.angle_min, angle_max,

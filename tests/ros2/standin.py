@@ -106,6 +106,7 @@ class StandInNav2:
         self.counts = {"odom": 0, "scan": 0, "clock": 0, "cmd_vel": 0, "goals": 0,
                        "cancels": 0, "bad_attachment": 0, "goal_pose": 0}
         self.scan_beams: set[int] = set()
+        self.scan_no_return = self.scan_at_max = 0
         self.clock_ns: list[int] = []
         self.gid = bytes(range(200, 216))
         self.sequence = 0
@@ -182,6 +183,8 @@ class StandInNav2:
         with self.lock:
             self.counts["scan"] += 1
             self.scan_beams.add(len(message.ranges))
+            self.scan_no_return += int(np.isposinf(message.ranges).sum())
+            self.scan_at_max += int((message.ranges == message.range_max).sum())
 
     def _on_odom(self, sample: Any) -> None:
         message = self._decode(sample, "nav_msgs/msg/Odometry")

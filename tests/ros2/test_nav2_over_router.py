@@ -139,6 +139,8 @@ def test_jazzy_key_expressions_carry_rihs01_hashes(zenoh_router: str) -> None:
         wait_for(lambda: False, 0.3)  # let the subscriptions meet
         command = robot.step(observation(0.1, (0.0, 0.0, 0.0)))
         assert node.counts["odom"] == 1 and node.counts["scan"] == 1
+        # every beam of observation()'s scan is at range_max: no return, +inf (REP 117)
+        assert node.scan_no_return == 36 and node.scan_at_max == 0
         assert node.counts["clock"] == 1 and node.clock_ns == [100_000_000]
         assert robot.cmd_sub.received.messages == 1 and command.linear == 0.0
     finally:
