@@ -10,7 +10,8 @@ is registered here from the published definitions:
   jazzy at commit f4108e5b1c2bce804a1aa0c7be6673a8eb4a1501 (result ``uint16 error_code``,
   ``string error_msg``; kilted has the same fields);
 - ``action_msgs/srv/CancelGoal`` from ros2/rcl_interfaces ``action_msgs/srv/CancelGoal.srv``
-  at commit 29eb7ff836aa7b0097bd20a4b1599ec918bd78ba;
+  as last changed by commit f5b4ab352c9658daf068150aeda08ef48fa56ce4 (the same on the
+  humble and jazzy branches: ``int8 return_code``, ``GoalInfo[] goals_canceling``);
 - the types rosidl derives from an action (ros2/rosidl ``rosidl_parser/definition.py``,
   class ``Action``, commit 854b5e97c26fadb24229096ae8541bbb495588dd): ``_SendGoal``
   (request: UUID goal_id, Goal goal; response: bool accepted, Time stamp), ``_GetResult``
@@ -59,9 +60,9 @@ _NAVIGATE_FEEDBACK = ("geometry_msgs/PoseStamped current_pose\n"
                       "builtin_interfaces/Duration estimated_time_remaining\n"
                       "int16 number_of_recoveries\nfloat32 distance_remaining\n")
 _CANCEL_REQUEST = "action_msgs/GoalInfo goal_info\n"
-_CANCEL_RESPONSE = ("int8 RESPONSE_OK=0\nint8 RESPONSE_REJECTED=1\n"
-                    "int8 RESPONSE_UNKNOWN_GOAL_ID=2\nint8 RESPONSE_GOAL_TERMINATED=3\n"
-                    "int8 response\naction_msgs/GoalInfo[] goals_canceling\n")
+_CANCEL_RESPONSE = ("int8 ERROR_NONE=0\nint8 ERROR_REJECTED=1\n"
+                    "int8 ERROR_UNKNOWN_GOAL_ID=2\nint8 ERROR_GOAL_TERMINATED=3\n"
+                    "int8 return_code\naction_msgs/GoalInfo[] goals_canceling\n")
 
 
 def _action_definitions(action: str, goal: str, result: str, feedback: str
@@ -173,6 +174,19 @@ def type_hash(msgtype: str, distro: Distro) -> str:
         raise Ros2Error(f"type hash: no type description of '{msgtype}' (expected a type of "
                         f"the ROS 2 profile or of rosbags' {distro.value} store)")
     return store.hash_rihs01(msgtype)
+
+
+def register_action(distro: Distro, action: str, goal: str, result: str, feedback: str
+                    ) -> None:
+    """Register an action's goal, result and feedback definitions (``.action`` thirds) and
+    the services and message rosidl derives from them, for hashing and CDR."""
+    definitions = _action_definitions(action, goal, result, feedback)
+    for store in (typestore(distro), _hash_store(distro)):
+        if f"{action}_Goal" not in store.fielddefs:
+            _register(store, definitions)
+    for service in (f"{action}_SendGoal", f"{action}_GetResult"):
+        if service not in _hash_store(distro).fielddefs:
+            _register(_hash_store(distro), _service_descriptions(service))
 
 
 def register_service(distro: Distro, service: str, request: str, response: str) -> None:

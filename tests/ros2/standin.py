@@ -30,7 +30,8 @@ HASHLESS = "TypeHashNotSupported"  # ROS 2 Humble's rmw_zenoh_cpp
 ACTION = "nav2_msgs/action/NavigateToPose"
 
 # ros-navigation/navigation2 nav2_msgs/action/NavigateToPose.action, branch humble
-# (3c3db59d6969d8ecee8e68468693d006397f4a0c), and the types rosidl derives from it.
+# (3c3db59d6969d8ecee8e68468693d006397f4a0c), and the types rosidl derives from it;
+# ros2/rcl_interfaces action_msgs/srv/CancelGoal.srv (f5b4ab352c9658daf068150aeda08ef48fa56ce4).
 _HUMBLE_ACTION = {
     "Goal": "geometry_msgs/PoseStamped pose\nstring behavior_tree\n",
     "Result": "std_msgs/Empty result\n",
@@ -45,7 +46,7 @@ _HUMBLE_ACTION = {
                        "nav2msgs_placeholder_Feedback feedback\n",
 }
 _CANCEL = {"Request": "action_msgs/GoalInfo goal_info\n",
-           "Response": "int8 response\naction_msgs/GoalInfo[] goals_canceling\n"}
+           "Response": "int8 return_code\naction_msgs/GoalInfo[] goals_canceling\n"}
 
 
 def humble_store() -> Any:

@@ -184,3 +184,21 @@ def test_action_messages_round_trip_through_cdr() -> None:
         assert data[:4] == b"\x00\x01\x00\x00" and data[4:20] == bytes(range(16))
         back = store.deserialize_cdr(data, name)
         assert back.goal.pose.pose.position.x == 1.5 and back.goal.pose.header.frame_id == "map"
+
+
+def test_action_hashes_agree_with_an_independent_implementation() -> None:
+    # Not ROS 2's own publication, a corroboration: values locked in an independent
+    # rmw_zenoh-compatible implementation's tests ("Locked RIHS01 values for the Jazzy IDL")
+    # for the ROS 2 tutorial action Fibonacci and for CancelGoal. They agree with what the
+    # derivation here (rosidl's Action and Service, see rei.runtime.ros2.types) gives.
+    from rei.runtime.ros2.types import register_action
+    action = "action_tutorials_interfaces/action/Fibonacci"
+    register_action(Distro.JAZZY, action, "int32 order\n", "int32[] sequence\n",
+                    "int32[] partial_sequence\n")
+    assert {t: type_hash(f"{action}_{t}", Distro.JAZZY)[7:15]
+            for t in ("SendGoal", "GetResult", "FeedbackMessage")} \
+        == {"SendGoal": "a0603060", "GetResult": "8b47e383", "FeedbackMessage": "50fc26b9"}
+    assert type_hash("action_msgs/srv/CancelGoal", Distro.JAZZY) \
+        == "RIHS01_573d8b0a534451d7bc2ac8c5ffde8ac14b8593b7001175d0cd6516dcbeb8689a"
+    assert type_hash("action_msgs/msg/GoalStatusArray", Distro.JAZZY) \
+        == "RIHS01_6c1684b00f177d37438febe6e709fc4e2b0d4248dca4854946f9ed8b30cda83e"
