@@ -209,6 +209,7 @@ class Ros2Controller:
         self._goal: NavGoal | None = None
         self._topic_goal_state = NavState.IDLE
         self._static_sent = False
+        self._bad_cmd = ""
         self._waits_missed = 0
         """Ticks whose cmd_vel did not come within cmd-wait (for the docs' timing model)."""
 
@@ -246,6 +247,7 @@ class Ros2Controller:
             self._action = None
             self._goal_pub = node.publisher("goal_pose", POSE_STAMPED, DEFAULT_QOS)
         self._cmd, self._cmd_count, self._cmd_sim_time = STOP, 0, -math.inf
+        self._bad_cmd = ""
         self._sim_time, self._scan_time, self._static_sent = 0.0, None, False
         self._feedback, self._goal = GoalFeedback(NavState.IDLE, None), None
         self._topic_goal_state = NavState.IDLE
@@ -310,6 +312,8 @@ class Ros2Controller:
                         break
                     self._lock.wait(left)
         with self._lock:
+            if self._bad_cmd:
+                raise Ros2Error(self._bad_cmd)
             fresh = now - self._cmd_sim_time <= self.options.cmd_timeout
             command = self._cmd if fresh else STOP
         self._feedback = self._goal_feedback(observation)
@@ -333,6 +337,16 @@ class Ros2Controller:
 
     def _on_cmd(self, message: Any, _: Attachment) -> None:
         command = VelocityCommand(float(message.linear.x), float(message.angular.z))
+        if not command.finite:
+            # rejected at the edge, and the run ends as an error saying so (a stack that
+            # sends NaN now and then must not drive on its last good command to a pass)
+            with self._lock:
+                self._bad_cmd = (f"the ROS 2 stack published a non-finite cmd_vel (linear.x "
+                                 f"{command.linear}, angular.z {command.angular}) at simulated "
+                                 f"time {self._sim_time:g} s")
+                self._cmd_count += 1
+                self._lock.notify_all()
+            return
         with self._lock:
             self._cmd, self._cmd_sim_time = command, self._sim_time
             self._cmd_count += 1

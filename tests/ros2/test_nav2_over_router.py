@@ -285,3 +285,35 @@ def test_a_stack_that_answers_in_time_gives_byte_identical_runs(
         outputs.append(tuple((tmp_path / name / f).read_bytes()
                              for f in ("events.csv", "trace.jsonl")))
     assert outputs[0] == outputs[1]
+
+
+def test_malformed_or_non_finite_commands_are_refused_at_the_edge(
+        zenoh_router: str, standin: StandInNav2) -> None:
+    from tests.ros2.standin import attachment
+    robot = Ros2Controller(parse_options(f"router={zenoh_router},distro=humble,cmd-wait=0.3",
+                                         {}))
+    robot.reset(CONTEXT)
+    t = standin.store.types
+    vector = t["geometry_msgs/msg/Vector3"]
+
+    def twist(linear: float) -> bytes:
+        return bytes(standin.store.serialize_cdr(
+            t["geometry_msgs/msg/Twist"](vector(linear, 0.0, 0.0), vector(0.0, 0.0, 0.0)),
+            "geometry_msgs/msg/Twist"))
+
+    try:
+        wait_for(lambda: False, 0.3)
+        robot.step(observation(0.1, (0.0, 0.0, 0.0)))
+        before = robot.cmd_sub.received.messages
+        # no attachment, and a truncated payload: dropped and counted, never a crash
+        standin.cmd_pub.put(twist(0.1))
+        standin.cmd_pub.put(twist(0.1)[:10], attachment=attachment(99, standin.gid))
+        assert wait_for(lambda: robot.cmd_sub.received.dropped == 2, 5)
+        assert robot.cmd_sub.received.messages == before
+        # a NaN command ends the run as an error naming it
+        standin.cmd_pub.put(twist(math.nan), attachment=attachment(100, standin.gid))
+        assert wait_for(lambda: robot.cmd_sub.received.messages == before + 1, 5)
+        with pytest.raises(Ros2Error, match="non-finite cmd_vel"):
+            robot.step(observation(0.2, (0.0, 0.0, 0.0)))
+    finally:
+        robot.close()
