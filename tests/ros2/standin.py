@@ -95,8 +95,9 @@ class StandInNav2:
 
     def __init__(self, router: str, domain: int = 0, reach: float = 0.12,
                  type_hash: dict[str, str] | None = None,
-                 auth: tuple[str, str] | None = None) -> None:
+                 auth: tuple[str, str] | None = None, namespace: str = "") -> None:
         self.auth = auth
+        self.ns = namespace  # "robot1/" puts the robot's topics and action under /robot1
         self.router, self.domain, self.reach = router, domain, reach
         self.max_linear = 0.22  # under the robot's drive limit, as a Nav2 config would be
         self.hashes = type_hash or {}
@@ -128,19 +129,20 @@ class StandInNav2:
         d, s = self.domain, self.session
         zid = str(s.zid())
         twist = "geometry_msgs::msg::dds_::Twist_"
-        self.cmd_key = key(d, "cmd_vel", twist, self._hash(twist))
+        self.cmd_key = key(d, f"{self.ns}cmd_vel", twist, self._hash(twist))
         self.cmd_pub = s.declare_publisher(self.cmd_key)
         odom = "nav_msgs::msg::dds_::Odometry_"
         scan = "sensor_msgs::msg::dds_::LaserScan_"
         clock = "rosgraph_msgs::msg::dds_::Clock_"
-        action = "navigate_to_pose/_action"
+        action = f"{self.ns}navigate_to_pose/_action"
+        mangled = self.ns.replace("/", "%")
         tokens = [f"@ros2_lv/{d}/{zid}/0/0/NN/%/%/standin_nav2",
-                  f"@ros2_lv/{d}/{zid}/0/10/MP/%/%/standin_nav2/%cmd_vel/{twist}/"
+                  f"@ros2_lv/{d}/{zid}/0/10/MP/%/%/standin_nav2/%{mangled}cmd_vel/{twist}/"
                   f"{self._hash(twist)}/::,10:,:,:,,"]
         self.declared += [s.liveliness().declare_token(t) for t in tokens]
         self.declared += [
-            s.declare_subscriber(key(d, "odom", odom, self._hash(odom)), self._on_odom),
-            s.declare_subscriber(key(d, "scan", scan, self._hash(scan)), self._on_scan),
+            s.declare_subscriber(key(d, f"{self.ns}odom", odom, self._hash(odom)), self._on_odom),
+            s.declare_subscriber(key(d, f"{self.ns}scan", scan, self._hash(scan)), self._on_scan),
             s.declare_subscriber(key(d, "clock", clock, self._hash(clock)), self._on_clock),
             s.declare_queryable(key(d, f"{action}/send_goal",
                                     "nav2_msgs::action::dds_::NavigateToPose_SendGoal_"),
@@ -153,8 +155,8 @@ class StandInNav2:
                                 self._on_cancel, complete=True),
         ]
         pose = "geometry_msgs::msg::dds_::PoseStamped_"
-        self.declared.append(s.declare_subscriber(key(d, "goal_pose", pose, self._hash(pose)),
-                                                  self._on_goal_pose))
+        self.declared.append(s.declare_subscriber(
+            key(d, f"{self.ns}goal_pose", pose, self._hash(pose)), self._on_goal_pose))
         self.status_pub = s.declare_publisher(
             key(d, f"{action}/status", "action_msgs::msg::dds_::GoalStatusArray_"))
         return self

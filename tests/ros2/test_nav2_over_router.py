@@ -317,3 +317,21 @@ def test_malformed_or_non_finite_commands_are_refused_at_the_edge(
             robot.step(observation(0.2, (0.0, 0.0, 0.0)))
     finally:
         robot.close()
+
+
+def test_a_namespaced_robot_meets_its_stack_and_the_clock_stays_global(
+        zenoh_router: str) -> None:
+    node = StandInNav2(zenoh_router, namespace="robot1/").start()
+    robot = Ros2Controller(parse_options(
+        f"router={zenoh_router},distro=humble,cmd-wait=2,namespace=/robot1", {}))
+    try:
+        robot.reset(CONTEXT)
+        wait_for(lambda: False, 0.3)
+        robot.send_goal(NavGoal("east", 1.0, 0.0, None, 0.25, 30.0))
+        robot.step(observation(0.1, (0.0, 0.0, 0.0)))
+        assert node.counts["odom"] == 1 and node.counts["clock"] == 1
+        assert node.counts["goals"] == 1 and robot.cmd_sub.received.messages == 1
+        assert robot.feedback().state == NavState.ACTIVE
+    finally:
+        robot.close()
+        node.close()
