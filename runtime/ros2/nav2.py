@@ -37,7 +37,7 @@ import numpy as np
 from rei.runtime.messages import NavState
 from rei.runtime.robot.protocol import GoalFeedback, NavGoal
 from rei.runtime.ros2.attachment import Attachment
-from rei.runtime.ros2.names import DEFAULT_QOS, LATCHED_QOS, Distro
+from rei.runtime.ros2.names import DEFAULT_QOS, LATCHED_QOS, Distro, EntityKind
 from rei.runtime.ros2.node import RmwNode
 from rei.runtime.ros2.types import CANCEL_GOAL, GOAL_STATUS_ARRAY, NAVIGATE_TO_POSE
 
@@ -150,14 +150,33 @@ class NavigateToPoseClient:
             goal = self._goal
             if goal is None:
                 return GoalFeedback(NavState.IDLE, None)
-            if goal.state == NavState.PENDING \
-                    and time.monotonic() - goal.sent_at > self._server_wait:
-                goal.state = NavState.ABORTED
-                goal.message = (f"no {ACTION} action server accepted the goal within "
-                                f"{self._server_wait:g} s (is Nav2 running with "
-                                f"RMW_IMPLEMENTATION=rmw_zenoh_cpp on ROS_DOMAIN_ID="
-                                f"{self._node.domain}, connected to REI's router?)")
+            unanswered = goal.state == NavState.PENDING \
+                and time.monotonic() - goal.sent_at > self._server_wait
+        if unanswered:
+            reason = self._why_unanswered()  # asks the graph: outside the lock
+            with self._lock:
+                if goal.state == NavState.PENDING:
+                    goal.state, goal.message = NavState.ABORTED, reason
+        with self._lock:
             return GoalFeedback(goal.state, goal.name, goal.distance, goal.message)
+
+    def _why_unanswered(self) -> str:
+        """Why no server answered, as far as the ROS graph's liveliness tokens tell: a server
+        of another type hash is a distribution mismatch (humble vs jazzy)."""
+        said = (f"no {ACTION} action server accepted the goal within {self._server_wait:g} s")
+        servers = [t for t in self._node.graph(timeout=0.5)
+                   if t.kind == EntityKind.SERVICE and t.topic == self._send.token.topic]
+        if not servers:
+            return (f"{said} (no such server in the ROS graph of domain {self._node.domain}: "
+                    f"is Nav2 running with RMW_IMPLEMENTATION=rmw_zenoh_cpp and ROS_DOMAIN_ID="
+                    f"{self._node.domain}, connected to REI's router?)")
+        theirs = servers[0]
+        if theirs.type_hash != self._send.token.type_hash:
+            return (f"{said}: node {theirs.node_name} serves {theirs.topic} with type hash "
+                    f"{theirs.type_hash}, REI speaks {self._send.token.type_hash} (is the "
+                    f"distro option the stack's: humble writes TypeHashNotSupported, jazzy "
+                    f"RIHS01?)")
+        return f"{said} (node {theirs.node_name} serves {theirs.topic} but did not answer)"
 
     # ---- answers (Zenoh's threads) --------------------------------------------------------
 

@@ -136,7 +136,10 @@ class StandInNav2:
         clock = "rosgraph_msgs::msg::dds_::Clock_"
         action = f"{self.ns}navigate_to_pose/_action"
         mangled = self.ns.replace("/", "%")
+        send_goal = "nav2_msgs::action::dds_::NavigateToPose_SendGoal_"
         tokens = [f"@ros2_lv/{d}/{zid}/0/0/NN/%/%/standin_nav2",
+                  f"@ros2_lv/{d}/{zid}/0/11/SS/%/%/standin_nav2/%{mangled}navigate_to_pose"
+                  f"%_action%send_goal/{send_goal}/{HASHLESS}/::,10:,:,:,,",
                   f"@ros2_lv/{d}/{zid}/0/10/MP/%/%/standin_nav2/%{mangled}cmd_vel/{twist}/"
                   f"{self._hash(twist)}/::,10:,:,:,,"]
         self.declared += [s.liveliness().declare_token(t) for t in tokens]

@@ -190,6 +190,7 @@ def test_a_goal_nobody_serves_is_aborted_with_what_to_check(zenoh_router: str) -
                                  robot.feedback().state)[1] == NavState.ABORTED, 5)
         message = robot.feedback().message
         assert "no navigate_to_pose action server" in message and "ROS_DOMAIN_ID=7" in message
+        assert "no such server in the ROS graph of domain 7" in message
         # no cmd_vel either: the base stays stopped
         assert robot.step(observation(0.2, (0.0, 0.0, 0.0))).linear == 0.0
     finally:
@@ -335,3 +336,22 @@ def test_a_namespaced_robot_meets_its_stack_and_the_clock_stays_global(
     finally:
         robot.close()
         node.close()
+
+
+def test_a_distro_mismatch_is_named_when_the_goal_is_aborted(
+        zenoh_router: str, standin: StandInNav2) -> None:
+    # The stand-in is a Humble stack (TypeHashNotSupported); REI told distro=jazzy: the keys
+    # never meet, and the abort says why from the ROS graph.
+    robot = Ros2Controller(parse_options(
+        f"router={zenoh_router},distro=jazzy,cmd-wait=0,server-wait=0.5", {}))
+    robot.reset(CONTEXT)
+    try:
+        robot.send_goal(NavGoal("g", 1.0, 0.0, None, 0.25, 30.0))
+        assert wait_for(lambda: (robot.step(observation(0.1, (0.0, 0.0, 0.0))),
+                                 robot.feedback().state)[1] == NavState.ABORTED, 5)
+        message = robot.feedback().message
+        assert "node standin_nav2 serves /navigate_to_pose/_action/send_goal with type hash " \
+               "TypeHashNotSupported, REI speaks RIHS01_" in message
+        assert "distro" in message
+    finally:
+        robot.close()
