@@ -50,7 +50,7 @@ def test_the_router_lets_the_stack_drive_and_refuses_its_forgeries(tmp_path: Pat
         reader = monitor.declare_subscriber(keys["odom"].keyexpr,
                                             lambda s: seen.append(s.attachment.to_bytes()))
         adapter = Ros2Controller(parse_options(
-            f"router={endpoint},distro=humble,cmd-wait=2,credentials={folder}", {}))
+            f"router={endpoint},distro=humble,cmd-wait=10,credentials={folder}", {}))
         try:
             adapter.reset(CONTEXT)
             wait_for(lambda: False, 0.3)

@@ -16,6 +16,7 @@ import re
 import subprocess
 import sys
 from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -48,6 +49,27 @@ def standin(zenoh_router: str) -> Iterator[StandInNav2]:
         node.close()
 
 
+@contextmanager
+def adapter(options: str) -> Iterator[Ros2Controller]:
+    """REI's side, reset and given a moment for its subscriptions to meet the stack's."""
+    robot = Ros2Controller(parse_options(options, {}))
+    try:
+        robot.reset(CONTEXT)
+        wait_for(lambda: False, 0.3)
+        yield robot
+    finally:
+        robot.close()
+
+
+def reaches(robot: Ros2Controller, state: NavState, time: float = 0.1,
+            pose: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> bool:
+    """Whether stepping in place brings the goal to ``state`` within 5 wall seconds."""
+    def stepped() -> bool:
+        robot.step(observation(time, pose))
+        return robot.feedback().state == state
+    return wait_for(stepped, 5)
+
+
 def observation(time: float, pose: tuple[float, float, float]) -> Observation:
     scan = LaserScan(-math.pi, 2 * math.pi / 36, 0.1, 5.0, np.full(36, 5.0))
     return Observation(time, pose, (0.0, 0.0), scan, time)
@@ -65,10 +87,10 @@ def tokens(router: str) -> list[str]:
 
 
 def run_mission(router: str, out: Path) -> tuple[subprocess.CompletedProcess[str], dict]:
-    spec = f"ros2:router={router},distro=humble,cmd-wait=1,server-wait=5"
+    spec = f"ros2:router={router},distro=humble,cmd-wait=10,server-wait=20"
     run = subprocess.run([sys.executable, "-m", "rei.runtime.cli", "run",
                           str(REPO / "examples/simple_wall/simple_wall.mission"), "-o", str(out),
-                          "--controller", spec, "--no-variation"],
+                          "--controller", spec, "--no-variation", "--watchdog", "60"],
                          capture_output=True, text=True, timeout=600)
     return run, json.loads((out / "summary.json").read_text())
 
@@ -98,12 +120,8 @@ def test_a_ros2_stack_that_breaks_a_requirement_fails_by_reis_own_rules(
 
 def test_the_adapter_announces_itself_in_the_ros_graph(
         zenoh_router: str, standin: StandInNav2) -> None:
-    robot = Ros2Controller(parse_options(f"router={zenoh_router},distro=humble", {}))
-    robot.reset(CONTEXT)
-    try:
+    with adapter(f"router={zenoh_router},distro=humble"):
         seen = "\n".join(tokens(zenoh_router))
-    finally:
-        robot.close()
     zid = r"[0-9a-f]+"
     for pattern in [
         rf"@ros2_lv/0/{zid}/0/0/NN/%/%/rei_sim",
@@ -132,7 +150,7 @@ def test_jazzy_key_expressions_carry_rihs01_hashes(zenoh_router: str) -> None:
               for t in ("geometry_msgs/msg/Twist", "nav_msgs/msg/Odometry",
                         "sensor_msgs/msg/LaserScan", "rosgraph_msgs/msg/Clock")}
     node = StandInNav2(zenoh_router, type_hash=hashes).start()
-    robot = Ros2Controller(parse_options(f"router={zenoh_router},distro=jazzy,cmd-wait=2",
+    robot = Ros2Controller(parse_options(f"router={zenoh_router},distro=jazzy,cmd-wait=10",
                                          {}))
     try:
         robot.reset(CONTEXT)
@@ -150,11 +168,7 @@ def test_jazzy_key_expressions_carry_rihs01_hashes(zenoh_router: str) -> None:
 
 def test_goals_follow_the_action_and_a_cancel_preempts(
         zenoh_router: str, standin: StandInNav2) -> None:
-    robot = Ros2Controller(parse_options(f"router={zenoh_router},distro=humble,cmd-wait=1",
-                                         {}))
-    robot.reset(CONTEXT)
-    try:
-        wait_for(lambda: False, 0.3)
+    with adapter(f"router={zenoh_router},distro=humble,cmd-wait=10") as robot:
         robot.send_goal(NavGoal("east", 1.0, 0.0, None, 0.25, 30.0))
         # send_goal waited (cmd-wait) for the server, which accepted it
         assert robot.feedback().state == NavState.ACTIVE
@@ -173,28 +187,19 @@ def test_goals_follow_the_action_and_a_cancel_preempts(
         robot.send_goal(NavGoal("back", 0.0, 0.0, None, 0.25, 30.0))
         assert wait_for(lambda: standin.counts["goals"] == 2, 5)
         robot.cancel_goal()
-        assert wait_for(lambda: (robot.step(observation(time, tuple(pose))),  # type: ignore
-                                 robot.feedback().state)[1] == NavState.PREEMPTED, 5)
+        assert reaches(robot, NavState.PREEMPTED, time, (pose[0], pose[1], pose[2]))
         assert standin.counts["cancels"] == 1
-    finally:
-        robot.close()
 
 
 def test_a_goal_nobody_serves_is_aborted_with_what_to_check(zenoh_router: str) -> None:
-    robot = Ros2Controller(parse_options(
-        f"router={zenoh_router},domain=7,cmd-wait=0,server-wait=0.5", {}))
-    robot.reset(CONTEXT)
-    try:
+    with adapter(f"router={zenoh_router},domain=7,cmd-wait=0,server-wait=0.5") as robot:
         robot.send_goal(NavGoal("g", 1.0, 0.0, None, 0.25, 30.0))
-        assert wait_for(lambda: (robot.step(observation(0.1, (0.0, 0.0, 0.0))),
-                                 robot.feedback().state)[1] == NavState.ABORTED, 5)
+        assert reaches(robot, NavState.ABORTED)
         message = robot.feedback().message
         assert "no navigate_to_pose action server" in message and "ROS_DOMAIN_ID=7" in message
         assert "no such server in the ROS graph of domain 7" in message
         # no cmd_vel either: the base stays stopped
         assert robot.step(observation(0.2, (0.0, 0.0, 0.0))).linear == 0.0
-    finally:
-        robot.close()
 
 
 @pytest.mark.parametrize(("text", "message"), [
@@ -243,7 +248,7 @@ def test_the_adapter_passes_the_controller_conformance_checker(
     # REI's own checker of the robot contract, with the stand-in stack answering: the goal
     # states, cancel, and two runs after reset() giving the same commands.
     from rei.runtime.robot.conformance import check_controller
-    robot = Ros2Controller(parse_options(f"router={zenoh_router},distro=humble,cmd-wait=1",
+    robot = Ros2Controller(parse_options(f"router={zenoh_router},distro=humble,cmd-wait=10",
                                          {}))
     try:
         assert check_controller(robot, steps=300) == []
@@ -253,11 +258,7 @@ def test_the_adapter_passes_the_controller_conformance_checker(
 
 def test_a_goal_on_the_simple_topic_ends_when_odometry_is_there(
         zenoh_router: str, standin: StandInNav2) -> None:
-    robot = Ros2Controller(parse_options(
-        f"router={zenoh_router},distro=humble,cmd-wait=1,goals=topic", {}))
-    robot.reset(CONTEXT)
-    try:
-        wait_for(lambda: False, 0.3)
+    with adapter(f"router={zenoh_router},distro=humble,cmd-wait=10,goals=topic") as robot:
         robot.send_goal(NavGoal("east", 0.6, 0.0, None, 0.25, 30.0))
         assert robot.feedback().state == NavState.ACTIVE
         assert wait_for(lambda: standin.counts["goal_pose"] == 1, 5)
@@ -271,8 +272,6 @@ def test_a_goal_on_the_simple_topic_ends_when_odometry_is_there(
                 break
         assert states[-1] == NavState.SUCCEEDED and abs(pose[0] - 0.6) <= 0.25
         assert standin.counts["goals"] == 0  # the action was not used
-    finally:
-        robot.close()
 
 
 def test_a_stack_that_answers_in_time_gives_byte_identical_runs(
@@ -324,7 +323,7 @@ def test_a_namespaced_robot_meets_its_stack_and_the_clock_stays_global(
         zenoh_router: str) -> None:
     node = StandInNav2(zenoh_router, namespace="robot1/").start()
     robot = Ros2Controller(parse_options(
-        f"router={zenoh_router},distro=humble,cmd-wait=2,namespace=/robot1", {}))
+        f"router={zenoh_router},distro=humble,cmd-wait=10,namespace=/robot1", {}))
     try:
         robot.reset(CONTEXT)
         wait_for(lambda: False, 0.3)
@@ -342,16 +341,10 @@ def test_a_distro_mismatch_is_named_when_the_goal_is_aborted(
         zenoh_router: str, standin: StandInNav2) -> None:
     # The stand-in is a Humble stack (TypeHashNotSupported); REI told distro=jazzy: the keys
     # never meet, and the abort says why from the ROS graph.
-    robot = Ros2Controller(parse_options(
-        f"router={zenoh_router},distro=jazzy,cmd-wait=0,server-wait=0.5", {}))
-    robot.reset(CONTEXT)
-    try:
+    with adapter(f"router={zenoh_router},distro=jazzy,cmd-wait=0,server-wait=0.5") as robot:
         robot.send_goal(NavGoal("g", 1.0, 0.0, None, 0.25, 30.0))
-        assert wait_for(lambda: (robot.step(observation(0.1, (0.0, 0.0, 0.0))),
-                                 robot.feedback().state)[1] == NavState.ABORTED, 5)
+        assert reaches(robot, NavState.ABORTED)
         message = robot.feedback().message
         assert "node standin_nav2 serves /navigate_to_pose/_action/send_goal with type hash " \
                "TypeHashNotSupported, REI speaks RIHS01_" in message
         assert "distro" in message
-    finally:
-        robot.close()
