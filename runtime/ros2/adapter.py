@@ -65,7 +65,7 @@ from rei.runtime.ros2.names import (
     check_node_name,
 )
 from rei.runtime.ros2.nav2 import NavigateToPoseClient, yaw_quaternion
-from rei.runtime.ros2.node import RmwNode, client_config, import_zenoh
+from rei.runtime.ros2.node import Publisher, RmwNode, client_config, import_zenoh
 from rei.runtime.ros2.types import CLOCK, POSE_STAMPED
 
 
@@ -209,6 +209,8 @@ class Ros2Controller:
         self._goal: NavGoal | None = None
         self._topic_goal_state = NavState.IDLE
         self._static_sent = False
+        self._action: NavigateToPoseClient | None = None
+        self._goal_pub: Publisher | None = None
         self._bad_cmd = ""
         self._waits_missed = 0
         """Ticks whose cmd_vel did not come within cmd-wait (for the docs' timing model)."""
@@ -240,8 +242,8 @@ class Ros2Controller:
         self._scan = node.publisher(_topic("/scan"), SCAN, SENSOR_QOS)
         self.cmd_sub = node.subscription(_topic("/cmd_vel"), TWIST, self._on_cmd, DEFAULT_QOS)
         if o.goals == "action":
-            self._action: NavigateToPoseClient | None = NavigateToPoseClient(
-                node, server_wait=o.server_wait, seed=context.seed)
+            self._action = NavigateToPoseClient(node, server_wait=o.server_wait,
+                                                seed=context.seed)
             self._goal_pub = None
         else:
             self._action = None
@@ -256,7 +258,8 @@ class Ros2Controller:
         self._time_t, self._header_t = t["builtin_interfaces/msg/Time"], t["std_msgs/msg/Header"]
 
     def close(self) -> None:
-        """Leave the ROS graph and close the session (the host calls it at the end)."""
+        """Leave the ROS graph and close the session (a new ``reset`` does it first; the
+        robot's host process ends with the run, which closes it all the same)."""
         if self._node is not None:
             self._node.close()
             self._node = None
@@ -270,6 +273,8 @@ class Ros2Controller:
     # ---- goals ----------------------------------------------------------------------------
 
     def send_goal(self, goal: NavGoal) -> None:
+        if self._node is None:
+            raise Ros2Error("ros2 controller: send_goal() before reset()")
         self._goal = goal
         if self._action is not None:
             self._action.send(goal, stamp_ns(self._sim_time), self.options.cmd_wait)
