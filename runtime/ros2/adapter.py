@@ -19,7 +19,8 @@ clock moves, and REI gives it up to ``cmd-wait`` per tick to answer; an answer t
 later is used at the next tick. The latest command is held, as a real base holds it, for
 ``cmd-timeout`` simulated seconds, after which the base stops (a base's command watchdog).
 A goal and a cancel are given the same ``cmd-wait`` for the server's answer, so a stack that
-answers in time knows them before simulated time moves on. So a run with a ROS stack depends
+answers in time knows them before simulated time moves on; the goal's state is read as it
+stood when a tick began (the stack's answer to a tick counts at the next). So a run with a ROS stack depends
 on wall-clock timing: it repeats exactly only while the stack answers within the waits,
 unlike a Python controller's run; the verdict is still REI's, from its own ground truth.
 
@@ -304,6 +305,10 @@ class Ros2Controller:
             raise Ros2Error("ros2 controller: step() before reset()")
         now = observation.time
         self._sim_time = now
+        # The goal's state as the stack had told it when this tick began: what it says in
+        # answer to this tick's messages (a status beside the cmd_vel, on another thread)
+        # counts at the next tick, so the order of two callbacks never decides a run.
+        self._feedback = self._goal_feedback(observation)
         with self._lock:
             seen = self._cmd_count
         self._publish_sensors(observation)
@@ -321,7 +326,6 @@ class Ros2Controller:
                 raise Ros2Error(self._bad_cmd)
             fresh = now - self._cmd_sim_time <= self.options.cmd_timeout
             command = self._cmd if fresh else STOP
-        self._feedback = self._goal_feedback(observation)
         return command
 
     def _goal_feedback(self, observation: Observation) -> GoalFeedback:

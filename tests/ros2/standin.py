@@ -49,18 +49,103 @@ _CANCEL = {"Request": "action_msgs/GoalInfo goal_info\n",
            "Response": "int8 return_code\naction_msgs/GoalInfo[] goals_canceling\n"}
 
 
-def humble_store() -> Any:
-    """rosbags' Humble store with NavigateToPose and CancelGoal, registered under the
-    names the wire uses (rosbags' parser files every type under .../msg/)."""
-    store = get_typestore(Stores.ROS2_HUMBLE)
+# branch jazzy (f4108e5b1c2bce804a1aa0c7be6673a8eb4a1501): the result's fields changed
+_JAZZY_RESULT = "uint16 error_code\nstring error_msg\n"
+
+
+def humble_store(jazzy: bool = False) -> Any:
+    """rosbags' Humble (or Jazzy) store with NavigateToPose and CancelGoal, registered under
+    the names the wire uses (rosbags' parser files every type under .../msg/)."""
+    store = get_typestore(Stores.ROS2_JAZZY if jazzy else Stores.ROS2_HUMBLE)
     types: dict[str, Any] = {}
     for part, text in _HUMBLE_ACTION.items():
+        if jazzy and part == "Result":
+            text = _JAZZY_RESULT
         text = text.replace("nav2msgs_placeholder_", "nav2_msgs/msg/NavigateToPose_")
         types.update(get_types_from_msg(text, f"nav2_msgs/msg/NavigateToPose_{part}"))
     for part, text in _CANCEL.items():
         types.update(get_types_from_msg(text, f"action_msgs/msg/CancelGoal_{part}"))
     store.register({_wire(name): _wire(definition) for name, definition in types.items()})
     return store
+
+
+# REP 2011's RIHS01, written here from the REP and type_description_interfaces'
+# FieldType.msg (not with rosbags' hash_rihs01, nor rei.runtime.ros2's): SHA-256 of the JSON
+# of the type's description and its referenced descriptions sorted by name; a field is
+# {name, type: {type_id, capacity, string_capacity, nested_type_name}}; arrays add 48,
+# bounded sequences 96, unbounded 144 to the element's id; a .msg char is uint8 (rosidl).
+_FIELD_TYPE = {"int8": 2, "uint8": 3, "char": 3, "int16": 4, "uint16": 5, "int32": 6,
+               "uint32": 7, "int64": 8, "uint64": 9, "float32": 10, "float64": 11,
+               "bool": 15, "byte": 16, "string": 17}
+
+
+def rihs01(fields_of: Any, name: str) -> str:
+    import hashlib
+    import json
+    described: dict[str, Any] = {}
+
+    def element(definition: Any) -> tuple[int, int, str]:
+        kind, detail = definition
+        if int(kind) == 2:  # a nested type
+            describe(detail)
+            return 1, 0, detail
+        base, bound = detail
+        if base == "string" and bound:
+            return 21, bound, ""
+        return _FIELD_TYPE[base], 0, ""
+
+    def field(fname: str, definition: Any) -> dict[str, Any]:
+        kind, detail = definition
+        capacity, offset = 0, 0
+        if int(kind) == 3:  # array
+            definition, capacity, offset = detail[0], detail[1], 48
+        elif int(kind) == 4:  # sequence
+            definition, capacity = detail[0], detail[1]
+            offset = 96 if capacity else 144
+        type_id, string_capacity, nested = element(definition)
+        return {"name": fname, "type": {"type_id": type_id + offset, "capacity": capacity,
+                                        "string_capacity": string_capacity,
+                                        "nested_type_name": nested}}
+
+    def describe(typename: str) -> None:
+        if typename in described:
+            return
+        described[typename] = None
+        fields = fields_of[typename][1] or [
+            ("structure_needs_at_least_one_member", (1, ("uint8", 0)))]
+        described[typename] = {"type_name": typename,
+                               "fields": [field(n, d) for n, d in fields]}
+
+    describe(name)
+    body = {"type_description": described[name],
+            "referenced_type_descriptions": [described[k] for k in sorted(described)
+                                             if k != name]}
+    return "RIHS01_" + hashlib.sha256(json.dumps(body).encode()).hexdigest()
+
+
+def jazzy_hashes() -> dict[str, str]:
+    """The RIHS01 of every DDS type the stand-in meets, services included (a service is
+    described by request_message, response_message and the _Event rosidl derives)."""
+    store = humble_store(jazzy=True)
+    fields_of = dict(store.fielddefs)
+    for service in (f"{ACTION}_SendGoal", f"{ACTION}_GetResult", "action_msgs/srv/CancelGoal"):
+        fields_of[f"{service}_Event"] = ([], [
+            ("info", (2, "service_msgs/msg/ServiceEventInfo")),
+            ("request", (4, ((2, f"{service}_Request"), 1))),
+            ("response", (4, ((2, f"{service}_Response"), 1)))])
+        fields_of[service] = ([], [("request_message", (2, f"{service}_Request")),
+                                   ("response_message", (2, f"{service}_Response")),
+                                   ("event_message", (2, f"{service}_Event"))])
+    names = ["geometry_msgs/msg/Twist", "nav_msgs/msg/Odometry", "sensor_msgs/msg/LaserScan",
+             "rosgraph_msgs/msg/Clock", "geometry_msgs/msg/PoseStamped",
+             "action_msgs/msg/GoalStatusArray", f"{ACTION}_FeedbackMessage",
+             f"{ACTION}_SendGoal", f"{ACTION}_GetResult", "action_msgs/srv/CancelGoal"]
+    return {_dds(n): rihs01(fields_of, n) for n in names}
+
+
+def _dds(msgtype: str) -> str:
+    package, kind, name = msgtype.split("/")
+    return f"{package}::{kind}::dds_::{name}_"
 
 
 def _wire(item: Any) -> Any:
@@ -95,13 +180,14 @@ class StandInNav2:
 
     def __init__(self, router: str, domain: int = 0, reach: float = 0.12,
                  type_hash: dict[str, str] | None = None,
-                 auth: tuple[str, str] | None = None, namespace: str = "") -> None:
-        self.auth = auth
+                 auth: tuple[str, str] | None = None, namespace: str = "",
+                 jazzy: bool = False) -> None:
+        self.auth, self.jazzy = auth, jazzy
         self.ns = namespace  # "robot1/" puts the robot's topics and action under /robot1
         self.router, self.domain, self.reach = router, domain, reach
         self.max_linear = 0.22  # under the robot's drive limit, as a Nav2 config would be
-        self.hashes = type_hash or {}
-        self.store = humble_store()
+        self.hashes = type_hash or (jazzy_hashes() if jazzy else {})
+        self.store = humble_store(jazzy)
         self.lock = threading.Lock()
         self.goal: tuple[bytes, float, float] | None = None
         self.result_queries: dict[bytes, Any] = {}
@@ -116,6 +202,9 @@ class StandInNav2:
 
     def _hash(self, dds: str) -> str:
         return self.hashes.get(dds, HASHLESS)
+
+    def _key(self, name: str, dds: str) -> str:
+        return key(self.domain, name, dds, self._hash(dds))
 
     def start(self) -> StandInNav2:
         config = zenoh.Config()
@@ -139,7 +228,7 @@ class StandInNav2:
         send_goal = "nav2_msgs::action::dds_::NavigateToPose_SendGoal_"
         tokens = [f"@ros2_lv/{d}/{zid}/0/0/NN/%/%/standin_nav2",
                   f"@ros2_lv/{d}/{zid}/0/11/SS/%/%/standin_nav2/%{mangled}navigate_to_pose"
-                  f"%_action%send_goal/{send_goal}/{HASHLESS}/::,10:,:,:,,",
+                  f"%_action%send_goal/{send_goal}/{self._hash(send_goal)}/::,10:,:,:,,",
                   f"@ros2_lv/{d}/{zid}/0/10/MP/%/%/standin_nav2/%{mangled}cmd_vel/{twist}/"
                   f"{self._hash(twist)}/::,10:,:,:,,"]
         self.declared += [s.liveliness().declare_token(t) for t in tokens]
@@ -147,21 +236,20 @@ class StandInNav2:
             s.declare_subscriber(key(d, f"{self.ns}odom", odom, self._hash(odom)), self._on_odom),
             s.declare_subscriber(key(d, f"{self.ns}scan", scan, self._hash(scan)), self._on_scan),
             s.declare_subscriber(key(d, "clock", clock, self._hash(clock)), self._on_clock),
-            s.declare_queryable(key(d, f"{action}/send_goal",
-                                    "nav2_msgs::action::dds_::NavigateToPose_SendGoal_"),
+            s.declare_queryable(self._key(f"{action}/send_goal", send_goal),
                                 self._on_send_goal, complete=True),
-            s.declare_queryable(key(d, f"{action}/get_result",
-                                    "nav2_msgs::action::dds_::NavigateToPose_GetResult_"),
+            s.declare_queryable(self._key(f"{action}/get_result",
+                                          "nav2_msgs::action::dds_::NavigateToPose_GetResult_"),
                                 self._on_get_result, complete=True),
-            s.declare_queryable(key(d, f"{action}/cancel_goal",
-                                    "action_msgs::srv::dds_::CancelGoal_"),
+            s.declare_queryable(self._key(f"{action}/cancel_goal",
+                                          "action_msgs::srv::dds_::CancelGoal_"),
                                 self._on_cancel, complete=True),
         ]
         pose = "geometry_msgs::msg::dds_::PoseStamped_"
-        self.declared.append(s.declare_subscriber(
-            key(d, f"{self.ns}goal_pose", pose, self._hash(pose)), self._on_goal_pose))
+        self.declared.append(s.declare_subscriber(self._key(f"{self.ns}goal_pose", pose),
+                                                  self._on_goal_pose))
         self.status_pub = s.declare_publisher(
-            key(d, f"{action}/status", "action_msgs::msg::dds_::GoalStatusArray_"))
+            self._key(f"{action}/status", "action_msgs::msg::dds_::GoalStatusArray_"))
         return self
 
     def close(self) -> None:
@@ -276,9 +364,10 @@ class StandInNav2:
         self._status(uuid, status)
         if query is not None:
             t = self.store.types
-            self._reply(query, t[f"{ACTION}_GetResult_Response"](
-                status, t[f"{ACTION}_Result"](t["std_msgs/msg/Empty"]())),
-                f"{ACTION}_GetResult_Response")
+            result = t[f"{ACTION}_Result"](0, "") if self.jazzy else \
+                t[f"{ACTION}_Result"](t["std_msgs/msg/Empty"]())
+            self._reply(query, t[f"{ACTION}_GetResult_Response"](status, result),
+                        f"{ACTION}_GetResult_Response")
             query.drop()
 
     def _status(self, uuid: bytes, status: int) -> None:

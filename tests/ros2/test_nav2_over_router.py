@@ -86,8 +86,9 @@ def tokens(router: str) -> list[str]:
                 if r.ok is not None]
 
 
-def run_mission(router: str, out: Path) -> tuple[subprocess.CompletedProcess[str], dict]:
-    spec = f"ros2:router={router},distro=humble,cmd-wait=10,server-wait=20"
+def run_mission(router: str, out: Path, distro: str = "humble"
+                ) -> tuple[subprocess.CompletedProcess[str], dict]:
+    spec = f"ros2:router={router},distro={distro},cmd-wait=10,server-wait=20"
     run = subprocess.run([sys.executable, "-m", "rei.runtime.cli", "run",
                           str(REPO / "examples/simple_wall/simple_wall.mission"), "-o", str(out),
                           "--controller", spec, "--no-variation", "--watchdog", "60"],
@@ -348,3 +349,21 @@ def test_a_distro_mismatch_is_named_when_the_goal_is_aborted(
         assert "node standin_nav2 serves /navigate_to_pose/_action/send_goal with type hash " \
                "TypeHashNotSupported, REI speaks RIHS01_" in message
         assert "distro" in message
+
+
+def test_a_jazzy_stack_with_independently_computed_hashes_drives_the_mission(
+        zenoh_router: str, tmp_path: Path) -> None:
+    # The stand-in as a Jazzy stack: every key carries the RIHS01 hash it computed itself
+    # (standin.rihs01, written from REP 2011, services included), the action's result is
+    # Jazzy's (error_code, error_msg). REI with distro=jazzy meets it on every key.
+    from tests.ros2.standin import jazzy_hashes
+    hashes = jazzy_hashes()
+    assert all(h.startswith("RIHS01_") for h in hashes.values())
+    node = StandInNav2(zenoh_router, jazzy=True).start()
+    try:
+        run, summary = run_mission(zenoh_router, tmp_path / "out", distro="jazzy")
+    finally:
+        node.close()
+    assert run.returncode == 0, (run.stdout[-2000:], run.stderr[-2000:], summary)
+    assert summary["verdict"] == "pass" and node.counts["goals"] == 2
+    assert node.counts["bad_attachment"] == 0 and node.counts["scan"] > 5
