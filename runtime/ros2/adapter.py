@@ -20,9 +20,10 @@ later is used at the next tick. The latest command is held, as a real base holds
 ``cmd-timeout`` simulated seconds, after which the base stops (a base's command watchdog).
 A goal and a cancel are given the same ``cmd-wait`` for the server's answer, so a stack that
 answers in time knows them before simulated time moves on; the goal's state is read as it
-stood when a tick began (the stack's answer to a tick counts at the next). So a run with a ROS stack depends
-on wall-clock timing: it repeats exactly only while the stack answers within the waits,
-unlike a Python controller's run; the verdict is still REI's, from its own ground truth.
+stood when a tick began (the stack's answer to a tick counts at the next). So a run with a
+ROS stack depends on wall-clock timing: it repeats exactly only while the stack answers
+within the waits, unlike a Python controller's run; the verdict is still REI's, from its own
+ground truth.
 
 Goals go to Nav2's ``navigate_to_pose`` action (``nav2.NavigateToPoseClient``), or with
 ``goals=topic`` as a geometry_msgs/PoseStamped on ``goal_pose`` (what RViz's "2D Goal Pose"
