@@ -105,11 +105,12 @@ def render(frame: WatchFrame, footer: str = "", max_objects: int | None = None) 
                                          style=style))
     signals = Table(title="recent signals", title_justify="left", expand=True,
                     show_edge=False, pad_edge=False)
-    signals.add_column("time", justify="right")
-    signals.add_column("signal", no_wrap=True, overflow="ellipsis")
-    signals.add_column("utility", justify="right")
-    signals.add_column("total", justify="right")
-    signals.add_column("objects", overflow="ellipsis", no_wrap=True)
+    # on a narrow screen the names give way, never the numbers
+    signals.add_column("time", justify="right", min_width=5, no_wrap=True)
+    signals.add_column("signal", no_wrap=True, overflow="ellipsis", ratio=3)
+    signals.add_column("utility", justify="right", min_width=4, no_wrap=True)
+    signals.add_column("total", justify="right", min_width=5, no_wrap=True)
+    signals.add_column("objects", overflow="ellipsis", no_wrap=True, ratio=1)
     for row in frame.recent:
         style = "red" if row.utility < 0 else "green" if row.utility > 0 else ""
         signals.add_row(f"{row.time:.1f}", Text(row.signal, style=style), f"{row.utility:+g}",
