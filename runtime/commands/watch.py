@@ -14,6 +14,8 @@ import argparse
 import sys
 import tempfile
 import threading
+import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -45,6 +47,29 @@ def _port(text: str) -> int:
     if not text.isdigit() or not 0 <= int(text) <= 65535:
         raise argparse.ArgumentTypeError(f"expected a port number 0-65535, found {text!r}")
     return int(text)
+
+
+SETTLE = 0.5
+"""Wall seconds without a new subscription after which a client counts as subscribed: a
+Foxglove client subscribes to what its panels show in one burst when it connects."""
+
+
+class SubscriptionBurst:
+    """``rei watch --wait``: has a client subscribed, and has its burst of subscriptions
+    ended? (Told from the server's thread.)"""
+
+    def __init__(self, clock: Callable[[], float] = time.monotonic) -> None:
+        self.clock = clock
+        self._last: float | None = None
+        self._lock = threading.Lock()
+
+    def add(self, topic: str) -> None:
+        with self._lock:
+            self._last = self.clock()
+
+    def settled(self) -> bool:
+        with self._lock:
+            return self._last is not None and self.clock() - self._last >= SETTLE
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -123,10 +148,10 @@ def _watch(args: argparse.Namespace) -> int:
     full_screen = not args.plain and sys.stdout.isatty()
     screen = TerminalView() if full_screen else None
     views: list[View] = [screen if screen is not None else LineView()]
-    subscribed = threading.Event()
+    subscriptions = SubscriptionBurst()
     foxglove = None
     if args.foxglove is not None:
-        foxglove = FoxgloveView(args.foxglove, on_subscribe=lambda _topic: subscribed.set())
+        foxglove = FoxgloveView(args.foxglove, on_subscribe=subscriptions.add)
         foxglove.serve()
         print(f"rei watch: Foxglove server at {foxglove.url} (Foxglove: Open connection > "
               f"Foxglove WebSocket)", file=sys.stderr, flush=True)
@@ -138,8 +163,8 @@ def _watch(args: argparse.Namespace) -> int:
             if args.wait:
                 print("rei watch: waiting for a Foxglove client to subscribe", file=sys.stderr,
                       flush=True)
-                while not subscribed.wait(0.1):
-                    if any(k in quit_keys for k in keys.pressed()):
+                while not subscriptions.settled():
+                    if any(k in quit_keys for k in keys.pressed(0.05)):
                         return EXIT_INTERRUPTED
             watcher = Watcher(views, args.vepl, Path(work), functions=user)
             summary = watcher.watch(RecordedSource(args.replay, args.speed),

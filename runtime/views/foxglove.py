@@ -39,6 +39,9 @@ PATH = "nav_msgs/msg/Path"
 PATH_STEP = 0.05
 """m: the robot's route gets a new pose when it moved this far (a path of every sample of
 a long run would grow by the sample rate, for nothing a viewer can see)."""
+BACKLOG = 16384
+"""Messages queued per client before the oldest are dropped: a replay at full speed sends
+a burst (some six messages per sample) that a client on a busy machine reads behind."""
 INSTALL_HINT = ("the Foxglove server needs the 'foxglove-sdk' package: "
                 "pip install 'rei-testbed[watch]' (or pip install 'foxglove-sdk>=0.30,<0.31')")
 
@@ -91,11 +94,20 @@ class FoxgloveView:
         try:
             self._server = sdk.start_server(
                 name="REI watch", host=HOST, port=self.requested, context=self._context,
-                capabilities=[Capability.Time], server_listener=Listener())
+                capabilities=[Capability.Time], server_listener=Listener(),
+                message_backlog_size=BACKLOG)
         except RuntimeError as exc:
             raise WatchError(f"cannot start the Foxglove server on {HOST}:{self.requested}: "
                              f"{exc}") from None
         self.port = int(self._server.port)
+        # advertised before the stream starts, so a client can subscribe and be waited for
+        with self._lock:
+            for topic, msgtype in {**TOPICS, PATH_TOPIC: PATH, GOALS_TOPIC: PATH}.items():
+                self._channels[topic] = self._channel(topic, msgtype)
+            self._channels[TRACE_TOPIC] = sdk.Channel(
+                TRACE_TOPIC, schema=sdk.Schema(name="rei/TraceRecord", encoding="jsonschema",
+                                               data=b'{"type":"object"}'),
+                message_encoding="json", context=self._context)
         return self.port
 
     @property
@@ -114,16 +126,9 @@ class FoxgloveView:
     def start(self, header: StreamHeader) -> None:
         if self._server is None:
             self.serve()
-        sdk = self._sdk
         views = self._views
         with self._lock:
             self._header = header
-            for topic, msgtype in {**TOPICS, PATH_TOPIC: PATH, GOALS_TOPIC: PATH}.items():
-                self._channels[topic] = self._channel(topic, msgtype)
-            self._channels[TRACE_TOPIC] = sdk.Channel(
-                TRACE_TOPIC, schema=sdk.Schema(name="rei/TraceRecord", encoding="jsonschema",
-                                               data=b'{"type":"object"}'),
-                message_encoding="json", context=self._context)
             self._latched = {"/tf_static": views.laser_mount(header, 0.0),
                              "/world/markers": views.markers(header, 0.0),
                              GOALS_TOPIC: self._goals(header)}
