@@ -86,9 +86,17 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                     "run's verdict (0 pass, 1 fail or inconclusive, 2 invalid input, 3 a monitor "
                     "or recorded run error, 130 interrupted or quit before the end).",
         epilog=EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--replay", type=Path, required=True, metavar="TRACE",
+    source = parser.add_mutually_exclusive_group(required=True)
+    source.add_argument("--replay", type=Path, metavar="TRACE",
                         help="a recorded run: trace.jsonl, or recording.mcap of `rei run "
                              "--record`")
+    source.add_argument("--bus", metavar="ENDPOINT",
+                        help="a run on the bus (`rei bus` prints its endpoint, e.g. "
+                             "tcp/127.0.0.1:7447), joined as a viewer; waits for the next "
+                             "run to start; needs the 'bus' extra")
+    parser.add_argument("--credentials", type=Path, default=None, metavar="DIR",
+                        help="with --bus: the folder `rei bus` printed (or the viewer's "
+                             "file; default $REI_BUS_CREDENTIALS)")
     parser.add_argument("--speed", type=_speed, default=1.0, metavar="F",
                         help="play the recording F times faster than it ran (default 1: "
                              "real time; 0: as fast as it is read)")
@@ -135,11 +143,11 @@ def _watch(args: argparse.Namespace) -> int:
     from rei.runtime.monitor.functions import load_functions  # noqa: PLC0415
     from rei.runtime.results import judge  # noqa: PLC0415
     from rei.runtime.views.foxglove import FoxgloveView  # noqa: PLC0415
-    from rei.runtime.views.frames import View, Watcher  # noqa: PLC0415
-    from rei.runtime.views.sources import RecordedSource  # noqa: PLC0415
+    from rei.runtime.views.frames import StreamSource, View, Watcher  # noqa: PLC0415
+    from rei.runtime.views.sources import BusSource, RecordedSource, WatchStopped  # noqa: PLC0415
     from rei.runtime.views.terminal import Keys, LineView, TerminalView  # noqa: PLC0415
 
-    if not args.replay.is_file():
+    if args.replay is not None and not args.replay.is_file():
         print(f"rei watch: error: {args.replay}: expected a trace.jsonl or recording.mcap "
               f"file, found {'a folder' if args.replay.is_dir() else 'nothing'}",
               file=sys.stderr)
@@ -166,9 +174,17 @@ def _watch(args: argparse.Namespace) -> int:
                 while not subscriptions.settled():
                     if any(k in quit_keys for k in keys.pressed(0.05)):
                         return EXIT_INTERRUPTED
+            def quit_pressed() -> bool:
+                return any(k in quit_keys for k in keys.pressed())
+
+            source: StreamSource = RecordedSource(args.replay, args.speed) \
+                if args.replay is not None else BusSource(args.bus, args.credentials,
+                                                          stop=quit_pressed)
+            if args.bus is not None:
+                print(f"rei watch: waiting for a run on the bus at {args.bus}",
+                      file=sys.stderr, flush=True)
             watcher = Watcher(views, args.vepl, Path(work), functions=user)
-            summary = watcher.watch(RecordedSource(args.replay, args.speed),
-                                    stop=lambda: any(k in quit_keys for k in keys.pressed()))
+            summary = watcher.watch(source, stop=quit_pressed)
             interactive = screen is not None or foxglove is not None
             if interactive and not args.exit and summary.reason != "stopped watching":
                 try:  # the run is judged: Ctrl-C here only ends the holding
@@ -176,7 +192,7 @@ def _watch(args: argparse.Namespace) -> int:
                         pass
                 except KeyboardInterrupt:
                     pass
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, WatchStopped):
         return EXIT_INTERRUPTED
     finally:
         if screen is not None:
