@@ -3,7 +3,9 @@
 `rei watch --replay TRACE` plays a recorded run (trace.jsonl or recording.mcap) at
 ``--speed`` times real time through the same automata and evaluator as `rei replay`, and
 shows it (rei.runtime.views): full-screen on a terminal, one line per signal into a pipe
-(or with --plain), and with --foxglove PORT on a Foxglove WebSocket server. Exit status:
+(or with --plain), and with --foxglove PORT on a Foxglove WebSocket server. `rei watch --bus
+ENDPOINT` does the same with the run a simulation publishes on the bus, live. It only reads:
+it never sends anything to a run. Exit status:
 the watched run's verdict as `rei replay` gives it (0 pass, 1 fail or inconclusive, 2
 invalid input, 3 a monitor or recorded run error, 130 interrupted or quit before the end).
 """
@@ -13,6 +15,7 @@ from __future__ import annotations
 import argparse
 import sys
 import tempfile
+import textwrap
 import threading
 import time
 from collections.abc import Callable
@@ -30,6 +33,7 @@ examples:
   rei watch --replay out/nav/trace.jsonl --foxglove 8765 --wait
         # then in Foxglove: Open connection > Foxglove WebSocket > ws://127.0.0.1:8765
   rei watch --replay out/nav/trace.jsonl --speed 0 --plain   # signals as lines, at once
+  rei watch --bus tcp/127.0.0.1:7447 --credentials ~/.rei/bus  # the next run on the bus
 """
 
 
@@ -76,7 +80,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser = sub.add_parser(
         "watch", help="watch a run live: objects FAR/CLOSE/COLLISION, task, signals, "
                       "utility (terminal, Foxglove)",
-        description="Watch a run as the thesis's monitor showed it: each watched object's "
+        description=textwrap.fill(
+                    "Watch a run as the thesis's monitor showed it: each watched object's "
                     "FAR / CLOSE / COLLISION state, the current task, the latest signals, the "
                     "total utility and the simulated-time factor, judged by the same event "
                     "automata as `rei run` (the default .vepl unless --vepl). On a terminal the "
@@ -84,7 +89,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                     "line per signal. --foxglove serves the run to Foxglove on 127.0.0.1, on the "
                     "channels of `rei run --record`'s recording.mcap. Exit status: the watched "
                     "run's verdict (0 pass, 1 fail or inconclusive, 2 invalid input, 3 a monitor "
-                    "or recorded run error, 130 interrupted or quit before the end).",
+                    "or recorded run error, or a server that cannot start, 130 interrupted or "
+                    "quit before the end).", 88),
         epilog=EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--replay", type=Path, metavar="TRACE",
@@ -111,7 +117,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                         help="also serve the run to Foxglove (WebSocket on 127.0.0.1:PORT; 0 "
                              "picks a free port, printed on stderr); needs the 'watch' extra")
     parser.add_argument("--wait", action="store_true",
-                        help="with --foxglove: start playing when a Foxglove client subscribes")
+                        help="with --foxglove: start playing when a Foxglove client has "
+                             "subscribed (its burst of subscriptions settled for 0.5 s)")
     parser.add_argument("--plain", action="store_true",
                         help="one line per signal instead of the full-screen view")
     parser.add_argument("--exit", action="store_true",
