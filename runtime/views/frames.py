@@ -62,6 +62,9 @@ class ObjectState:
     """None when the specification has no per-object geometric queries."""
     distance: float
     """Footprint distance to the robot, metres (as the monitor measured it)."""
+    x: float = 0.0
+    y: float = 0.0
+    """Where it is (ground truth, world frame, metres): the map draws it there."""
 
 
 @dataclass(frozen=True)
@@ -102,6 +105,11 @@ class WatchFrame:
     """The pace asked for (``--speed``) when replaying; None live or unpaced."""
     ended: RunSummary | None = None
     """The run's summary once the stream ended (its verdicts included)."""
+    floors: tuple[tuple[float, float], ...] = ()
+    """Centres of the floor tiles (the stream header's), for the map."""
+    tile: float = 1.0
+    goals: tuple[tuple[str, float, float], ...] = ()
+    """(name, x, y) of the mission's goals, in order."""
 
     @property
     def robot_state(self) -> GeometricState | None:
@@ -243,9 +251,12 @@ class Watcher:
             robot_pose=sample.robot_pose if sample is not None else (0.0, 0.0, 0.0),
             nav_state=sample.belief.nav_state.value if sample is not None else "idle",
             task=_current_task(host, sample), tasks=_tasks(host),
-            objects=_objects(header, host), laser_state=_laser_state(host),
+            objects=_objects(header, host, sample), laser_state=_laser_state(host),
             recent=tuple(rows[-RECENT_SIGNALS:]), signals=len(rows),
-            total_utility=host.log.total, time_factor=factor, speed=speed)
+            total_utility=host.log.total, time_factor=factor, speed=speed,
+            floors=tuple((x, y) for _, x, y in header.floors), tile=header.tile_size,
+            goals=tuple((g.name, g.x, g.y) for g in header.mission_facts.goals)
+            if header.mission_facts is not None else ())
 
 
 def _ended(frame: WatchFrame, host: Any, summary: RunSummary) -> WatchFrame:
@@ -267,7 +278,8 @@ def _tasks(host: Any) -> tuple[TaskLine, ...]:
     return tuple(TaskLine(t.name, t.status, t.reason) for t in host.model.tasks)
 
 
-def _objects(header: StreamHeader, host: Any) -> tuple[ObjectState, ...]:
+def _objects(header: StreamHeader, host: Any, sample: Sample | None
+             ) -> tuple[ObjectState, ...]:
     q = host.prev_q
     distance = np.asarray(host.prev_inputs.distance, dtype=float)
     collision = q.get(COLLISION_QUERY)
@@ -280,7 +292,9 @@ def _objects(header: StreamHeader, host: Any) -> tuple[ObjectState, ...]:
         if judged:
             state = "COLLISION" if collision[i] else "CLOSE" if close[i] else "FAR"
         d = float(distance[i]) if i < len(distance) else math.inf
-        out.append(ObjectState(o.name, o.role, state, d))
+        x, y = (float(sample.poses[i][0]), float(sample.poses[i][1])) \
+            if sample is not None and i < len(sample.poses) else (0.0, 0.0)
+        out.append(ObjectState(o.name, o.role, state, d, x, y))
     others = [o for o in out if o.role != "wall"]
     walls = sorted((o for o in out if o.role == "wall"), key=lambda o: o.distance)
     return tuple(others + walls)

@@ -46,10 +46,64 @@ HEAD_LINES = 12
 """Screen lines the page uses besides the objects' rows (titles, status, table heads)."""
 
 
-def render(frame: WatchFrame, footer: str = "", max_objects: int | None = None) -> Any:
+MAP_CELLS = (36, 12)
+"""At most this many map cells across and down (two characters each across): a larger room
+is drawn with several tiles to a cell."""
+_MAP_MARKS: dict[str, tuple[int, str, str]] = {
+    # role -> (precedence, characters, style): a cell shows its most telling occupant
+    "floor": (0, "\u00b7 ", "dim"),
+    "wall": (1, "\u2588\u2588", "grey50"),
+    "goal": (2, "G ", "bold cyan"),
+    "static": (3, "o ", "yellow"),
+    "dynamic": (3, "d ", "yellow"),
+    "human": (4, "H ", "bold magenta"),
+    "robot": (5, "R ", "bold"),
+}
+
+
+def draw_map(frame: WatchFrame, cells: tuple[int, int] = MAP_CELLS) -> Any:
+    """The room from above (north up): floors, walls, goals, objects, humans and the robot,
+    each in the tile it stands on; the robot and the humans in their state's colour."""
+    from rich.text import Text  # noqa: PLC0415
+
+    tile = frame.tile
+    places: list[tuple[str, float, float, str | None]] = [
+        ("floor", x, y, None) for x, y in frame.floors]
+    places += [("goal", x, y, None) for _, x, y in frame.goals]
+    places += [(o.role, o.x, o.y, o.state) for o in frame.objects]
+    places.append(("robot", frame.robot_pose[0], frame.robot_pose[1], frame.robot_state))
+    if not frame.floors or tile <= 0:
+        return Text("")
+    xs = [p[1] for p in places]
+    ys = [p[2] for p in places]
+    x0, y1 = min(xs), max(ys)
+    columns = round((max(xs) - x0) / tile) + 1
+    rows = round((y1 - min(ys)) / tile) + 1
+    scale = max(1, -(-columns // cells[0]), -(-rows // cells[1]))
+    grid: dict[tuple[int, int], tuple[int, str, str]] = {}
+    for role, x, y, state in places:
+        cell = (round((x - x0) / tile) // scale, round((y1 - y) / tile) // scale)
+        rank, mark, style = _MAP_MARKS.get(role, _MAP_MARKS["static"])
+        if role in ("robot", "human") and state in ("CLOSE", "COLLISION"):
+            style = _STYLE[state]
+        if cell not in grid or grid[cell][0] <= rank:
+            grid[cell] = (rank, mark, style)
+    text = Text(no_wrap=True, overflow="crop")
+    for r in range(-(-rows // scale)):
+        for c in range(-(-columns // scale)):
+            _, mark, style = grid.get((c, r), (0, "  ", ""))
+            text.append(mark, style=style)
+        text.append("\n")
+    text.rstrip()
+    return text
+
+
+def render(frame: WatchFrame, footer: str = "", max_objects: int | None = None,
+           map_cells: tuple[int, int] = MAP_CELLS) -> Any:
     """The page of one frame as a rich renderable (exposed so it can be drawn anywhere).
     With ``max_objects``, the objects beyond it (the farthest walls: the list puts the
-    other objects first, then the walls nearest first) are summed up in one row."""
+    other objects first, then the walls nearest first) are summed up in one row; the map
+    takes at most ``map_cells``."""
     from rich.console import Group  # noqa: PLC0415  (rich is imported only to draw)
     from rich.table import Table  # noqa: PLC0415
     from rich.text import Text  # noqa: PLC0415
@@ -119,7 +173,9 @@ def render(frame: WatchFrame, footer: str = "", max_objects: int | None = None) 
     body = Table.grid(expand=True, padding=(0, 2))
     body.add_column(ratio=1)
     body.add_column(ratio=1)
-    body.add_row(objects, Group(tasks, Text(""), signals))
+    room = Group(Text("map (R robot, H human, o object, G goal)", style="italic"),
+                 draw_map(frame, map_cells))
+    body.add_row(objects, Group(room, Text(""), tasks, Text(""), signals))
     end = Text()
     if frame.ended is not None:
         verdict = judge(frame.ended)
@@ -161,8 +217,12 @@ class TerminalView:
             return
         self._drawn = now
         footer = self.footer if frame.ended is None else "the stream ended; q: quit"
-        height = self._live.console.size.height
-        self._live.update(render(frame, footer, max(height - HEAD_LINES, 1)), refresh=True)
+        width, height = self._live.console.size
+        # the map takes what the screen spares beside the tasks and the latest signals
+        spare = height - 6 - (len(frame.tasks) + 3) - (len(frame.recent) + 4) - 2
+        cells = (max(min(MAP_CELLS[0], width // 4 - 2), 4), max(min(MAP_CELLS[1], spare), 2))
+        self._live.update(render(frame, footer, max(height - HEAD_LINES, 1), cells),
+                          refresh=True)
 
     def close(self) -> None:
         """Leaves the screen as it is: ``leave`` restores the terminal."""

@@ -161,3 +161,22 @@ def test_the_time_factor_is_simulated_over_wall_seconds() -> None:
         clock.now += 0.1
         factor = meter.add(i * 0.5)  # 0.5 simulated s per 0.1 wall s
     assert factor == pytest.approx(5.0)
+
+
+def test_the_map_draws_the_room_from_above_with_the_robot_where_it_is(
+        recorded: dict[str, Path], tmp_path: Path) -> None:
+    """simple_wall (thesis 7.2): three floors between walls; the robot drove from the start
+    goal to the east wall and stands on the last floor, pressed against wall_e."""
+    from rei.runtime.views.terminal import draw_map
+
+    view, _ = watch(recorded["fail"] / "trace.jsonl", tmp_path)
+    first, last = view.frames[0], view.frames[-1]
+    lines = [line.rstrip() for line in draw_map(first).plain.splitlines()]
+    assert lines == ["  ██████", "██R · G ██", "  ██████"]
+    lines = [line.rstrip() for line in draw_map(last).plain.splitlines()]
+    assert lines == ["  ██████", "██G · R ██", "  ██████"]
+    # a large room is drawn with several tiles to a cell, within the cells given
+    nav, _ = watch(recorded["pass"] / "trace.jsonl", tmp_path / "nav")
+    small = draw_map(nav.frames[-1], (5, 4)).plain.splitlines()
+    assert 0 < len(small) <= 4 and max(len(line) for line in small) <= 10
+    assert "R" in "".join(small)

@@ -107,6 +107,8 @@ def test_the_screen_shows_the_monitor_of_a_known_run(
         assert "robot COLLISION" in screen
         (wall,) = _rows(screen, "wall_e")
         assert "COLLISION" in wall and "0.00 m" in wall
+        # the map: the robot on the last floor against the east wall, the start goal behind
+        assert "██G · R ██" in screen
     else:
         assert "robot FAR" in screen
         (human,) = _rows(screen, "walker")
