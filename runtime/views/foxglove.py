@@ -148,6 +148,10 @@ class FoxgloveView:
                     {"time": row.time, "signal": row.signal, "utility": row.utility,
                      "total_utility": row.total_utility, "objects": list(row.objects)}))
             if sample is None:
+                if frame.ended is not None and frame.end_time is not None:
+                    # the trace's end line, as the recording's /rei/trace ends
+                    self._log_json(frame.end_time, self._encoder.end(
+                        frame.end_time, frame.ended.outcome, frame.ended.reason))
                 return
             t = sample.time
             self._server.broadcast_time(stamp_ns(t))

@@ -105,6 +105,8 @@ class WatchFrame:
     """The pace asked for (``--speed``) when replaying; None live or unpaced."""
     ended: RunSummary | None = None
     """The run's summary once the stream ended (its verdicts included)."""
+    end_time: float | None = None
+    """Simulated seconds at the stream's end (its end record's), once it ended."""
     floors: tuple[tuple[float, float], ...] = ()
     """Centres of the floor tiles (the stream header's), for the map."""
     tile: float = 1.0
@@ -231,7 +233,7 @@ class Watcher:
                               sink.result.duration, 0.0, {}, ())
             summary = merge_summary(base, sink.result)
             previous = self.frame or self._frame(header, host, None, source.speed)
-            self.frame = _ended(previous, host, summary)
+            self.frame = _ended(previous, host, summary, end_time)
             for view in self.views:
                 view.show(self.frame, None, fired)
             return summary
@@ -259,12 +261,14 @@ class Watcher:
             if header.mission_facts is not None else ())
 
 
-def _ended(frame: WatchFrame, host: Any, summary: RunSummary) -> WatchFrame:
+def _ended(frame: WatchFrame, host: Any, summary: RunSummary, end_time: float
+           ) -> WatchFrame:
     from dataclasses import replace  # noqa: PLC0415
 
     rows = host.log.rows
     return replace(frame, tasks=_tasks(host), task=None, recent=tuple(rows[-RECENT_SIGNALS:]),
-                   signals=len(rows), total_utility=host.log.total, ended=summary)
+                   signals=len(rows), total_utility=host.log.total, ended=summary,
+                   end_time=end_time)
 
 
 def _current_task(host: Any, sample: Sample | None) -> str | None:

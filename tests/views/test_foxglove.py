@@ -112,7 +112,9 @@ def test_a_foxglove_client_decodes_the_run_on_the_recordings_channels(
     # the exact trace, line for line
     records = [m["message"] for m in by_topic["/rei/trace"]]
     assert records[0]["format"] == "rei-trace" and records[0]["mission"] == header.mission
-    assert [r["seq"] for r in records[1:]] == [s.seq for s in trace]
+    assert [r["seq"] for r in records[1:-1]] == [s.seq for s in trace]
+    # ... and its end line, as the recording's /rei/trace ends
+    assert records[-1] == json.loads((run / "trace.jsonl").read_text().splitlines()[-1])
 
     # signals: events.csv, row for row
     events = read_csv(run / "events.csv")
