@@ -186,8 +186,9 @@ def test_a_client_that_joins_late_still_gets_the_scene(
     for line in watch.stdout:  # the whole run has played before the client connects
         if line.startswith("ended at"):
             break
-    client = subprocess.Popen(["node", str(node_client), url], stdout=subprocess.PIPE,
-                              stderr=subprocess.PIPE, text=True)
+    # the client gives up after 10 s without a message: a missing resend fails, never hangs
+    client = subprocess.Popen(["node", str(node_client), url, "10000"],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     processes.append(client)
     assert client.stdout is not None
     wanted = {"/tf_static", "/world/markers", "/rei/goals", "/tf", "/rei/path"}
@@ -196,6 +197,7 @@ def test_a_client_that_joins_late_still_gets_the_scene(
         got.setdefault(message["topic"], message)
         if wanted <= set(got):
             break
+    assert wanted <= set(got), f"only {sorted(got)} came"
     watch.send_signal(signal.SIGINT)  # ends the server; the verdict stays the run's
     assert watch.wait(timeout=SAFETY_LIMIT) == 0
     header, samples = read_trace(run / "trace.jsonl")

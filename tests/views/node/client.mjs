@@ -4,7 +4,9 @@
 // @foxglove/rosmsg2-serialization). It subscribes to every channel the server advertises,
 // decodes each message by its channel's schema and prints one JSON line per message:
 // {"topic", "schema", "encoding", "logTime", "message"}. It ends when the server closes.
-// Usage: node client.mjs ws://127.0.0.1:PORT
+// With IDLE_MS, it also ends after IDLE_MS milliseconds without a message (so a test that
+// waits for messages that never come fails instead of hanging).
+// Usage: node client.mjs ws://127.0.0.1:PORT [IDLE_MS]
 import wsProtocol from "@foxglove/ws-protocol";
 import rosmsg from "@foxglove/rosmsg";
 import serialization from "@foxglove/rosmsg2-serialization";
@@ -14,6 +16,14 @@ const { FoxgloveClient } = wsProtocol; // CommonJS packages: their exports via t
 const { parse } = rosmsg;
 const { MessageReader } = serialization;
 const url = process.argv[2];
+const idleMs = process.argv[3] ? Number(process.argv[3]) : 0;
+let idle = null;
+function stillHere() {
+  if (idleMs > 0) {
+    clearTimeout(idle);
+    idle = setTimeout(() => process.exit(0), idleMs);
+  }
+}
 const ws = new WebSocket(url, ["foxglove.sdk.v1"]);
 const client = new FoxgloveClient({ ws });
 const channels = new Map(); // subscription id -> { channel, decode }
@@ -41,6 +51,7 @@ function decoder(channel) {
   throw new Error(`no decoder for ${channel.topic}: ${channel.encoding}/${channel.schemaEncoding}`);
 }
 
+client.on("open", stillHere);
 client.on("advertise", (advertised) => {
   for (const channel of advertised) {
     const id = client.subscribe(channel.id);
@@ -48,6 +59,7 @@ client.on("advertise", (advertised) => {
   }
 });
 client.on("message", ({ subscriptionId, timestamp, data }) => {
+  stillHere();
   const { channel, decode } = channels.get(subscriptionId);
   const bytes = new Uint8Array(data.buffer, data.byteOffset, data.byteLength);
   process.stdout.write(JSON.stringify({
