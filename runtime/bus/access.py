@@ -164,7 +164,8 @@ DEFAULT_ACCESS = AccessRules((
                              "robot/command"), TRACE),
         "subscribe": _topics("monitor/**"),
         "answer": (f"{CONFIG}/**",),
-        "query": tuple(f"{ROBOT_CALL}/{op}" for op in ("load", "reset", "step", "feedback")),
+        "query": tuple(f"{ROBOT_CALL}/{op}" for op in ("load", "reset", "step", "feedback",
+                                                                "close")),
     }),
     # Only what its sensors measured (never ground truth); it answers the calls (its
     # commands and its goal feedback are the answers) and publishes its own streams.

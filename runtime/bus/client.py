@@ -261,6 +261,13 @@ class BusSession:
 
         self._queryables.append(self._session.declare_queryable(key, on_query))
 
+    @property
+    def zenoh_session(self) -> Any:
+        """The Zenoh session underneath, for a profile that speaks Zenoh itself (the ROS 2
+        profile's liveliness tokens and attachments). The router's rules bind it all the
+        same; this session's own checks do not."""
+        return self._session
+
     # -- life -------------------------------------------------------------------------------
 
     def close(self) -> None:

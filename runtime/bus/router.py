@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from rei.runtime.bus.access import DEFAULT_ACCESS, ROLES, AccessRules
+from rei.runtime.bus.access import DEFAULT_ACCESS, AccessRules
 from rei.runtime.bus.errors import BusError, zenoh_module
 from rei.runtime.bus.schema import WIRE_VERSION
 
@@ -109,7 +109,7 @@ def prepare(folder: Path, host: str, port: int, access: AccessRules = DEFAULT_AC
     address = f"[{host}]" if ":" in host else host
     endpoint = f"{scheme}/{address}:{port}"
     _private_folder(folder)
-    passwords = {role: secrets.token_urlsafe(24) for role in ROLES}
+    passwords = {r.role: secrets.token_urlsafe(24) for r in access.roles}
     users = folder / "users.txt"
     _write_private(users, "".join(f"{user_of(r)}:{p}\n" for r, p in passwords.items()))
     credentials = {}

@@ -10,7 +10,8 @@ says, whatever its language:
 * configuration is asked for with a query on ``rei/v1/config/<name>`` (``CONFIG_NAMES``)
   and answered with one JSON object;
 * the run's sample stream (the trace's lines: header, samples, end) travels on
-  ``rei/v1/trace`` for monitors and viewers, one trace line per sample.
+  ``rei/v1/trace`` for monitors and viewers, one trace line per sample, each sample with
+  every object's row (a file's trace lists only the rows that changed).
 
 The version is in the key, so a v2 can run beside v1 on one router. Payloads larger than
 ``MAX_PAYLOAD`` are refused by the sender and dropped by the receiver. This module must
@@ -40,8 +41,9 @@ ALL = f"{PREFIX}/**"
 CONFIG = f"{PREFIX}/config"
 TRACE = f"{PREFIX}/trace"
 
-CONFIG_NAMES = ("world", "mission", "robot")
-"""What a query may ask for: the world manifest, the mission's facts, the robot's context."""
+CONFIG_NAMES = ("world", "robot", "trace")
+"""What a query may ask for: the world manifest, the robot's context, the trace's header
+line (the mission's facts are in it)."""
 
 MAX_PAYLOAD = 4 << 20
 """Bytes one message may take on the wire (a laser scan of 10k beams is ~200 KB)."""

@@ -847,6 +847,12 @@ class TraceDecoder:
         self._rules = _StreamRules(len(self.header.objects), self.header.data,
                                    tuple(n for n, _ in self.header.faults))
 
+    def resume_at(self, seq: int) -> None:
+        """Accept the sample numbered ``seq`` next: a reader that missed the ones before it
+        (a monitor on a bus) goes on, counting them missing. Only for lines that carry every
+        object's row (a bus's: a file's rows are changes, and a gap would lose some)."""
+        self._rules.seq = seq
+
     def line(self, raw: bytes, where: str) -> Sample | tuple[float, str, str]:
         """The sample of a line, or (end time, outcome, reason) of the end line."""
         data = _load(raw, where)

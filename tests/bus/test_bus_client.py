@@ -154,3 +154,21 @@ def test_the_bus_folder_is_private(router: Router) -> None:
     assert router.bus.endpoint.startswith("tcp/127.0.0.1:")
     assert config["scouting"]["multicast"]["enabled"] is False
     assert config["access_control"]["default_permission"] == "deny"
+
+
+def test_a_late_monitor_gets_the_trace_header_from_the_simulation(join) -> None:  # type: ignore[no-untyped-def]
+    from rei.runtime.bus.run import TracePublisher
+    from rei.runtime.bus.schema import TRACE, config_key
+    from rei.runtime.collector.trace import TraceDecoder
+    from tests.runtime.test_trace import _header
+
+    sim, monitor = join("simulation"), join("monitor")
+    header = _header()
+    publisher = TracePublisher(sim)
+    inbox = Inbox()
+    monitor.subscribe_raw(TRACE, inbox)
+    assert sim.await_readers(TRACE, SAFETY)
+    publisher.start(header)
+    line = monitor.call(config_key("trace"), b"", SAFETY)
+    assert TraceDecoder(line, "asked").header == header
+    assert inbox.wait(1)[0][1] == line
