@@ -151,7 +151,7 @@ def _watch(args: argparse.Namespace) -> int:
     from rei.runtime.results import judge  # noqa: PLC0415
     from rei.runtime.views.foxglove import FoxgloveView  # noqa: PLC0415
     from rei.runtime.views.frames import StreamSource, View, Watcher  # noqa: PLC0415
-    from rei.runtime.views.sources import BusSource, RecordedSource, WatchStopped  # noqa: PLC0415
+    from rei.runtime.views.sources import BusSource, RecordedSource  # noqa: PLC0415
     from rei.runtime.views.terminal import Keys, LineView, TerminalView  # noqa: PLC0415
 
     if args.replay is not None and not args.replay.is_file():
@@ -185,8 +185,7 @@ def _watch(args: argparse.Namespace) -> int:
                 return any(k in quit_keys for k in keys.pressed())
 
             source: StreamSource = RecordedSource(args.replay, args.speed) \
-                if args.replay is not None else BusSource(args.bus, args.credentials,
-                                                          stop=quit_pressed)
+                if args.replay is not None else BusSource(args.bus, args.credentials)
             if args.bus is not None:
                 print(f"rei watch: waiting for a run on the bus at {args.bus}",
                       file=sys.stderr, flush=True)
@@ -199,13 +198,18 @@ def _watch(args: argparse.Namespace) -> int:
                         pass
                 except KeyboardInterrupt:
                     pass
-    except (KeyboardInterrupt, WatchStopped):
+    except KeyboardInterrupt:
         return EXIT_INTERRUPTED
     finally:
         if screen is not None:
             screen.leave()
         if foxglove is not None:
             foxglove.stop()
+    bus = summary.measurements.get("bus", {})
+    if bus.get("missed") or bus.get("duplicated") or bus.get("reordered"):
+        print(f"rei watch: missed {bus['missed']} sample(s) {bus['missed_samples']}, "
+              f"{bus['duplicated']} duplicated, {bus['reordered']} reordered",
+              file=sys.stderr)
     for line in verdict_lines(summary, verbose=False):
         print(printable_lines(line))
     verdict = judge(summary)

@@ -145,9 +145,12 @@ End = tuple[float, str, str]
 
 
 class StreamSource(Protocol):
-    """Where a watched stream comes from (a recording, paced; a bus)."""
+    """Where a watched stream comes from (a recording, paced; a bus). A source may also
+    have ``measurements()``: more of the summary's measurements once the stream ended."""
 
     speed: float | None
+    where: str
+    """Names the stream in errors."""
 
     def open(self) -> tuple[StreamHeader, Iterator[Sample]]: ...
 
@@ -180,7 +183,7 @@ class FactorMeter:
 class Watcher:
     """Monitors one stream for its views (see the module's docstring)."""
 
-    def __init__(self, views: Sequence[View], vepl: str | Path | None, work_dir: Path,
+    def __init__(self, views: Sequence[View], vepl: Path | None, work_dir: Path,
                  functions: Mapping[str, Callable[..., Any]] | None = None,
                  clock: Callable[[], float] = wallclock.monotonic) -> None:
         self.views = list(views)
@@ -193,47 +196,63 @@ class Watcher:
     def watch(self, source: StreamSource,
               stop: Callable[[], bool] = lambda: False) -> RunSummary:
         """Watch ``source`` to its end (or until ``stop()`` says so after a sample: the
-        summary then says 'interrupted'); every view is closed on the way out."""
-        from rei.runtime.evaluator.summary import merge_summary  # noqa: PLC0415
-        from rei.runtime.monitor import MonitorSink  # noqa: PLC0415
-        from rei.runtime.results import RESULTS_VERSION  # noqa: PLC0415
+        summary then says 'interrupted'); every view is closed on the way out. The stream is
+        judged by ``judge_stream``, `rei replay`'s and `rei monitor`'s own."""
+        from rei.runtime.commands.replay import judge_stream  # noqa: PLC0415
+
+        judging: list[Any] = []  # the monitor's sink, once it judged a sample
+        seen = 0
+        stopped = False
+        last = 0.0
+
+        def judged(sink: Any, sample: Sample) -> None:
+            nonlocal seen, last
+            if not judging:
+                judging.append(sink)
+            host = sink.host
+            rows = host.log.rows
+            fired, seen = rows[seen:], len(rows)
+            last = sample.time
+            self.frame = self._frame(header, host, sample, source.speed)
+            for view in self.views:
+                view.show(self.frame, sample, fired)
+
+        def until_stopped(samples: Iterator[Sample]) -> Iterator[Sample]:
+            nonlocal stopped
+            try:
+                for sample in samples:
+                    yield sample
+                    if stop():
+                        stopped = True
+                        return
+            finally:
+                close = getattr(samples, "close", None)
+                if close is not None:
+                    close()
+
+        def read_end() -> End | None:
+            return (last, "interrupted", "stopped watching") if stopped else source.end()
 
         try:
             header, samples = source.open()
-            sink = MonitorSink(self.vepl, self.work_dir, functions=self.functions)
-            sink.start(header)
-            host = sink.host
-            assert host is not None
             for view in self.views:
                 view.start(header)
-            seen = 0
-            last = 0.0
-            stopped = False
-            for sample in samples:
-                sink.feed(sample)
-                last = sample.time
+            measurements = getattr(source, "measurements", None)
+            summary = judge_stream(header, until_stopped(samples), read_end, self.vepl,
+                                   self.work_dir, self.functions, None, source.where,
+                                   controller="watch", measurements=measurements,
+                                   judged=judged)
+            if judging:
+                host = judging[0].host
                 rows = host.log.rows
-                fired, seen = rows[seen:], len(rows)
-                self.frame = self._frame(header, host, sample, source.speed)
-                for view in self.views:
-                    view.show(self.frame, sample, fired)
-                if stop():
-                    stopped = True
-                    break
-            end = None if stopped else source.end()
-            end_time, outcome, reason = end if end is not None else (
-                last, "interrupted", "stopped watching" if stopped else
-                "the stream ended without an end record")
-            sink.finish(end_time, outcome, reason)
-            assert sink.result is not None
-            rows = host.log.rows
-            fired = rows[seen:]
-            base = RunSummary(RESULTS_VERSION, header.mission, header.world, header.seed,
-                              "watch", outcome, reason,  # type: ignore[arg-type]
-                              sink.result.duration, 0.0, {}, ())
-            summary = merge_summary(base, sink.result)
-            previous = self.frame or self._frame(header, host, None, source.speed)
-            self.frame = _ended(previous, host, summary, end_time)
+                fired = rows[seen:]
+                previous = self.frame or self._frame(header, host, None, source.speed)
+                end = read_end()
+                self.frame = _ended(previous, host, summary,
+                                    end[0] if end is not None else last)
+            else:
+                fired = []
+                self.frame = _nothing_seen(header, summary)
             for view in self.views:
                 view.show(self.frame, None, fired)
             return summary
@@ -269,6 +288,16 @@ def _ended(frame: WatchFrame, host: Any, summary: RunSummary, end_time: float
     return replace(frame, tasks=_tasks(host), task=None, recent=tuple(rows[-RECENT_SIGNALS:]),
                    signals=len(rows), total_utility=host.log.total, ended=summary,
                    end_time=end_time)
+
+
+def _nothing_seen(header: StreamHeader, summary: RunSummary) -> WatchFrame:
+    """The last frame of a stream that ended before its first sample."""
+    return WatchFrame(mission=header.mission, world=header.world, seed=header.seed, seq=-1,
+                      time=0.0, robot_pose=(0.0, 0.0, 0.0), nav_state="idle", task=None,
+                      tasks=(), objects=(), laser_state=None, recent=(), signals=0,
+                      total_utility=summary.total_utility, time_factor=None, ended=summary,
+                      end_time=0.0, floors=tuple((x, y) for _, x, y in header.floors),
+                      tile=header.tile_size)
 
 
 def _current_task(host: Any, sample: Sample | None) -> str | None:

@@ -12,7 +12,6 @@ simulator.
 from __future__ import annotations
 
 import math
-import queue
 import time as wallclock
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -21,9 +20,11 @@ from typing import Any
 from rei.runtime.messages import Sample, StreamHeader
 from rei.runtime.views.frames import End, WatchError
 
-
-class WatchStopped(WatchError):
-    """The user stopped watching before a stream began."""
+SILENCE = 60.0
+"""Wall seconds without a sample after which a run on the bus counts as cut off (as `rei
+monitor`'s default)."""
+HEADER_TIMEOUT = 10.0
+"""Wall seconds a viewer that joined a run under way waits for the header it asks for."""
 
 
 class Pacer:
@@ -60,8 +61,10 @@ class RecordedSource:
         self.path = path
         self.pacer = Pacer(speed, clock, sleep)
         self.speed: float | None = speed if speed > 0 else None
+        self.where = f"the recording '{path}'"
         self._samples: Iterator[Sample] | None = None
         self._end: Callable[[], End | None] = lambda: None
+        self._last = 0.0
 
     def open(self) -> tuple[StreamHeader, Iterator[Sample]]:
         from rei.runtime.recording import read_stream  # noqa: PLC0415
@@ -73,10 +76,17 @@ class RecordedSource:
     def _paced(self, samples: Iterator[Sample]) -> Iterator[Sample]:
         for sample in samples:
             self.pacer.wait(sample.time)
+            self._last = sample.time
             yield sample
 
     def end(self) -> End | None:
-        return self._end()
+        """The end line; for a recording cut short by a crash, the run as interrupted where
+        its last complete chunk ends (as `rei replay` judges it)."""
+        end = self._end()
+        cut = getattr(self._samples, "cut_short", "")
+        if end is None and cut:
+            return (self._last, "interrupted", cut)
+        return end
 
     def close(self) -> None:
         close = getattr(self._samples, "close", None)
@@ -87,68 +97,48 @@ class RecordedSource:
 class BusSource:
     """A ``StreamSource``: the run a simulation publishes on a bus (`rei run --bus`), joined
     as a viewer (the role that only reads). The stream is the trace the simulation publishes
-    on ``rei/v1/trace`` line by line, decoded by the trace's own rules; a viewer that joins
-    while a run is under way waits for the next run's header. ``stop()`` is asked while
-    waiting, so a user can give up."""
+    on ``rei/v1/trace``, taken in by `rei monitor`'s own ``TraceStream``: decoded by the
+    trace's rules, with what the network lost, duplicated or reordered counted (the summary's
+    ``bus`` measurement); a viewer that joins a run under way asks for its header and
+    watches from there (the samples it missed count as missing: no verdict rests on them).
+    """
 
     speed: float | None = None
 
     def __init__(self, endpoint: str, credentials: Path | None,
-                 stop: Callable[[], bool] = lambda: False) -> None:
+                 silence: float = SILENCE) -> None:
         self.endpoint = endpoint
         self.credentials = credentials
-        self.stop = stop
+        self.silence = silence
+        self.where = f"the run on the bus at {endpoint}"
         self._session: Any = None
-        self._lines: queue.Queue[bytes] = queue.Queue()
-        self._end: End | None = None
-        self.skipped = 0
-        """Lines of a run already under way when the viewer joined."""
+        self._stream: Any = None
 
     def open(self) -> tuple[StreamHeader, Iterator[Sample]]:
         from rei.runtime.bus import BusError, connect  # noqa: PLC0415  (the bus extra)
-        from rei.runtime.bus.schema import TRACE  # noqa: PLC0415
-        from rei.runtime.collector.trace import TraceDecoder  # noqa: PLC0415
+        from rei.runtime.bus.monitor import TraceStream, ask_header  # noqa: PLC0415
+        from rei.runtime.bus.schema import TRACE, config_key  # noqa: PLC0415
 
         try:
             self._session = connect(self.endpoint, role="viewer",
                                     credentials=self.credentials)
-            self._session.subscribe_raw(TRACE, lambda _key, payload: self._lines.put(payload))
+            self._stream = TraceStream(ask_header(self._session.call, config_key("trace"),
+                                                  HEADER_TIMEOUT), self.silence)
+            self._session.subscribe_raw(TRACE, self._stream.receive)
+            header = self._stream.header()
         except BusError as exc:
             raise WatchError(str(exc)) from None
-        where = f"{self.endpoint} {TRACE}"
-        while True:
-            first = self._next()
-            if first is None:
-                raise WatchStopped("stopped waiting for a run on the bus")
-            if first.startswith(b'{"format":'):
-                break
-            self.skipped += 1
-        decoder = TraceDecoder(first, f"{where} (header)")
-        return decoder.header, self._samples(decoder, where)
-
-    def _next(self) -> bytes | None:
-        while True:
-            try:
-                return self._lines.get(timeout=0.1)
-            except queue.Empty:
-                if self.stop():
-                    return None
-
-    def _samples(self, decoder: Any, where: str) -> Iterator[Sample]:
-        n = 1
-        while True:
-            raw = self._next()
-            if raw is None:
-                return
-            n += 1
-            record = decoder.line(raw, f"{where} line {n}")
-            if not isinstance(record, Sample):
-                self._end = record
-                return
-            yield record
+        return header, self._stream.samples()
 
     def end(self) -> End | None:
-        return self._end
+        return self._stream.read_end() if self._stream is not None else None
+
+    def measurements(self) -> dict[str, Any]:
+        """What the network did (`rei monitor`'s ``bus`` measurement)."""
+        if self._stream is None:
+            return {}
+        dropped = self._session.dropped if self._session is not None else 0
+        return {"bus": {**self._stream.measurements(), "dropped": dropped}}
 
     def close(self) -> None:
         session, self._session = self._session, None
