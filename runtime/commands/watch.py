@@ -24,6 +24,7 @@ from typing import Any
 
 from rei.lang.cli_support import EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_RUN_ERROR
 from rei.lang.errors import printable_lines
+from rei.runtime.commands.robot import add_bus_options
 
 EXAMPLES = """\
 examples:
@@ -81,7 +82,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "watch", help="watch a run live: objects FAR/CLOSE/COLLISION, task, signals, "
                       "utility (terminal, Foxglove)",
         description=textwrap.fill(
-                    "Watch a run as the thesis's monitor showed it: each watched object's "
+                    "Watch a run, recorded (--replay TRACE) or live on the bus (--bus URL, "
+                    "as a viewer), as the thesis's monitor showed it: each watched object's "
                     "FAR / CLOSE / COLLISION state, the current task, the latest signals, the "
                     "total utility and the simulated-time factor, judged by the same event "
                     "automata as `rei run` (the default .vepl unless --vepl). On a terminal the "
@@ -92,17 +94,12 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                     "or recorded run error, or a server that cannot start, 130 interrupted or "
                     "quit before the end).", 88),
         epilog=EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
-    source = parser.add_mutually_exclusive_group(required=True)
-    source.add_argument("--replay", type=Path, metavar="TRACE",
+    parser.add_argument("--replay", type=Path, metavar="TRACE",
                         help="a recorded run: trace.jsonl, or recording.mcap of `rei run "
                              "--record`")
-    source.add_argument("--bus", metavar="ENDPOINT",
-                        help="a run on the bus (`rei bus` prints its endpoint, e.g. "
-                             "tcp/127.0.0.1:7447), joined as a viewer; waits for the next "
-                             "run to start; needs the 'bus' extra")
-    parser.add_argument("--credentials", type=Path, default=None, metavar="DIR",
-                        help="with --bus: the folder `rei bus` printed (or the viewer's "
-                             "file; default $REI_BUS_CREDENTIALS)")
+    # the same --bus and --credentials as every component that joins a bus (as a viewer,
+    # live; needs the 'bus' extra)
+    add_bus_options(parser, required=False)
     parser.add_argument("--speed", type=_speed, default=1.0, metavar="F",
                         help="play the recording F times faster than it ran (default 1: "
                              "real time; 0: as fast as it is read)")
@@ -131,6 +128,11 @@ def run(args: argparse.Namespace) -> int:
     from rei.runtime.monitor.errors import MonitorError  # noqa: PLC0415
     from rei.runtime.views.frames import WatchError  # noqa: PLC0415
 
+    if (args.replay is None) == (args.bus is None):
+        print("rei watch: error: expected a stream to watch: --replay TRACE or --bus URL "
+              "(one of them), found " + ("both" if args.replay is not None else "neither"),
+              file=sys.stderr)
+        return EXIT_BAD_INPUT
     if args.wait and args.foxglove is None:
         print("rei watch: error: --wait waits for a Foxglove client: give --foxglove PORT too",
               file=sys.stderr)

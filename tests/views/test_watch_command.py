@@ -48,9 +48,10 @@ def test_bad_options_are_refused(recorded: dict[str, Path], args: tuple[str, ...
 
 
 def test_replay_and_bus_are_one_or_the_other(recorded: dict[str, Path]) -> None:
-    _refused(rei("watch", "--plain"), 2, "one of the arguments --replay --bus is required")
+    _refused(rei("watch", "--plain"), 2, "expected a stream to watch: --replay TRACE or "
+             "--bus URL (one of them), found neither")
     _refused(rei("watch", "--replay", str(recorded["pass"] / "trace.jsonl"), "--bus",
-                 "tcp/127.0.0.1:1"), 2, "not allowed with argument")
+                 "tcp/127.0.0.1:1"), 2, "found both")
 
 
 def test_a_taken_port_is_a_run_error_naming_it(recorded: dict[str, Path]) -> None:
