@@ -6,8 +6,10 @@
 /world/markers, /rei/events, /rei/signals, in ROS 2 types and CDR, plus the exact trace on
 /rei/trace), so Foxglove shows a run live as it shows its recording. Two channels more show
 the paths: /rei/path (nav_msgs/Path, the robot's ground-truth route so far) and /rei/goals
-(nav_msgs/Path, the mission's goals in order). Messages are stamped with simulated time,
-and the server's clock (the ``time`` capability) follows it.
+(nav_msgs/Path, the mission's goals in order); and /rei/monitor (std_msgs/String, JSON)
+what `rei watch`'s screen shows: the robot's and every object's FAR / CLOSE / COLLISION
+state, the task, the total utility, at the end the verdict. Messages are stamped with
+simulated time, and the server's clock (the ``time`` capability) follows it.
 
 A client that subscribes late still gets the scene: the latched channels (/tf_static,
 /world/markers, /rei/goals) and the latest /tf of every body are sent again to it when it
@@ -28,13 +30,14 @@ import numpy as np
 from rei.runtime.collector.trace import TraceEncoder
 from rei.runtime.evaluator.signal_log import SignalRow
 from rei.runtime.messages import Sample, StreamHeader
-from rei.runtime.recording.ros import MAP, TOPICS, RosViews, stamp_ns
+from rei.runtime.recording.ros import MAP, TEXT, TOPICS, RosViews, stamp_ns
 from rei.runtime.views.frames import WatchError, WatchFrame
 
 HOST = "127.0.0.1"
 TRACE_TOPIC = "/rei/trace"
 PATH_TOPIC = "/rei/path"
 GOALS_TOPIC = "/rei/goals"
+MONITOR_TOPIC = "/rei/monitor"
 PATH = "nav_msgs/msg/Path"
 PATH_STEP = 0.05
 """m: the robot's route gets a new pose when it moved this far (a path of every sample of
@@ -102,7 +105,8 @@ class FoxgloveView:
         self.port = int(self._server.port)
         # advertised before the stream starts, so a client can subscribe and be waited for
         with self._lock:
-            for topic, msgtype in {**TOPICS, PATH_TOPIC: PATH, GOALS_TOPIC: PATH}.items():
+            for topic, msgtype in {**TOPICS, PATH_TOPIC: PATH, GOALS_TOPIC: PATH,
+                                   MONITOR_TOPIC: TEXT}.items():
                 self._channels[topic] = self._channel(topic, msgtype)
             self._channels[TRACE_TOPIC] = sdk.Channel(
                 TRACE_TOPIC, schema=sdk.Schema(name="rei/TraceRecord", encoding="jsonschema",
@@ -147,6 +151,7 @@ class FoxgloveView:
                 self._log("/rei/signals", row.time, views.text(
                     {"time": row.time, "signal": row.signal, "utility": row.utility,
                      "total_utility": row.total_utility, "objects": list(row.objects)}))
+            self._log(MONITOR_TOPIC, frame.time, views.text(monitor_json(frame)))
             if sample is None:
                 if frame.ended is not None and frame.end_time is not None:
                     # the trace's end line, as the recording's /rei/trace ends
@@ -247,3 +252,21 @@ class FoxgloveView:
         facts = header.mission_facts
         goals = facts.goals if facts is not None else ()
         return self._path([(0.0, g.x, g.y, g.heading or 0.0) for g in goals], 0.0)
+
+
+def monitor_json(frame: WatchFrame) -> dict[str, Any]:
+    """What `rei watch`'s screen shows, for Foxglove's panels (/rei/monitor): the robot's,
+    the laser's and every object's geometric state, the task, the total utility."""
+    from rei.runtime.results import judge  # noqa: PLC0415
+
+    return {
+        "time": frame.time, "robot_state": frame.robot_state, "laser_state": frame.laser_state,
+        "nav_state": frame.nav_state, "task": frame.task, "total_utility": frame.total_utility,
+        "signals": frame.signals, "time_factor": frame.time_factor,
+        "objects": {o.name: {"state": o.state,
+                             "distance": o.distance if math.isfinite(o.distance) else None}
+                    for o in frame.objects},
+        "tasks": {t.name: t.status for t in frame.tasks},
+        **({"outcome": frame.ended.outcome, "verdict": judge(frame.ended)}
+           if frame.ended is not None else {}),
+    }

@@ -122,6 +122,18 @@ def test_a_foxglove_client_decodes_the_run_on_the_recordings_channels(
     assert [(s["time"], s["signal"], s["utility"], s["total_utility"], tuple(s["objects"]))
             for s in signals] == [(r.time, r.signal, r.utility, r.total_utility, r.objects)
                                   for r in events]
+    # what the screen shows, for Foxglove's panels: the last one says how it ended
+    monitor = [json.loads(m["message"]["data"]) for m in by_topic["/rei/monitor"]]
+    assert len(monitor) == len(trace) + 1
+    live = json.loads((run / "summary.json").read_text())
+    assert (monitor[-1]["verdict"], monitor[-1]["total_utility"]) == (
+        live["verdict"], live["total_utility"])
+    assert set(monitor[-1]["objects"]) == {o.name for o in header.objects}
+    if name == "fail":
+        assert monitor[-1]["robot_state"] == "COLLISION"
+        assert monitor[-1]["objects"]["wall_e"]["state"] == "COLLISION"
+    else:
+        assert {m["robot_state"] for m in monitor} == {"FAR", "CLOSE"}
     # mission events
     kinds = [json.loads(m["message"]["data"])["kind"] for m in by_topic["/rei/events"]]
     assert kinds[0] == "begin" and kinds[-1] == "end"
