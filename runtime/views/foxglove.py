@@ -34,6 +34,10 @@ from rei.runtime.recording.ros import MAP, TEXT, TOPICS, RosViews, stamp_ns
 from rei.runtime.views.frames import WatchError, WatchFrame
 
 HOST = "127.0.0.1"
+LIVE_TOPICS = ("/tf", "/tf_static", "/scan", "/odom", "/cmd_vel", "/world/markers",
+               "/rei/events", "/rei/signals")
+"""The recording's channels this server fills (types from ``TOPICS``): a channel the
+recording gains is advertised here only once this server fills it too, never empty."""
 TRACE_TOPIC = "/rei/trace"
 PATH_TOPIC = "/rei/path"
 GOALS_TOPIC = "/rei/goals"
@@ -105,8 +109,8 @@ class FoxgloveView:
         self.port = int(self._server.port)
         # advertised before the stream starts, so a client can subscribe and be waited for
         with self._lock:
-            for topic, msgtype in {**TOPICS, PATH_TOPIC: PATH, GOALS_TOPIC: PATH,
-                                   MONITOR_TOPIC: TEXT}.items():
+            for topic, msgtype in {**{t: TOPICS[t] for t in LIVE_TOPICS}, PATH_TOPIC: PATH,
+                                   GOALS_TOPIC: PATH, MONITOR_TOPIC: TEXT}.items():
                 self._channels[topic] = self._channel(topic, msgtype)
             self._channels[TRACE_TOPIC] = sdk.Channel(
                 TRACE_TOPIC, schema=sdk.Schema(name="rei/TraceRecord", encoding="jsonschema",
