@@ -4,6 +4,7 @@ specification's FAR / CLOSE / COLLISION queries hold it, and a replay paced as a
 
 from __future__ import annotations
 
+import io
 import json
 from collections.abc import Sequence
 from pathlib import Path
@@ -180,3 +181,26 @@ def test_the_map_draws_the_room_from_above_with_the_robot_where_it_is(
     small = draw_map(nav.frames[-1], (5, 4)).plain.splitlines()
     assert 0 < len(small) <= 4 and max(len(line) for line in small) <= 10
     assert "R" in "".join(small)
+
+
+def test_a_specification_without_the_geometric_queries_shows_no_state(
+        recorded: dict[str, Path], tmp_path: Path) -> None:
+    """examples/navigation/human_safety.vepl judges people only: the objects have no
+    FAR / CLOSE / COLLISION state to show (never a made-up FAR), its own signals still come."""
+    from rei.runtime.views.terminal import render
+    from tests.conftest import EXAMPLES
+
+    view = Collect()
+    vepl = EXAMPLES / "navigation" / "human_safety.vepl"
+    summary = Watcher([view], vepl, tmp_path).watch(
+        RecordedSource(recorded["pass"] / "trace.jsonl", 0.0))
+    last = view.frames[-1]
+    assert last.objects and all(o.state is None for o in last.objects)
+    assert last.robot_state is None and last.laser_state is None
+    assert last.ended == summary and summary.total_utility == last.total_utility
+    from rich.console import Console
+
+    console = Console(width=120, record=True, file=io.StringIO())
+    console.print(render(last))
+    screen = console.export_text()
+    assert "robot -" in screen and "walker" in screen
