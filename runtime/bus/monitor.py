@@ -5,7 +5,8 @@ Zenoh's thread: ``receive`` only queues) and gives the monitor the header and th
 decoded and checked by the trace's own rules (``TraceDecoder``). What the network did is
 counted, never guessed over: a sample whose sequence number was already seen is a
 duplicate, one older than the newest seen a reordered one (both dropped: the monitor's
-clock only goes forward), and the numbers never seen are missed — the monitor's own
+clock only goes forward), and the numbers never seen are missed, as are those after a gap
+until the next line that carries every object's row (a keyframe) — the monitor's own
 ``missing`` count then makes every verdict that rests on something not happening
 inconclusive, never a pass. A monitor that joins late asks for the header
 (``config/trace``) and misses the samples before its first; one the bus cuts off (nothing
@@ -60,6 +61,8 @@ class TraceStream:
         self._seen: set[int] = set()
         self.cut = ""
         """Why the stream ended without its end line ('' when it has one)."""
+        self._lost = False
+        """A sample was missed and no line with every row has come since."""
         self.total: int | None = None
         """The samples the run published (its count line, just before the end line)."""
         self.last_time = 0.0
@@ -141,14 +144,22 @@ class TraceStream:
                 else:  # it came after all, too late to be judged: still missed
                     self.reordered += 1
                 continue
-            if seq > self._next:
+            if seq > self._next or self._lost:
+                # after a gap only a line with every object's row can be read (a keyframe)
                 self.missed.extend(range(self._next, seq))
+                self._next = seq
+                if not self._whole(data):
+                    self._lost = True
+                    self.missed.append(seq)
+                    self._next = seq + 1
+                    continue
+                self._lost = False
                 self.decoder.resume_at(seq)
             try:
                 sample = self.decoder.line(payload, f"{self.where}:seq {seq}")
             except TraceError as exc:
                 self._malformed(str(exc))
-                self.decoder.resume_at(seq + 1)
+                self._lost = True  # the rows of the next lines rest on this one
                 self.missed.append(seq)
                 self._next = seq + 1
                 continue
@@ -158,6 +169,14 @@ class TraceStream:
             self.received += 1
             self.last_time = sample.time
             yield sample
+
+    def _whole(self, data: dict[str, Any]) -> bool:
+        """Whether a sample line carries every object's row (poses and twists)."""
+        assert self.decoder is not None
+        n = len(self.decoder.header.objects)
+        poses, twists = data.get("poses"), data.get("twists")
+        return isinstance(poses, list) and isinstance(twists, list) \
+            and len(poses) == n and len(twists) == n
 
     def _malformed(self, reason: str) -> None:
         self.malformed += 1

@@ -6,8 +6,8 @@ robot's control calls) and as the mission executor (the only role that may send 
 waits for a robot to answer (``BusController.load``) and, when asked, for a reader of the
 trace (a monitor) before the run begins: what is published before a subscription reaches
 the router is lost to it. ``TracePublisher`` is a sample sink publishing the trace's records
-with the trace's own encoder and rules (every number exact), each sample with every
-object's row so a monitor that missed one can read the next. This module must never import
+with the trace's own encoder and rules (every number exact), with keyframes so a monitor
+that missed a sample can read on. This module must never import
 pybullet.
 """
 
@@ -20,8 +20,6 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from rei.runtime.bus.client import BusSession, connect
 from rei.runtime.bus.errors import BusError
 from rei.runtime.bus.robot import BusController, to_json
@@ -30,25 +28,21 @@ from rei.runtime.collector.trace import TraceEncoder
 from rei.runtime.errors import RunError
 from rei.runtime.messages import Sample, StreamHeader
 
-
-class WholeRowsEncoder(TraceEncoder):
-    """Trace lines whose samples carry every object's row, not only the changed ones: a
-    reader that missed a sample can still read the next one (``TraceDecoder.resume_at``)."""
-
-    @staticmethod
-    def _changed(new: np.ndarray, old: np.ndarray | None) -> list[list[Any]]:
-        return TraceEncoder._changed(new, None)
+KEYFRAME = 10
+"""Every KEYFRAME-th sample (seq 0, 10, 20, ...) carries every object's row on the bus; the
+others only the rows that changed, as in trace.jsonl. A reader that missed a sample reads
+on from the next keyframe."""
 
 
 class TracePublisher:
     """A ``SampleSink`` publishing the run's trace on ``rei/v1/trace``: the header, one
-    line per sample (with every object's row, ``WholeRowsEncoder``), the end line; after
+    line per sample (every ``KEYFRAME``-th with every object's row), the end line; after
     the end line, ``done`` (the run has nothing more to say on the bus). It answers the
     header line as the configuration ``trace`` for a monitor that joins late."""
 
     def __init__(self, session: BusSession, done: Callable[[], None] = lambda: None) -> None:
         self.session, self.done = session, done
-        self.encoder = WholeRowsEncoder(TRACE)
+        self.encoder = TraceEncoder(TRACE)
         self.published = 0
         self._header = b""
 
@@ -62,7 +56,7 @@ class TracePublisher:
         self._publish(self._header.decode("utf-8"))
 
     def feed(self, sample: Sample) -> None:
-        self._publish(self.encoder.sample(sample))
+        self._publish(self.encoder.sample(sample, whole=sample.seq % KEYFRAME == 0))
 
     def finish(self, end_time: float, outcome: str, reason: str) -> None:
         try:

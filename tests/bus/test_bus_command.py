@@ -75,3 +75,23 @@ def test_rei_bus_refuses_bad_options(tmp_path: Path) -> None:
                          capture_output=True, text=True, timeout=SAFETY)
     assert tls.returncode == 2
     assert "--tls-cert, --tls-key, --tls-ca missing" in tls.stderr
+
+
+def test_components_say_a_refusal_in_one_line(tmp_path: Path) -> None:
+    from rei.runtime.bus.router import start
+
+    with start(tmp_path / "bus") as router:
+        (tmp_path / "wrong").mkdir(mode=0o700)
+        forged = tmp_path / "wrong" / "robot.json"
+        forged.write_text('{"user": "rei-robot", "password": "guess"}')
+        forged.chmod(0o600)
+        for command in (["robot", "--controller", "reference"], ["monitor", "-o",
+                                                                  str(tmp_path / "m")]):
+            done = subprocess.run([sys.executable, "-m", "rei.runtime.cli", *command, "--bus",
+                                   router.bus.endpoint, "--credentials", str(forged)],
+                                  capture_output=True, text=True, timeout=SAFETY)
+            role = command[0]
+            assert done.returncode == 2, done.stderr
+            assert done.stderr == (f"rei {role}: error: the bus at {router.bus.endpoint} "
+                                   f"refused the {role} role's credentials (user "
+                                   f"rei-robot)\n")

@@ -14,8 +14,8 @@ from typing import Any
 import pytest
 
 from rei.runtime.bus.monitor import TraceStream, ranges
-from rei.runtime.bus.run import WholeRowsEncoder
-from rei.runtime.collector.trace import read_trace, read_trace_end
+from rei.runtime.bus.run import KEYFRAME
+from rei.runtime.collector.trace import TraceEncoder, read_trace, read_trace_end
 from rei.runtime.commands.replay import judge_stream
 from rei.runtime.commands.run import run_into
 from rei.runtime.monitor import generate_automata
@@ -30,8 +30,9 @@ def payloads(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, list[bytes
     out = tmp_path_factory.mktemp("faults") / "run"
     run_into(MISSION, out)
     header, samples = read_trace(out / "trace.jsonl")
-    encoder = WholeRowsEncoder("test")
-    lines = [encoder.header(header), *(encoder.sample(s) for s in samples)]
+    encoder = TraceEncoder("test")
+    lines = [encoder.header(header),
+             *(encoder.sample(s, whole=s.seq % KEYFRAME == 0) for s in samples)]
     end = read_trace_end(out / "trace.jsonl")
     assert end is not None
     lines += [json.dumps({"samples": len(lines) - 1}), encoder.end(*end)]
@@ -84,8 +85,10 @@ def test_lost_samples_are_named_and_make_verdicts_inconclusive(
     lost = {5, 6, 7, 30, len(samples) - 1}
     kept = [lines[0], *(p for i, p in enumerate(samples) if i not in lost), *lines[-2:]]
     bus, lossy = _judge(kept, tmp_path / "lossy")
-    assert bus["missed_samples"] == [[5, 7], [30, 30], [len(samples) - 1, len(samples) - 1]]
-    assert bus["missed"] == 5 and bus["received"] == len(samples) - 5
+    # after a gap the monitor reads on from the next keyframe (seq 10, 40, ...)
+    assert KEYFRAME == 10
+    assert bus["missed_samples"] == [[5, 9], [30, 39], [len(samples) - 1, len(samples) - 1]]
+    assert bus["missed"] == 16 and bus["received"] == len(samples) - 16
     _never_a_new_pass(lossy, whole)
 
 
@@ -96,7 +99,8 @@ def test_duplicated_and_reordered_samples_are_counted(payloads: tuple[Path, list
     shuffled = [*samples[:4], samples[3], samples[3], samples[5], samples[4], *samples[6:]]
     bus, _ = _judge([lines[0], *shuffled, *lines[-2:]], tmp_path)
     assert (bus["duplicated"], bus["reordered"]) == (2, 1)
-    assert bus["missed_samples"] == [[4, 4]]  # it came after 5: too late to be judged
+    # 4 came after 5 (too late to be judged), and 5 to 9 rest on it: read on from 10
+    assert bus["missed_samples"] == [[4, 9]]
 
 
 def test_a_late_monitor_asks_for_the_header_and_names_what_it_missed(
