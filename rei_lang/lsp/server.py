@@ -18,24 +18,26 @@ import asyncio
 import functools
 import logging
 import sys
-from collections.abc import Callable, Iterable
+from collections.abc import Awaitable, Callable, Iterable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TypeVar
 
 from lsprotocol import types
+from pygls.exceptions import JsonRpcException
 from pygls.lsp.server import LanguageServer
 from pygls.uris import from_fs_path, to_fs_path
 
 from rei.lang.errors import Diagnostic, Severity, Span
 from rei.lang.lsp import completion as completing
-from rei.lang.lsp import vepl_support
+from rei.lang.lsp import symbols, vepl_support
 from rei.lang.lsp.navigation import Found, Place, find_in_mission, find_in_room
 from rei.lang.lsp.outline import Symbol, mission_outline, room_outline
 from rei.lang.lsp.positions import LineIndex, Units, units_for
 from rei.lang.mission.document import MissionDocument
 from rei.lang.room.document import RoomDocument
+from rei.lang.room.model import Room
 from rei.lang.source import read_bounded
 from rei.lang.workspace import Workspace, known_suffixes
 
@@ -98,6 +100,8 @@ class ReiLanguageServer(LanguageServer):
         self.dirty: set[str] = set()
         self.foreign: dict[str, set[str]] = {}
         """Per URI, the other files (a catalogue) it published diagnostics to."""
+        self.first_check: dict[str, asyncio.Event] = {}
+        """Per open URI not checked yet: set when its first check is done (requests wait)."""
 
     # --- analysis -------------------------------------------------------------------------
 
@@ -150,9 +154,23 @@ class ReiLanguageServer(LanguageServer):
             log.exception("checking %s failed", uri)
         finally:
             self.running.discard(uri)
+            self._first_check_done(uri)  # a failed check must not keep requests waiting
+
+    async def ready(self, uri: str) -> Analysis | None:
+        """The newest analysis of a document; for a document opened but not checked yet,
+        wait for its first check (a request must not answer 'nothing here' meanwhile)."""
+        if uri not in self.analyses and uri in self.workspace.text_documents:
+            await self.first_check.setdefault(uri, asyncio.Event()).wait()
+        return self.analyses.get(uri)
+
+    def _first_check_done(self, uri: str) -> None:
+        event = self.first_check.pop(uri, None)
+        if event is not None:
+            event.set()
 
     def _store(self, analysis: Analysis) -> None:
         self.analyses[analysis.uri] = analysis
+        self._first_check_done(analysis.uri)
         parsed = ((analysis.room is not None and analysis.room.room is not None)
                   or (analysis.mission is not None and analysis.mission.mission is not None)
                   or vepl_support.specification(analysis.vepl) is not None)
@@ -192,6 +210,7 @@ class ReiLanguageServer(LanguageServer):
         self.submit(self.rei.forget_text, path)
         gone = self.analyses.pop(uri, None)
         self.last_parsed.pop(uri, None)
+        self._first_check_done(uri)
         self.clear(uri)
         for other in self.foreign.pop(uri, set()):
             self.clear(other)
@@ -231,10 +250,107 @@ class ReiLanguageServer(LanguageServer):
         index = LineIndex.of(text, self.units())
         return types.Location(uri=path_to_uri(place.path), range=index.range(place.span))
 
+    # --- rename and references ----------------------------------------------------------
+
+    async def target_at(self, uri: str, position: types.Position) -> Resolved | None:
+        """The declared name under the cursor, with the names its file already declares."""
+        await self.ready(uri)
+        document = self.workspace.text_documents.get(uri)
+        parsed = self.last_parsed.get(uri)
+        if document is None or parsed is None:
+            return None
+        text = document.source
+        path = uri_to_path(uri)
+        line, col = LineIndex.of(text, self.units()).rei_position(position)
+        token = symbols.token_at(symbols.tokens(text), symbols.offset_of(text, line, col))
+        if token is None:
+            return None
+        suffix = Path(path).suffix
+        if suffix == ".room" and parsed.room is not None and parsed.room.room is not None:
+            room = parsed.room.room
+            toks = symbols.tokens(text)
+            if not any(t.start == token.start for _, t in symbols.room_name_tokens(toks)):
+                return None
+            target = symbols.room_target(room, path, token.text)
+            return Resolved(target, symbols.room_declared(room), room) if target else None
+        if suffix == ".mission" and parsed.mission is not None:
+            room_doc = parsed.mission.room
+            imported = room_doc.room if room_doc is not None else None
+            target = symbols.mission_target(text, path, token, imported, parsed.imports_room)
+            if target is None:
+                return None
+            if target.language == "room" and imported is not None:
+                return Resolved(target, symbols.room_declared(imported), imported)
+            return Resolved(target, {g: "goal" for g in symbols.goal_names(text)}, None)
+        spec = vepl_support.specification(parsed.vepl)
+        if suffix == ".vepl" and spec is not None:
+            target = symbols.vepl_target(spec, text, path, token)
+            if target is None:
+                return None
+            declared = symbols.vepl_declared(spec)
+            if target.scope is not None:
+                declared.update(symbols.local_names(text, target.scope))
+            return Resolved(target, declared, None)
+        return None
+
+    async def occurrences(self, resolved: Resolved) -> list[symbols.Occurrence]:
+        target = resolved.target
+        text = self.text_of(target.path) or ""
+        if target.language == "vepl":
+            return symbols.vepl_occurrences(target, text)
+        if target.language == "mission":
+            return symbols.goal_occurrences(target.path, text, target.name)
+        assert resolved.room is not None
+        room = resolved.room
+        # Missions beside the room and under the workspace folders, read off the event loop.
+        roots = [str(Path(target.path).parent), *self.workspace_roots()]
+        on_disk = await asyncio.to_thread(symbols.mission_files, roots)
+        open_missions = [uri_to_path(u) for u in self.workspace.text_documents
+                         if u.endswith(".mission")]
+        missions = list(dict.fromkeys([*(_resolved(p) for p in open_missions), *on_disk]))
+        texts = {p: self._open_text(p) for p in missions}
+        unopened = [p for p, t in texts.items() if t is None]
+        read = await asyncio.to_thread(lambda: {p: symbols.read_text(p) for p in unopened})
+        texts.update(read)
+        return symbols.room_references(room, target.path, target,
+                                       lambda p: texts[p] if p in texts else self.text_of(p),
+                                       missions)
+
+    def text_of(self, path: str) -> str | None:
+        """A file's text as the editor holds it (an open buffer), else as saved."""
+        text = self._open_text(path)
+        return text if text is not None else symbols.read_text(path)
+
+    def workspace_roots(self) -> list[str]:
+        try:
+            folders = [to_fs_path(f.uri) for f in self.workspace.folders.values()]
+            root = self.workspace.root_path
+        except Exception:  # before initialisation there is no workspace yet
+            return []
+        return [p for p in [*folders, root] if p]
+
+    def locations(self, found: Iterable[symbols.Occurrence]) -> list[types.Location]:
+        out = []
+        for occurrence in found:
+            index = LineIndex.of(occurrence.text, self.units())
+            out.append(types.Location(uri=path_to_uri(occurrence.path),
+                                      range=index.range(occurrence.span)))
+        return out
+
     def _open_text(self, path: str) -> str | None:
         uri = path_to_uri(path)
         document = self.workspace.text_documents.get(uri)
         return document.source if document is not None else None
+
+
+@dataclass(frozen=True)
+class Resolved:
+    """A rename or references request's target, and what its file already declares."""
+
+    target: symbols.Target
+    declared: dict[str, str]
+    room: Room | None
+    """The room that declares it (room names only)."""
 
 
 def _read_text(path: str) -> str:
@@ -339,6 +455,28 @@ def guarded(default: Callable[[], Any]) -> Callable[[Callable[..., R]], Callable
     return decorate
 
 
+def guarded_async(default: Callable[[], Any]
+                  ) -> Callable[[Callable[..., Awaitable[R]]], Callable[..., Awaitable[R]]]:
+    """``guarded`` for a handler that awaits (one that waits for a document's first check).
+    A ``JsonRpcException`` (a refused rename) is the answer, not a bug: it passes through."""
+
+    def decorate(fn: Callable[..., Awaitable[R]]) -> Callable[..., Awaitable[R]]:
+        @functools.wraps(fn)
+        async def wrapper(*args: Any, **kwargs: Any) -> R:
+            try:
+                return await fn(*args, **kwargs)
+            except JsonRpcException:
+                raise
+            except Exception:
+                log.exception("%s failed", fn.__name__)
+                answer: R = default()
+                return answer
+
+        return wrapper
+
+    return decorate
+
+
 _SYMBOL_KINDS = {
     "room": types.SymbolKind.Module, "mission": types.SymbolKind.Module,
     "grid": types.SymbolKind.Array, "floor": types.SymbolKind.Field,
@@ -402,10 +540,11 @@ def build_server() -> ReiLanguageServer:
 
     @server.feature(types.TEXT_DOCUMENT_COMPLETION,
                     types.CompletionOptions(trigger_characters=[":"]))
-    @guarded(lambda: None)
-    def completion(ls: ReiLanguageServer, params: types.CompletionParams
-                   ) -> types.CompletionList | None:
+    @guarded_async(lambda: None)
+    async def completion(ls: ReiLanguageServer, params: types.CompletionParams
+                         ) -> types.CompletionList | None:
         uri = params.text_document.uri
+        await ls.ready(uri)
         document = ls.workspace.text_documents.get(uri)
         if document is None:
             return None
@@ -439,17 +578,19 @@ def build_server() -> ReiLanguageServer:
         return types.CompletionList(is_incomplete=False, items=items)
 
     @server.feature(types.TEXT_DOCUMENT_DEFINITION)
-    @guarded(lambda: None)
-    def definition(ls: ReiLanguageServer, params: types.DefinitionParams
-                   ) -> list[types.Location] | None:
+    @guarded_async(lambda: None)
+    async def definition(ls: ReiLanguageServer, params: types.DefinitionParams
+                         ) -> list[types.Location] | None:
+        await ls.ready(params.text_document.uri)
         hit = ls.found_at(params.text_document.uri, params.position)
         if hit is None or hit[0].declaration is None:
             return None
         return [ls.location(hit[0].declaration)]
 
     @server.feature(types.TEXT_DOCUMENT_HOVER)
-    @guarded(lambda: None)
-    def hover(ls: ReiLanguageServer, params: types.HoverParams) -> types.Hover | None:
+    @guarded_async(lambda: None)
+    async def hover(ls: ReiLanguageServer, params: types.HoverParams) -> types.Hover | None:
+        await ls.ready(params.text_document.uri)
         hit = ls.found_at(params.text_document.uri, params.position)
         if hit is None:
             return None
@@ -460,9 +601,10 @@ def build_server() -> ReiLanguageServer:
             range=index.range(found.written.span))
 
     @server.feature(types.TEXT_DOCUMENT_DOCUMENT_SYMBOL)
-    @guarded(lambda: None)
-    def document_symbol(ls: ReiLanguageServer, params: types.DocumentSymbolParams
-                        ) -> list[types.DocumentSymbol] | None:
+    @guarded_async(lambda: None)
+    async def document_symbol(ls: ReiLanguageServer, params: types.DocumentSymbolParams
+                              ) -> list[types.DocumentSymbol] | None:
+        await ls.ready(params.text_document.uri)
         analysis = ls.last_parsed.get(params.text_document.uri)
         if analysis is None:
             return []
@@ -476,7 +618,67 @@ def build_server() -> ReiLanguageServer:
             symbols = vepl_support.outline(analysis.vepl, index)
         return [_document_symbol(s, index) for s in symbols]
 
+    @server.feature(types.TEXT_DOCUMENT_REFERENCES)
+    @guarded_async(lambda: None)
+    async def references(ls: ReiLanguageServer, params: types.ReferenceParams
+                         ) -> list[types.Location] | None:
+        resolved = await ls.target_at(params.text_document.uri, params.position)
+        if resolved is None:
+            return None
+        found = await ls.occurrences(resolved)
+        if not params.context.include_declaration:
+            found = [o for o in found if not o.declaration]
+        return ls.locations(found)
+
+    @server.feature(types.TEXT_DOCUMENT_PREPARE_RENAME)
+    @guarded_async(lambda: None)
+    async def prepare_rename(ls: ReiLanguageServer, params: types.PrepareRenameParams
+                             ) -> types.PrepareRenamePlaceholder | None:
+        resolved = await ls.target_at(params.text_document.uri, params.position)
+        if resolved is None:
+            raise JsonRpcException(code=REQUEST_FAILED,
+                                   message="nothing to rename here: put the cursor on a name "
+                                           "this file or its room declares")
+        if resolved.target.refused is not None:
+            raise JsonRpcException(code=REQUEST_FAILED, message=resolved.target.refused)
+        document = ls.workspace.text_documents[params.text_document.uri]
+        index = LineIndex.of(document.source, ls.units())
+        line, col = index.rei_position(params.position)
+        text = document.source
+        token = symbols.token_at(symbols.tokens(text), symbols.offset_of(text, line, col))
+        assert token is not None
+        span = symbols.span_of(uri_to_path(params.text_document.uri), text, token.start,
+                               token.end)
+        return types.PrepareRenamePlaceholder(range=index.range(span),
+                                              placeholder=resolved.target.name)
+
+    @server.feature(types.TEXT_DOCUMENT_RENAME,
+                    types.RenameOptions(prepare_provider=True))
+    @guarded_async(lambda: None)
+    async def rename(ls: ReiLanguageServer, params: types.RenameParams
+                     ) -> types.WorkspaceEdit | None:
+        resolved = await ls.target_at(params.text_document.uri, params.position)
+        if resolved is None:
+            raise JsonRpcException(code=REQUEST_FAILED,
+                                   message="nothing to rename here: put the cursor on a name "
+                                           "this file or its room declares")
+        try:
+            symbols.check_new_name(resolved.target, params.new_name, resolved.declared)
+        except symbols.RenameRefused as refused:
+            raise JsonRpcException(code=REQUEST_FAILED, message=str(refused)) from None
+        changes: dict[str, list[types.TextEdit]] = {}
+        found = await ls.occurrences(resolved)
+        for location in ls.locations(found):
+            changes.setdefault(location.uri, []).append(
+                # A grid's made-up cell names are occurrences by their prefix only.
+                types.TextEdit(range=location.range, new_text=params.new_name))
+        return types.WorkspaceEdit(changes=changes)
+
     return server
+
+
+REQUEST_FAILED = -32803
+"""LSP's RequestFailed: the request was valid but cannot be done (the message says why)."""
 
 
 def main(argv: list[str] | None = None) -> int:
