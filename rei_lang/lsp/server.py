@@ -18,20 +18,22 @@ import asyncio
 import functools
 import logging
 import sys
+import threading
 from collections.abc import Awaitable, Callable, Iterable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any, BinaryIO, TypeVar
 
 from lsprotocol import types
 from pygls.exceptions import JsonRpcException
+from pygls.io_ import StdoutWriter
 from pygls.lsp.server import LanguageServer
 from pygls.uris import from_fs_path, to_fs_path
 
 from rei.lang.errors import Diagnostic, Severity, Span
 from rei.lang.lsp import completion as completing
-from rei.lang.lsp import symbols, vepl_support
+from rei.lang.lsp import framing, symbols, vepl_support
 from rei.lang.lsp.navigation import Found, Place, find_in_mission, find_in_room
 from rei.lang.lsp.outline import Symbol, mission_outline, room_outline
 from rei.lang.lsp.positions import LineIndex, Units, units_for
@@ -102,6 +104,21 @@ class ReiLanguageServer(LanguageServer):
         """Per URI, the other files (a catalogue) it published diagnostics to."""
         self.first_check: dict[str, asyncio.Event] = {}
         """Per open URI not checked yet: set when its first check is done (requests wait)."""
+
+    def start_io(self, stdin: BinaryIO | None = None, stdout: BinaryIO | None = None) -> None:
+        """Serve over stdio with REI's bounded reader (rei.lang.lsp.framing) instead of
+        pygls's, which a wrong Content-Length could make allocate without bound."""
+        self._stop_event = threading.Event()
+        reader = framing.BoundedStdin(stdin or sys.stdin.buffer, self.thread_pool)
+        self.protocol.set_writer(StdoutWriter(stdout or sys.stdout.buffer))
+        try:
+            asyncio.run(framing.read_messages(self._stop_event, reader, self.protocol))
+        except BrokenPipeError:
+            log.error("the client closed the connection; stopping")
+        except (KeyboardInterrupt, SystemExit):
+            pass
+        finally:
+            self.shutdown()  # type: ignore[no-untyped-call]
 
     # --- analysis -------------------------------------------------------------------------
 
