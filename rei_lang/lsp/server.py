@@ -7,9 +7,12 @@ the client's code units; the rule id is the diagnostic's ``code``.
 
 Concurrency: all use of the (not thread-safe) ``Workspace`` happens on one worker thread,
 in submission order, so the event loop keeps answering requests while a big file is being
-checked; edits that arrive during a check coalesce into one more check of the newest
-text. Requests read the last finished analysis, an immutable snapshot. A handler must never
-let an exception escape: it logs it and answers empty.
+checked; an edit that arrives during a check stops that check (rei.lang.lsp.cancelling) and
+the edits coalesce into one check of the newest text. Requests read the last finished
+analysis, an immutable snapshot; a request about a document opened but not checked yet
+waits for its first check. A handler must never let an exception escape: it logs it and
+answers empty (a refused rename answers with the reason). The protocol is read by
+rei.lang.lsp.framing, which bounds what a client can make the server hold.
 """
 
 from __future__ import annotations
@@ -34,6 +37,7 @@ from pygls.uris import from_fs_path, to_fs_path
 from rei.lang.errors import Diagnostic, Severity, Span
 from rei.lang.lsp import completion as completing
 from rei.lang.lsp import framing, symbols, vepl_support
+from rei.lang.lsp.cancelling import CheckCanceller
 from rei.lang.lsp.navigation import Found, Place, find_in_mission, find_in_room
 from rei.lang.lsp.outline import Symbol, mission_outline, room_outline
 from rei.lang.lsp.positions import LineIndex, Units, units_for
@@ -95,6 +99,7 @@ class ReiLanguageServer(LanguageServer):
                          text_document_sync_kind=types.TextDocumentSyncKind.Incremental)
         self.rei = Workspace()
         self.checker = ThreadPoolExecutor(max_workers=1, thread_name_prefix="rei-check")
+        self.canceller = CheckCanceller()
         self.analyses: dict[str, Analysis] = {}
         self.last_parsed: dict[str, Analysis] = {}
         """Per URI, the newest analysis whose file parsed: names for completion while typing."""
@@ -136,6 +141,8 @@ class ReiLanguageServer(LanguageServer):
         document = self.workspace.text_documents.get(uri)
         if document is None:
             return
+        if uri in self.running and self.canceller.cancel(uri):
+            log.info("stopped the check of %s: newer text arrived", uri)
         self.submit(self.rei.set_text, uri_to_path(uri), document.source)
         self.schedule(uri)
 
@@ -153,8 +160,15 @@ class ReiLanguageServer(LanguageServer):
                 document = self.workspace.text_documents.get(uri)
                 if document is None:
                     return
-                analysis = await self.submit(_analyse, self.rei, uri, uri_to_path(uri),
-                                             document.source, document.version)
+                analysis = await self.submit(self.canceller.run, uri,
+                                             self.canceller.generation(uri), _analyse, self.rei,
+                                             uri, uri_to_path(uri), document.source,
+                                             document.version)
+                if analysis is None:  # stopped for newer text (or the document closed)
+                    self.submit(self.rei.invalidate)  # it may have stopped mid-cache
+                    if uri in self.dirty:
+                        continue
+                    return
                 if uri in self.dirty:
                     continue  # newer text arrived while checking: its check supersedes this one
                 if uri not in self.workspace.text_documents:
@@ -224,6 +238,7 @@ class ReiLanguageServer(LanguageServer):
 
     def closed(self, uri: str) -> None:
         path = uri_to_path(uri)
+        self.canceller.cancel(uri)
         self.submit(self.rei.forget_text, path)
         gone = self.analyses.pop(uri, None)
         self.last_parsed.pop(uri, None)

@@ -37,8 +37,8 @@ def _read_frames(stream: BinaryIO, out: queue.Queue[dict[str, Any] | None]) -> N
 class RawServer:
     """``rei-lsp`` on pipes; ``send`` writes bytes, ``response`` waits for an answer by id."""
 
-    def __init__(self) -> None:
-        self.process = subprocess.Popen([*SERVER_COMMAND, "--log-level", "WARNING"],
+    def __init__(self, log_level: str = "WARNING") -> None:
+        self.process = subprocess.Popen([*SERVER_COMMAND, "--log-level", log_level],
                                         stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                                         stderr=subprocess.PIPE)
         assert self.process.stdin is not None and self.process.stdout is not None

@@ -90,3 +90,43 @@ def test_huge_messages_and_header_lines_keep_memory_bounded() -> None:
         assert "skipping" in server.log() or "dropped a message" in server.log()
     finally:
         server.stop()
+
+
+def slow_vepl(blocks: int) -> str:
+    """A .vepl whose parse takes tens of seconds (issue 27: 50,000 ``{+}`` in 150 kB)."""
+    return ("query q() { mission_state == ended }\nqueryEvent a() as q found\n"
+            "complexEvent c() { as a" + "{+}" * blocks + " }\n")
+
+
+def test_a_slow_check_never_blocks_requests_and_stops_when_the_text_changes() -> None:
+    server = RawServer(log_level="INFO")
+    try:
+        server.initialize()
+        room = "file:///tmp/rei-raw-quick.room"
+        server.notify("textDocument/didOpen", {"textDocument": {
+            "uri": room, "languageId": "room", "version": 1,
+            "text": "room r {\n  floor a\n  robot b : turtlebot3_waffle on a\n}\n"}})
+        slow = "file:///tmp/rei-raw-slow.vepl"
+        server.notify("textDocument/didOpen", {"textDocument": {
+            "uri": slow, "languageId": "vepl", "version": 1, "text": slow_vepl(50_000)}})
+        # While the slow file is checked, requests about another file are answered.
+        for n in range(3):
+            server.request(10 + n, "textDocument/hover", {
+                "textDocument": {"uri": room}, "position": {"line": 2, "character": 34}})
+            assert "floor" in server.response(10 + n)["result"]["contents"]["value"]
+        server.send(frame({"jsonrpc": "2.0", "method": "textDocument/didChange", "params": {
+            "textDocument": {"uri": slow, "version": 2},
+            "contentChanges": [{"text": "query q() { mission_state == ended }\n"}]}}))
+        versions = []
+        while 2 not in versions:
+            message = server.messages.get(timeout=120)
+            assert message is not None
+            params = message.get("params") or {}
+            if message.get("method") == "textDocument/publishDiagnostics" and \
+                    params.get("uri") == slow:
+                versions.append(params.get("version"))
+        assert versions == [2]  # the stale version was never published
+        assert server.stop() == 0
+        assert "stopped the check of file:///tmp/rei-raw-slow.vepl" in server.log()
+    finally:
+        server.stop()
