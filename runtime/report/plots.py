@@ -209,7 +209,7 @@ def failure_map(data: CampaignData, record: RunRecord) -> str | None:
     run_dir = data.run_dir(record)
     paths = read_paths(run_dir) if run_dir.is_dir() else None
     events = read_events(run_dir) if run_dir.is_dir() else []
-    fig, ax = map_figure(mission.world, mission, title=record.spec.run_id)
+    fig, ax = map_figure(mission.world, mission, title=record.spec.run_id, size=4.6)
     if paths is not None:
         draw_paths(ax, paths, events)
     else:

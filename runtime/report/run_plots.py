@@ -44,7 +44,7 @@ if TYPE_CHECKING:
 WIDTH = PLOT_WIDTH
 """inches at 96 dpi (figures.PLOT_WIDTH)."""
 FAIL = "#c92a2a"
-PASS = "#2b8a3e"
+PASS = "#237032"
 CLOSE = "#e67700"
 NEUTRAL = "#868e96"
 DISTANCE_AXIS_MIN = 1.5
@@ -289,7 +289,7 @@ def run_map(world: ConcreteWorld, mission: ConcreteMission | None, series: Trace
             failures: Sequence[FailureMark], title: str) -> str:
     """The room from above: the robot's path coloured by time, the humans' paths, where and
     when each requirement failed."""
-    fig, ax = map_figure(world, mission, title=title, compact=False, size=7.0,
+    fig, ax = map_figure(world, mission, title=title, compact=False, size=5.0,
                          margin=(4.2, 1.6))
     world_legend = ax.get_legend()
     draw_human_paths(ax, Paths(series.robot, series.humans))
