@@ -108,7 +108,7 @@ class ReiLanguageServer(LanguageServer):
         self.foreign: dict[str, set[str]] = {}
         """Per URI, the other files (a catalogue) it published diagnostics to."""
         self.first_check: dict[str, asyncio.Event] = {}
-        """Per open URI not checked yet: set when its first check is done (requests wait)."""
+        """Per URI being checked: set when the check is done (requests that wait for it)."""
 
     def start_io(self, stdin: BinaryIO | None = None, stdout: BinaryIO | None = None) -> None:
         """Serve over stdio with REI's bounded reader (rei.lang.lsp.framing) instead of
@@ -187,10 +187,13 @@ class ReiLanguageServer(LanguageServer):
             self.running.discard(uri)
             self._first_check_done(uri)  # a failed check must not keep requests waiting
 
-    async def ready(self, uri: str) -> Analysis | None:
-        """The newest analysis of a document; for a document opened but not checked yet,
-        wait for its first check (a request must not answer 'nothing here' meanwhile)."""
-        if uri not in self.analyses and uri in self.workspace.text_documents:
+    async def ready(self, uri: str, *, current: bool = False) -> Analysis | None:
+        """The newest analysis of a document. For a document opened but not checked yet,
+        wait for its first check (a request must not answer 'nothing here' meanwhile); with
+        ``current``, also wait while a check of newer text runs (a rename right after an
+        edit must see the names as they are now)."""
+        while uri in self.workspace.text_documents and uri in self.running and (
+                uri not in self.analyses or current):
             await self.first_check.setdefault(uri, asyncio.Event()).wait()
         return self.analyses.get(uri)
 
@@ -286,7 +289,7 @@ class ReiLanguageServer(LanguageServer):
 
     async def target_at(self, uri: str, position: types.Position) -> Resolved | None:
         """The declared name under the cursor, with the names its file already declares."""
-        await self.ready(uri)
+        await self.ready(uri, current=True)
         document = self.workspace.text_documents.get(uri)
         parsed = self.last_parsed.get(uri)
         if document is None or parsed is None:
