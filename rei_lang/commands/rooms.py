@@ -4,8 +4,10 @@ coverage report. Refuses impossible requests with exit status 2; never loops for
 from __future__ import annotations
 
 import argparse
+import shutil
 import sys
 from pathlib import Path
+from typing import Any
 
 from rei.lang.cli_support import EXIT_OK
 
@@ -28,6 +30,13 @@ OVERRIDES = (
     ("heading", "whether the final goal has a heading: yes, no"),
     ("max_speed", "the mission's speed limit, m/s, or none"),
 )
+
+
+HELP_EXAMPLES = """\
+rei-gen rooms -o suite --count 20 --seed 1              # 20 rooms and missions
+rei-gen rooms -o dense --preset small --objects 10%,25% --humans 0,1
+rei-gen rooms --describe examples/navigation/navigation.mission
+"""
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -66,7 +75,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     for name, text in OVERRIDES:
         parser.add_argument(f"--{name.replace('_', '-')}", default=None, metavar="LEVELS",
                             help=text)
-    parser.add_argument("--quiet", action="store_true", help="do not print the coverage report")
+    parser.add_argument("-q", "--quiet", action="store_true",
+                        help="no progress display and no coverage report; only the final "
+                             "line (on stderr)")
     parser.set_defaults(func=run)
 
 
@@ -99,7 +110,8 @@ def run(args: argparse.Namespace) -> int:
     request = SuiteRequest(space=space, strategy=args.strategy, count=args.count,
                            seed=args.seed, max_grid=args.max_grid, design=args.design,
                            prefix=args.prefix, version=__version__)
-    suite = generate(request, args.output)
+    with RoomsProgress(enabled=not args.quiet and sys.stderr.isatty()) as progress:
+        suite = generate(request, args.output, progress=progress.update)
     report = coverage_report(suite)
     write_suite(suite, args.output, report)
     if not args.quiet:
@@ -107,6 +119,36 @@ def run(args: argparse.Namespace) -> int:
     print(f"{len(suite.pairs)} room(s) and mission(s) written to {args.output} "
           f"(index.csv, coverage.txt)", file=sys.stderr)
     return EXIT_OK
+
+
+class RoomsProgress:
+    """The progress display of a long generation on a terminal: rooms built of how many,
+    rate and time left (tqdm, on stderr). Off the terminal (a log, a pipe) it shows
+    nothing, so logs and the generated files stay the same."""
+
+    def __init__(self, enabled: bool) -> None:
+        self.enabled = enabled
+        self.bar: Any = None
+
+    def update(self, done: int, total: int) -> None:
+        if not self.enabled:
+            return
+        if self.bar is None:
+            from tqdm import tqdm  # noqa: PLC0415  (only on a terminal)
+
+            # A terminal that reports no width (a bare pty) gets 80 columns, not nothing.
+            width = shutil.get_terminal_size().columns
+            self.bar = tqdm(total=total, desc="rooms", unit="room", file=sys.stderr,
+                            dynamic_ncols=width > 0, ncols=None if width > 0 else 80,
+                            leave=False)
+        self.bar.update(done - self.bar.n)
+
+    def __enter__(self) -> RoomsProgress:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self.bar is not None:
+            self.bar.close()
 
 
 def describe_missions(paths: list[Path]) -> int:
