@@ -19,10 +19,11 @@ from __future__ import annotations
 
 import asyncio
 import functools
+import inspect
 import logging
 import sys
 import threading
-from collections.abc import Awaitable, Callable, Iterable
+from collections.abc import Callable, Iterable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
@@ -471,41 +472,37 @@ def to_lsp(diagnostic: Diagnostic, index: LineIndex) -> types.Diagnostic:
     )
 
 
-def guarded(default: Callable[[], Any]) -> Callable[[Callable[..., R]], Callable[..., R]]:
+def guarded(default: Callable[[], Any]) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
     """Log any exception of a handler and answer ``default()`` instead: one broken request
-    must never take the server down."""
+    must never take the server down. A ``JsonRpcException`` (a refused rename) is the
+    answer, not a bug: it passes through. Works on plain and on async handlers (those that
+    wait for a document's check)."""
 
-    def decorate(fn: Callable[..., R]) -> Callable[..., R]:
+    def failed(fn: Callable[..., Any]) -> Any:
+        log.exception("%s failed", fn.__name__)
+        return default()
+
+    def decorate(fn: Callable[..., Any]) -> Callable[..., Any]:
+        if inspect.iscoroutinefunction(fn):
+            @functools.wraps(fn)
+            async def waiting(*args: Any, **kwargs: Any) -> Any:
+                try:
+                    return await fn(*args, **kwargs)
+                except JsonRpcException:
+                    raise
+                except Exception:
+                    return failed(fn)
+
+            return waiting
+
         @functools.wraps(fn)
-        def wrapper(*args: Any, **kwargs: Any) -> R:
+        def wrapper(*args: Any, **kwargs: Any) -> Any:
             try:
                 return fn(*args, **kwargs)
-            except Exception:
-                log.exception("%s failed", fn.__name__)
-                answer: R = default()
-                return answer
-
-        return wrapper
-
-    return decorate
-
-
-def guarded_async(default: Callable[[], Any]
-                  ) -> Callable[[Callable[..., Awaitable[R]]], Callable[..., Awaitable[R]]]:
-    """``guarded`` for a handler that awaits (one that waits for a document's first check).
-    A ``JsonRpcException`` (a refused rename) is the answer, not a bug: it passes through."""
-
-    def decorate(fn: Callable[..., Awaitable[R]]) -> Callable[..., Awaitable[R]]:
-        @functools.wraps(fn)
-        async def wrapper(*args: Any, **kwargs: Any) -> R:
-            try:
-                return await fn(*args, **kwargs)
             except JsonRpcException:
                 raise
             except Exception:
-                log.exception("%s failed", fn.__name__)
-                answer: R = default()
-                return answer
+                return failed(fn)
 
         return wrapper
 
@@ -575,7 +572,7 @@ def build_server() -> ReiLanguageServer:
 
     @server.feature(types.TEXT_DOCUMENT_COMPLETION,
                     types.CompletionOptions(trigger_characters=[":"]))
-    @guarded_async(lambda: None)
+    @guarded(lambda: None)
     async def completion(ls: ReiLanguageServer, params: types.CompletionParams
                          ) -> types.CompletionList | None:
         uri = params.text_document.uri
@@ -613,7 +610,7 @@ def build_server() -> ReiLanguageServer:
         return types.CompletionList(is_incomplete=False, items=items)
 
     @server.feature(types.TEXT_DOCUMENT_DEFINITION)
-    @guarded_async(lambda: None)
+    @guarded(lambda: None)
     async def definition(ls: ReiLanguageServer, params: types.DefinitionParams
                          ) -> list[types.Location] | None:
         await ls.ready(params.text_document.uri)
@@ -623,7 +620,7 @@ def build_server() -> ReiLanguageServer:
         return [ls.location(hit[0].declaration)]
 
     @server.feature(types.TEXT_DOCUMENT_HOVER)
-    @guarded_async(lambda: None)
+    @guarded(lambda: None)
     async def hover(ls: ReiLanguageServer, params: types.HoverParams) -> types.Hover | None:
         await ls.ready(params.text_document.uri)
         hit = ls.found_at(params.text_document.uri, params.position)
@@ -636,7 +633,7 @@ def build_server() -> ReiLanguageServer:
             range=index.range(found.written.span))
 
     @server.feature(types.TEXT_DOCUMENT_DOCUMENT_SYMBOL)
-    @guarded_async(lambda: None)
+    @guarded(lambda: None)
     async def document_symbol(ls: ReiLanguageServer, params: types.DocumentSymbolParams
                               ) -> list[types.DocumentSymbol] | None:
         await ls.ready(params.text_document.uri)
@@ -654,7 +651,7 @@ def build_server() -> ReiLanguageServer:
         return [_document_symbol(s, index) for s in symbols]
 
     @server.feature(types.TEXT_DOCUMENT_REFERENCES)
-    @guarded_async(lambda: None)
+    @guarded(lambda: None)
     async def references(ls: ReiLanguageServer, params: types.ReferenceParams
                          ) -> list[types.Location] | None:
         resolved = await ls.target_at(params.text_document.uri, params.position)
@@ -666,7 +663,7 @@ def build_server() -> ReiLanguageServer:
         return ls.locations(found)
 
     @server.feature(types.TEXT_DOCUMENT_PREPARE_RENAME)
-    @guarded_async(lambda: None)
+    @guarded(lambda: None)
     async def prepare_rename(ls: ReiLanguageServer, params: types.PrepareRenameParams
                              ) -> types.PrepareRenamePlaceholder | None:
         resolved = await ls.target_at(params.text_document.uri, params.position)
@@ -689,7 +686,7 @@ def build_server() -> ReiLanguageServer:
 
     @server.feature(types.TEXT_DOCUMENT_RENAME,
                     types.RenameOptions(prepare_provider=True))
-    @guarded_async(lambda: None)
+    @guarded(lambda: None)
     async def rename(ls: ReiLanguageServer, params: types.RenameParams
                      ) -> types.WorkspaceEdit | None:
         resolved = await ls.target_at(params.text_document.uri, params.position)
