@@ -36,6 +36,8 @@ __all__ = ["Occurrence", "RenameRefused", "Target", "room_references", "vepl_occ
 MAX_WORKSPACE_MISSIONS = 2000
 """Mission files read from the disk when looking for a room's references (a bound, so a
 workspace rooted at / cannot stall the server)."""
+MAX_WORKSPACE_FOLDERS = 20_000
+"""Folders walked looking for them (the same bound, for a tree with few missions)."""
 _SKIPPED_FOLDERS = {"node_modules", "__pycache__", "site-packages", "build", "dist"}
 
 _TOKEN = re.compile(
@@ -433,8 +435,12 @@ def mission_files(roots: Iterable[str], limit: int = MAX_WORKSPACE_MISSIONS) -> 
     at most ``limit``)."""
     found: list[str] = []
     seen: set[str] = set()
+    folders = 0
     for root in roots:
         for folder, subfolders, files in os.walk(root):
+            folders += 1
+            if folders > MAX_WORKSPACE_FOLDERS:
+                return found
             subfolders[:] = sorted(d for d in subfolders
                                    if not d.startswith(".") and d not in _SKIPPED_FOLDERS)
             for name in sorted(files):
