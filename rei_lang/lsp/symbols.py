@@ -227,17 +227,12 @@ def room_occurrences(room: Room, path: str, text: str, name: str,
     out: list[Occurrence] = []
     toks = tokens(text)
     if kind == "grid":
-        cell = re.compile(rf"{re.escape(name)}_(\d+)_(\d+)")
         for i, token in enumerate(toks):
             before = _previous(toks, i)
             if token.text == name and before is not None and before.text == "grid":
                 out.append(Occurrence(path, text, span_of(path, text, token.start, token.end),
                                       True))
-            elif token.name and cell.fullmatch(token.text) and room_kind(
-                    room, token.text) == "grid cell":
-                end = token.start + len(name)
-                out.append(Occurrence(path, text, span_of(path, text, token.start, end), False))
-        return out
+        return out + cell_prefixes(room, path, text, name, toks)
     declaring = {"floor", "wall", "object", "dynamic", "human", "robot"}
     for i, token in room_name_tokens(toks):
         if token.text != name:
@@ -247,6 +242,16 @@ def room_occurrences(room: Room, path: str, text: str, name: str,
         out.append(Occurrence(path, text, span_of(path, text, token.start, token.end),
                               is_declaration))
     return out
+
+
+def cell_prefixes(room: Room, path: str, text: str, grid: str, toks: list[Token]
+                  ) -> list[Occurrence]:
+    """Where a text names a cell that grid ``grid`` named by its place (``hall_2_3``): the
+    grid's part of that name, which renaming the grid changes."""
+    cell = re.compile(rf"{re.escape(grid)}_\d+_\d+")
+    return [Occurrence(path, text, span_of(path, text, t.start, t.start + len(grid)), False)
+            for t in toks if t.name and cell.fullmatch(t.text)
+            and room_kind(room, t.text) == "grid cell"]
 
 
 # --- missions -------------------------------------------------------------------------------
@@ -468,14 +473,15 @@ def room_references(room: Room, room_path: str, target: Target,
     room_text = text_of(room_path)
     out = room_occurrences(room, room_path, room_text or "", target.name, target.kind) \
         if room_text is not None else []
-    if target.kind == "grid":
-        return out  # cell names are written in grids and links of the room itself only
     key = _resolved(room_path)
     for mission in missions:
         text = text_of(mission)
         if text is None or imported_room(mission, text) != key:
             continue
-        out.extend(mission_floor_occurrences(mission, text, target.name))
+        if target.kind == "grid":
+            out.extend(cell_prefixes(room, mission, text, target.name, tokens(text)))
+        else:
+            out.extend(mission_floor_occurrences(mission, text, target.name))
     return out
 
 
