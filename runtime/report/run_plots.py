@@ -210,6 +210,20 @@ def _line(ax: Axes, series: Series, **style: object) -> None:
     ax.plot(series.time, series.value, **style)  # type: ignore[arg-type]
 
 
+def distance_axis(values: Sequence[np.ndarray], close: float) -> tuple[float, float, bool]:
+    """(bottom, top, cut) of the distance axis for the finite values of each line: the top
+    is at most a few CLOSE thresholds (at least DISTANCE_AXIS_MIN) or just above each line's
+    closest approach; ``cut`` when some value lies above the top (drawn on the top edge)."""
+    finite = np.concatenate(values) if len(values) else np.zeros(0)
+    low = min(0.0, float(finite.min())) if len(finite) else 0.0
+    high = float(finite.max()) if len(finite) else close
+    closest = max((float(v.min()) for v in values), default=0.0)
+    cut = max(DISTANCE_AXIS_MIN, 6 * close, 1.3 * closest)
+    is_cut = high > cut
+    top = cut if is_cut else (high * 1.08 if high > 0 else close * 2)
+    return low, max(top, close * 1.3), is_cut
+
+
 def distances(series: TraceSeries, thresholds: Thresholds, failures: Sequence[FailureMark]
               ) -> str | None:
     """Footprint distance to the nearest obstacle and human, against CLOSE and COLLISION."""
@@ -224,14 +238,7 @@ def distances(series: TraceSeries, thresholds: Thresholds, failures: Sequence[Fa
     # names the value the axis really ends at.
     values = [v for v in (s.value[np.isfinite(s.value)] for s in (series.obstacle, series.human)
                           if s is not None) if len(v)]
-    finite = np.concatenate(values) if values else np.zeros(0)
-    low = min(0.0, float(finite.min())) if len(finite) else 0.0
-    high = float(finite.max()) if len(finite) else thresholds.close
-    closest = max((float(v.min()) for v in values), default=0.0)
-    cut = max(DISTANCE_AXIS_MIN, 6 * thresholds.close, 1.3 * closest)
-    is_cut = high > cut
-    top = cut if is_cut else (high * 1.08 if high > 0 else thresholds.close * 2)
-    top = max(top, thresholds.close * 1.3)
+    low, top, is_cut = distance_axis(values, thresholds.close)
     for line, colour, label in ((series.obstacle, "#1c7ed6", "nearest obstacle (walls, objects)"),
                                 (series.human, "#e8590c", "nearest human")):
         if line is not None:
