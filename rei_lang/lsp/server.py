@@ -296,44 +296,15 @@ class ReiLanguageServer(LanguageServer):
         if document is None or parsed is None:
             return None
         text = document.source
-        path = uri_to_path(uri)
         line, col = LineIndex.of(text, self.units()).rei_position(position)
-        token = symbols.token_at(symbols.tokens(text), symbols.offset_of(text, line, col))
-        if token is None:
-            return None
-        suffix = Path(path).suffix
-        if suffix == ".room" and parsed.room is not None and parsed.room.room is not None:
-            room = parsed.room.room
-            toks = symbols.tokens(text)
-            if not any(t.start == token.start for _, t in symbols.room_name_tokens(toks)):
-                return None
-            target = symbols.room_target(room, path, token.text)
-            return Resolved(target, symbols.room_declared(room), room) if target else None
-        if suffix == ".mission" and parsed.mission is not None:
-            room_doc = parsed.mission.room
-            imported = room_doc.room if room_doc is not None else None
-            target = symbols.mission_target(text, path, token, imported, parsed.imports_room)
-            if target is None:
-                return None
-            if target.language == "room" and imported is not None:
-                return Resolved(target, symbols.room_declared(imported), imported)
-            return Resolved(target, {g: "goal" for g in symbols.goal_names(text)}, None)
-        spec = vepl_support.specification(parsed.vepl)
-        if suffix == ".vepl" and spec is not None:
-            target = symbols.vepl_target(spec, text, path, token)
-            if target is None:
-                return None
-            declared = symbols.vepl_declared(spec)
-            if target.scope is not None:
-                declared.update(symbols.local_names(text, target.scope))
-            return Resolved(target, declared, None)
-        return None
+        # Tokenising a big file takes a while: off the event loop (the inputs are immutable).
+        return await asyncio.to_thread(_resolve, uri_to_path(uri), text, parsed, line, col)
 
     async def occurrences(self, resolved: Resolved) -> list[symbols.Occurrence]:
         target = resolved.target
         text = self.text_of(target.path) or ""
         if target.language == "vepl":
-            return symbols.vepl_occurrences(target, text)
+            return await asyncio.to_thread(symbols.vepl_occurrences, target, text)
         if target.language == "mission":
             return symbols.goal_occurrences(target.path, text, target.name)
         assert resolved.room is not None
@@ -344,12 +315,12 @@ class ReiLanguageServer(LanguageServer):
         open_missions = [uri_to_path(u) for u in self.workspace.text_documents
                          if u.endswith(".mission")]
         missions = list(dict.fromkeys([*(_resolved(p) for p in open_missions), *on_disk]))
-        texts = {p: self._open_text(p) for p in missions}
+        texts = {p: self._open_text(p) for p in [target.path, *missions]}
         unopened = [p for p, t in texts.items() if t is None]
         read = await asyncio.to_thread(lambda: {p: symbols.read_text(p) for p in unopened})
         texts.update(read)
-        return symbols.room_references(room, target.path, target,
-                                       lambda p: texts[p] if p in texts else self.text_of(p),
+        return await asyncio.to_thread(symbols.room_references, room, target.path, target,
+                                       lambda p: texts[p] if p in texts else symbols.read_text(p),
                                        missions)
 
     def text_of(self, path: str) -> str | None:
@@ -387,6 +358,41 @@ class Resolved:
     declared: dict[str, str]
     room: Room | None
     """The room that declares it (room names only)."""
+
+
+def _resolve(path: str, text: str, parsed: Analysis, line: int, col: int) -> Resolved | None:
+    """The declared name at a 1-based line and column of ``text`` (the last parsed analysis
+    of the file says what it declares)."""
+    token = symbols.token_at(symbols.tokens(text), symbols.offset_of(text, line, col))
+    if token is None:
+        return None
+    suffix = Path(path).suffix
+    if suffix == ".room" and parsed.room is not None and parsed.room.room is not None:
+        room = parsed.room.room
+        toks = symbols.tokens(text)
+        if not any(t.start == token.start for _, t in symbols.room_name_tokens(toks)):
+            return None
+        target = symbols.room_target(room, path, token.text)
+        return Resolved(target, symbols.room_declared(room), room) if target else None
+    if suffix == ".mission" and parsed.mission is not None:
+        room_doc = parsed.mission.room
+        imported = room_doc.room if room_doc is not None else None
+        target = symbols.mission_target(text, path, token, imported, parsed.imports_room)
+        if target is None:
+            return None
+        if target.language == "room" and imported is not None:
+            return Resolved(target, symbols.room_declared(imported), imported)
+        return Resolved(target, {g: "goal" for g in symbols.goal_names(text)}, None)
+    spec = vepl_support.specification(parsed.vepl)
+    if suffix == ".vepl" and spec is not None:
+        target = symbols.vepl_target(spec, text, path, token)
+        if target is None:
+            return None
+        declared = symbols.vepl_declared(spec)
+        if target.scope is not None:
+            declared.update(symbols.local_names(text, target.scope))
+        return Resolved(target, declared, None)
+    return None
 
 
 def _read_text(path: str) -> str:

@@ -261,3 +261,19 @@ async def test_requests_before_the_first_check_wait_for_it(client: RecordingClie
         types.DocumentSymbolParams(text_document=ident(room)))
     assert symbols
     client.text_document_did_close(types.DidCloseTextDocumentParams(text_document=ident(room)))
+
+
+async def test_a_rename_edits_the_unsaved_buffer_not_the_saved_file(client: RecordingClient,
+                                                                   folder: Path) -> None:
+    """The room open with unsaved lines above: the edits land on the buffer's positions."""
+    editor = Editor(client)
+    room = folder / "cafe.room"
+    buffer = "// two lines the editor\n// has not saved yet\n" + ROOM
+    await editor.open(room, buffer)
+    changes = await rename(client, room, position_of(buffer, "floor porch", offset=6),
+                           "veranda")
+    edits = changes[room.resolve().as_uri()]
+    renamed = apply(buffer, edits)
+    assert "floor veranda {" in renamed and "human walker on veranda" in renamed
+    assert "veranda at 0" in renamed and "porch" not in renamed
+    await editor.close(room)
