@@ -719,6 +719,20 @@ REQUEST_FAILED = -32803
 """LSP's RequestFailed: the request was valid but cannot be done (the message says why)."""
 
 
+class _RefusalIsNotABug(logging.Filter):
+    """pygls logs every error answer with a traceback; a refused rename is an answer the
+    user asked for, so its record loses the traceback and becomes an INFO line."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        error = record.exc_info[1] if record.exc_info else None
+        if isinstance(error, JsonRpcException) and error.code == REQUEST_FAILED:
+            record.exc_info = None
+            record.levelno, record.levelname = logging.INFO, "INFO"
+            record.msg, record.args = "refused: %s", (error.message,)
+            return logging.getLogger(record.name).isEnabledFor(logging.INFO)
+        return True
+
+
 def main(argv: list[str] | None = None) -> int:
     """Serve the Language Server Protocol on stdin/stdout until the client says exit."""
     import argparse
@@ -736,6 +750,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     logging.basicConfig(stream=sys.stderr, level=args.log_level,
                         format="rei-lsp %(levelname)s %(name)s: %(message)s")
+    logging.getLogger("pygls.protocol.json_rpc").addFilter(_RefusalIsNotABug())
     server = build_server()
     try:
         server.start_io()
