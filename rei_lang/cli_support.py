@@ -36,11 +36,25 @@ class ReiHelpFormatter(argparse.HelpFormatter):
         for block in blocks:
             lines = block.split("\n")
             if any(line[:1].isspace() for line in lines):
-                out.append("\n".join(indent + line for line in lines))
+                out.append("\n".join(_hanging(indent + line, width) for line in lines))
             else:
                 out.append(textwrap.fill(" ".join(line.strip() for line in lines), width,
                                          initial_indent=indent, subsequent_indent=indent))
         return "\n\n".join(out)
+
+
+_DEFINITION = re.compile(r"^(\s+\S+\s{2,})(\S.*)$")
+
+
+def _hanging(line: str, width: int) -> str:
+    """A long line of a list of names and what they are ("  gazebo     an SDF world..."):
+    its text wrapped under itself; any other line as written."""
+    match = _DEFINITION.match(line)
+    if len(line) <= width or match is None:
+        return line
+    head = match.group(1)
+    return textwrap.fill(match.group(2), width, initial_indent=head,
+                         subsequent_indent=" " * len(head))
 
 
 def examples_epilog(examples: str, epilog: str | None) -> str:
