@@ -25,7 +25,7 @@ import sys
 import threading
 from collections.abc import Callable, Iterable
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, BinaryIO, TypeVar
 
@@ -300,6 +300,15 @@ class ReiLanguageServer(LanguageServer):
         # Tokenising a big file takes a while: off the event loop (the inputs are immutable).
         return await asyncio.to_thread(_resolve, uri_to_path(uri), text, parsed, line, col)
 
+    async def rename_target(self, uri: str, position: types.Position) -> Resolved:
+        """``target_at``, or the RequestFailed answer that says nothing here can be renamed."""
+        resolved = await self.target_at(uri, position)
+        if resolved is None:
+            raise JsonRpcException(code=REQUEST_FAILED,
+                                   message="nothing to rename here: put the cursor on a name "
+                                           "this file or its room declares")
+        return resolved
+
     async def occurrences(self, resolved: Resolved) -> list[symbols.Occurrence]:
         target = resolved.target
         text = self.text_of(target.path) or ""
@@ -358,18 +367,28 @@ class Resolved:
     declared: dict[str, str]
     room: Room | None
     """The room that declares it (room names only)."""
+    written: Span | None = None
+    """Where the cursor's name is written in the request's file."""
 
 
 def _resolve(path: str, text: str, parsed: Analysis, line: int, col: int) -> Resolved | None:
     """The declared name at a 1-based line and column of ``text`` (the last parsed analysis
-    of the file says what it declares)."""
-    token = symbols.token_at(symbols.tokens(text), symbols.offset_of(text, line, col))
+    of the file says what it declares), with where it is written."""
+    toks = symbols.tokens(text)
+    token = symbols.token_at(toks, symbols.offset_of(text, line, col))
     if token is None:
         return None
+    resolved = _resolve_token(path, text, toks, parsed, token)
+    if resolved is None:
+        return None
+    return replace(resolved, written=symbols.span_of(path, text, token.start, token.end))
+
+
+def _resolve_token(path: str, text: str, toks: list[symbols.Token], parsed: Analysis,
+                   token: symbols.Token) -> Resolved | None:
     suffix = Path(path).suffix
     if suffix == ".room" and parsed.room is not None and parsed.room.room is not None:
         room = parsed.room.room
-        toks = symbols.tokens(text)
         if not any(t.start == token.start for _, t in symbols.room_name_tokens(toks)):
             return None
         target = symbols.room_target(room, path, token.text)
@@ -672,34 +691,21 @@ def build_server() -> ReiLanguageServer:
     @guarded(lambda: None)
     async def prepare_rename(ls: ReiLanguageServer, params: types.PrepareRenameParams
                              ) -> types.PrepareRenamePlaceholder | None:
-        resolved = await ls.target_at(params.text_document.uri, params.position)
-        if resolved is None:
-            raise JsonRpcException(code=REQUEST_FAILED,
-                                   message="nothing to rename here: put the cursor on a name "
-                                           "this file or its room declares")
+        resolved = await ls.rename_target(params.text_document.uri, params.position)
         if resolved.target.refused is not None:
             raise JsonRpcException(code=REQUEST_FAILED, message=resolved.target.refused)
-        document = ls.workspace.text_documents[params.text_document.uri]
-        index = LineIndex.of(document.source, ls.units())
-        line, col = index.rei_position(params.position)
-        text = document.source
-        token = symbols.token_at(symbols.tokens(text), symbols.offset_of(text, line, col))
-        assert token is not None
-        span = symbols.span_of(uri_to_path(params.text_document.uri), text, token.start,
-                               token.end)
-        return types.PrepareRenamePlaceholder(range=index.range(span),
-                                              placeholder=resolved.target.name)
+        assert resolved.written is not None
+        text = ls.workspace.text_documents[params.text_document.uri].source
+        return types.PrepareRenamePlaceholder(
+            range=LineIndex.of(text, ls.units()).range(resolved.written),
+            placeholder=resolved.target.name)
 
     @server.feature(types.TEXT_DOCUMENT_RENAME,
                     types.RenameOptions(prepare_provider=True))
     @guarded(lambda: None)
     async def rename(ls: ReiLanguageServer, params: types.RenameParams
                      ) -> types.WorkspaceEdit | None:
-        resolved = await ls.target_at(params.text_document.uri, params.position)
-        if resolved is None:
-            raise JsonRpcException(code=REQUEST_FAILED,
-                                   message="nothing to rename here: put the cursor on a name "
-                                           "this file or its room declares")
+        resolved = await ls.rename_target(params.text_document.uri, params.position)
         try:
             symbols.check_new_name(resolved.target, params.new_name, resolved.declared)
         except symbols.RenameRefused as refused:
