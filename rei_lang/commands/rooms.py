@@ -4,7 +4,6 @@ coverage report. Refuses impossible requests with exit status 2; never loops for
 from __future__ import annotations
 
 import argparse
-import shutil
 import sys
 from pathlib import Path
 from typing import Any
@@ -122,33 +121,41 @@ def run(args: argparse.Namespace) -> int:
 
 
 class RoomsProgress:
-    """The progress display of a long generation on a terminal: rooms built of how many,
-    rate and time left (tqdm, on stderr). Off the terminal (a log, a pipe) it shows
+    """The progress display of a long generation on a terminal: a bar of rooms built of how
+    many, and the time left (rich, on stderr). Off the terminal (a log, a pipe) it shows
     nothing, so logs and the generated files stay the same."""
 
     def __init__(self, enabled: bool) -> None:
         self.enabled = enabled
-        self.bar: Any = None
+        self.display: Any = None
+        self.task: Any = None
 
     def update(self, done: int, total: int) -> None:
         if not self.enabled:
             return
-        if self.bar is None:
-            from tqdm import tqdm  # noqa: PLC0415  (only on a terminal)
+        if self.display is None:
+            from rich.console import Console  # noqa: PLC0415  (only on a terminal)
+            from rich.progress import (  # noqa: PLC0415
+                BarColumn,
+                MofNCompleteColumn,
+                Progress,
+                TextColumn,
+                TimeRemainingColumn,
+            )
 
-            # A terminal that reports no width (a bare pty) gets 80 columns, not nothing.
-            width = shutil.get_terminal_size().columns
-            self.bar = tqdm(total=total, desc="rooms", unit="room", file=sys.stderr,
-                            dynamic_ncols=width > 0, ncols=None if width > 0 else 80,
-                            leave=False)
-        self.bar.update(done - self.bar.n)
+            self.display = Progress(TextColumn("rooms"), BarColumn(), MofNCompleteColumn(),
+                                    TextColumn("left"), TimeRemainingColumn(),
+                                    console=Console(file=sys.stderr), transient=True)
+            self.display.start()
+            self.task = self.display.add_task("rooms", total=total)
+        self.display.update(self.task, completed=done)
 
     def __enter__(self) -> RoomsProgress:
         return self
 
     def __exit__(self, *exc: object) -> None:
-        if self.bar is not None:
-            self.bar.close()
+        if self.display is not None:
+            self.display.stop()
 
 
 def describe_missions(paths: list[Path]) -> int:
