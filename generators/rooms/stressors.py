@@ -39,9 +39,9 @@ from dataclasses import dataclass
 from rei.generators.rooms.geometry import Cell, fast_route
 from rei.generators.rooms.space import RoomParameters
 
-NOMINAL_SPEED = 0.22
-"""m/s the robot is planned to drive at: a careful navigator's pace below the Waffle's top
-speed (measured for the reference navigator, bench/RESULTS.md)."""
+NOMINAL_SPEED = 0.25
+"""m/s the robot is planned to drive at: the reference navigator's pace on a free straight
+(about 2.5 m in the first 10 s, bench/RESULTS.md), just below the Waffle's top speed."""
 TOP_SPEED = 0.26
 """m/s, the Waffle's top speed: no robot gets anywhere sooner than at this speed."""
 START_DELAY = 1.0
@@ -55,6 +55,14 @@ MIN_WAIT = 1.0
 """s a mover waits at least: a shorter wait means the meeting point is too near the start."""
 PERSON_LEAD = 1.5
 """m before the meeting point the planned robot is when a person reaches it."""
+ONCOMING_LEAD = 2.5
+"""m before the corridor the planned robot is when the oncoming person reaches its near end."""
+ONCOMING_CLEAR = 0.5
+"""m before the corridor's entrance the robot, at its top speed, may be at the latest when
+the oncoming person, at its slowest and latest, has stepped aside past the entrance: a person
+and a robot face to face inside a one-tile corridor would wait for each other for good."""
+HUMAN_SLOWEST = 0.85
+"""The slowest per-run speed scale of a human (runtime/animator/variation.py, 1 - 0.15)."""
 CART_LEAD = 1.2
 """m before the crossing point the planned robot is when the cart's centre crosses."""
 CART_CLEARANCE = 0.2
@@ -260,13 +268,14 @@ def _crossing(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: rando
 def _oncoming(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: random.Random
               ) -> StressorLayout:
     length = CORRIDOR_LENGTH
-    # One straight cell before the corridor, the corridor, one after (the person's start),
-    # which must not be the goal.
-    runs = [(k, d) for k, d in _straight_runs(leg, 1, length) if k + length < len(leg) - 1]
+    # One straight cell before the corridor and the corridor, whose far end (the person's
+    # start) must not be the goal.
+    runs = [(k, d) for k, d in _straight_runs(leg, 1, length - 1)
+            if k + length - 1 < len(leg) - 1]
     rng.shuffle(runs)
     for a, d in runs:
         corridor = leg[a:a + length]
-        start, entrance = leg[a + length], leg[a - 1]
+        entrance = leg[a - 1]
         for n in _perpendiculars(d, rng):
             walls = {_add(c, n, s) for c in corridor for s in (1, -1)} & floors
             aside = _add(entrance, n)
@@ -274,12 +283,12 @@ def _oncoming(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: rando
                 continue
             if not walls or not _connected(floors - walls):
                 continue
-            path = (start, *reversed(corridor), entrance, aside)
+            path = (*reversed(corridor), entrance, aside)
             mover = MoverPath("oncoming_person", "human", "human", path,
-                              anchor=len(corridor), lead=PERSON_LEAD)
+                              anchor=len(corridor) - 1, lead=ONCOMING_LEAD)
             return StressorLayout("oncoming", frozenset(walls), (), mover, corridor[0],
-                                  tuple(leg[a - 1:a + length + 1]), frozenset(leg) | {aside})
-    raise StressorFailed(f"no straight stretch of {length + 2} tiles on the first leg for a "
+                                  tuple(leg[a - 1:a + length]), frozenset(leg) | {aside})
+    raise StressorFailed(f"no straight stretch of {length + 1} tiles on the first leg for a "
                          f"one-tile corridor")
 
 
@@ -378,6 +387,12 @@ def time_layout(layout: StressorLayout, route: Sequence[Cell], params: RoomParam
         earliest = reach / top
         if cleared > earliest:
             go -= cleared - earliest
+    if layout.kind == "oncoming":
+        # Out of the corridor and aside, at its slowest (speed scale and a start delay of
+        # up to one vertex interval, below HOLD_STEP), before a robot at top speed arrives.
+        reach = math.dist(final[0], layout.approach[0]) - ONCOMING_CLEAR
+        latest = HUMAN_SLOWEST * (reach / top - HOLD_STEP) - walk[-1] / speed
+        go = min(go, latest)
     if go < MIN_WAIT:
         raise StressorFailed("the meeting point is too near the start to wait for the robot")
     go = round(go, 2)
