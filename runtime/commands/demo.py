@@ -37,8 +37,11 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                         help="rooms to generate (default 6)")
     parser.add_argument("--repeat", type=positive_int, default=2, metavar="K",
                         help="runs per mission, each with its own seed (default 2)")
-    parser.add_argument("--preset", choices=("small", "medium", "large"), default="small",
-                        help="room class of the suite (default small)")
+    parser.add_argument("--preset", choices=("small", "medium", "large", "stress"),
+                        default="small",
+                        help="room class of the suite (default small, to which the demo adds "
+                             f"{STRESS_ROOMS} stress rooms: a person emerging from behind a "
+                             "corner, a crossing cart, a gap narrower than the robot)")
     parser.add_argument("--seed", type=int, default=0, metavar="S",
                         help="seed of the generated suite and of the campaign's runs (default 0)")
     parser.add_argument("--workers", type=positive_int, default=None, metavar="N",
@@ -55,25 +58,38 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.set_defaults(func=run)
 
 
+STRESS_ROOMS = 3
+"""Stress rooms the demo adds to its small ones: the stress preset's first systematic rows,
+a person emerging from behind a corner, a crossing cart and a gap narrower than the robot."""
+
+
 def generate_suite(out: Path, count: int, preset: str, seed: int) -> list[Path]:
-    """The suite's index, generated with `rei-gen rooms`; the bundled examples without it."""
-    index = out / "index.csv"
-    if index.is_file():
-        return [index]  # resuming: the same seed gave these files, keep them
+    """The suite's indexes, generated with `rei-gen rooms`: ``count`` rooms of ``preset``
+    and, with the small preset, STRESS_ROOMS stress rooms (in DIR/suite/stress); the
+    bundled examples without the generator."""
     try:
         from rei.lang.cli import main as rei_gen  # noqa: PLC0415
         from rei.lang.commands import rooms  # noqa: F401, PLC0415
     except ImportError:
         print(f"rei demo: `rei-gen rooms` is not installed; using {EXAMPLES}", file=sys.stderr)
         return [EXAMPLES]
-    report = io.StringIO()
-    with contextlib.redirect_stdout(report):  # the coverage report is in DIR/suite/coverage.txt
-        status = rei_gen(["rooms", "-o", str(out), "--count", str(count), "--preset", preset,
-                          "--seed", str(seed)])
-    if status != EXIT_OK or not index.is_file():
-        sys.stderr.write(report.getvalue())
-        raise SystemExit(status or EXIT_BAD_INPUT)
-    return [index]
+    suites = [(out, ["--count", str(count), "--preset", preset])]
+    if preset == "small":
+        suites.append((out / "stress", ["--count", str(STRESS_ROOMS), "--preset", "stress",
+                                        "--strategy", "systematic", "--prefix", "stress"]))
+    indexes = []
+    for folder, options in suites:
+        index = folder / "index.csv"
+        indexes.append(index)
+        if index.is_file():
+            continue  # resuming: the same seed gave these files, keep them
+        report = io.StringIO()
+        with contextlib.redirect_stdout(report):  # the coverage report is in coverage.txt
+            status = rei_gen(["rooms", "-o", str(folder), *options, "--seed", str(seed)])
+        if status != EXIT_OK or not index.is_file():
+            sys.stderr.write(report.getvalue())
+            raise SystemExit(status or EXIT_BAD_INPUT)
+    return indexes
 
 
 def run(args: argparse.Namespace) -> int:
@@ -94,7 +110,8 @@ def run(args: argparse.Namespace) -> int:
         if not args.quiet:
             print(text, file=sys.stderr)
 
-    say(f"1/3 generating {args.count} {args.preset} rooms into {out / 'suite'}")
+    extra = f" and {STRESS_ROOMS} stress" if args.preset == "small" else ""
+    say(f"1/3 generating {args.count} {args.preset}{extra} rooms into {out / 'suite'}")
     inputs = generate_suite(out / "suite", args.count, args.preset, args.seed)
     plan = plan_campaign(inputs, repeat=args.repeat, seed=args.seed, controller=args.controller,
                          vepl=args.vepl)
