@@ -396,11 +396,10 @@ def time_layout(layout: StressorLayout, route: Sequence[Cell], params: RoomParam
     if go < MIN_WAIT:
         raise StressorFailed("the meeting point is too near the start to wait for the robot")
     go = round(go, 2)
-    times = [0.0]
-    while times[-1] + HOLD_STEP < go - SETTLE - HOLD_STEP / 2:
-        times.append(times[-1] + HOLD_STEP)
-    times.append(round(go - SETTLE, 2))
-    times.append(go)
+    waiting = go - SETTLE
+    intervals = math.ceil(waiting / HOLD_STEP - 1e-9)
+    times = [round(k * waiting / intervals, 2) for k in range(intervals)]
+    times += [round(waiting, 2), go]
     timed = [(mover.vertices[0], t) for t in times]
     timed += [(v, round(go + walk[m] / speed, 2)) for m, v in enumerate(mover.vertices)
               if m > 0]
