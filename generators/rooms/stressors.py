@@ -272,7 +272,9 @@ def _oncoming(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: rando
     # start) must not be the goal.
     runs = [(k, d) for k, d in _straight_runs(leg, 1, length - 1)
             if k + length - 1 < len(leg) - 1]
-    rng.shuffle(runs)
+    # Farthest from the start first: the person must be out of the corridor before a robot
+    # at top speed gets there, which a corridor near the start leaves no time for.
+    runs.sort(key=lambda run: -run[0])
     for a, d in runs:
         corridor = leg[a:a + length]
         entrance = leg[a - 1]
