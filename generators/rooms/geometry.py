@@ -230,6 +230,24 @@ def bfs_route(free: set[Cell], stops: Sequence[Cell]) -> list[Cell] | None:
     return cells
 
 
+def is_connected(cells: set[Cell]) -> bool:
+    """Whether the 4-connected set ``cells`` is one piece (an empty set is)."""
+    if not cells:
+        return True
+    start = min(cells)
+    seen = {start}
+    frontier = [start]
+    while frontier:
+        nxt = []
+        for i, j in frontier:
+            for n in ((i + 1, j), (i - 1, j), (i, j + 1), (i, j - 1)):
+                if n in cells and n not in seen:
+                    seen.add(n)
+                    nxt.append(n)
+        frontier = nxt
+    return len(seen) == len(cells)
+
+
 def stays_connected(free: set[Cell], cell: Cell) -> bool:
     """Whether removing ``cell`` from the 4-connected set ``free`` keeps its free neighbours
     connected to each other (so the whole free set stays one component)."""

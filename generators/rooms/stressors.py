@@ -33,10 +33,10 @@ from __future__ import annotations
 
 import math
 import random
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
-from rei.generators.rooms.geometry import Cell, fast_route
+from rei.generators.rooms.geometry import Cell, fast_route, is_connected
 from rei.generators.rooms.space import RoomParameters
 
 NOMINAL_SPEED = 0.25
@@ -179,23 +179,6 @@ def _straight_runs(route: Sequence[Cell], before: int, after: int) -> list[tuple
     return out
 
 
-def _connected(cells: set[Cell]) -> bool:
-    if not cells:
-        return True
-    start = min(cells)
-    seen = {start}
-    frontier = [start]
-    while frontier:
-        nxt = []
-        for i, j in frontier:
-            for n in ((i + 1, j), (i - 1, j), (i, j + 1), (i, j - 1)):
-                if n in cells and n not in seen:
-                    seen.add(n)
-                    nxt.append(n)
-        frontier = nxt
-    return len(seen) == len(cells)
-
-
 def first_leg(floors: set[Cell], goals: Sequence[Cell]) -> list[Cell]:
     """The robot's route from its start to the second goal on the inflated floor graph."""
     leg = fast_route(floors, [goals[0], goals[1]])
@@ -221,46 +204,47 @@ def plan_layout(params: RoomParameters, floors: set[Cell], goals: Sequence[Cell]
     raise ValueError(kind)
 
 
-def _emerge(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: random.Random
-            ) -> StressorLayout:
+def _meeting_points(leg: list[Cell], rng: random.Random
+                    ) -> Iterator[tuple[int, Cell, Cell, Cell]]:
+    """(k, p, d, n) in a random order: a cell p = leg[k] that the route approaches straight
+    along d for three cells and leaves along d, and a side n across the route there."""
     runs = _straight_runs(leg, 3, 1)
     rng.shuffle(runs)
     for k, d in runs:
-        p = leg[k]
         for n in _perpendiculars(d, rng):
-            stub, hide = _add(_sub(p, d), n), _add(p, n)
-            toward = _sub(p, d)
-            aside = _sub(toward, n)
-            tiles = (stub, hide, aside)
-            if any(t not in floors or t in blocked for t in tiles):
-                continue
-            rest = floors - {stub}
-            if not _connected(rest):
-                continue
-            mover = MoverPath("emerging_person", "human", "human", (hide, p, toward, aside),
-                              anchor=1, lead=PERSON_LEAD)
-            return StressorLayout("emerge", frozenset({stub}), (), mover, p,
-                                  tuple(leg[k - 3:k + 2]), frozenset(leg) | {hide, aside})
+            yield k, leg[k], d, n
+
+
+def _emerge(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: random.Random
+            ) -> StressorLayout:
+    for k, p, d, n in _meeting_points(leg, rng):
+        stub, hide = _add(_sub(p, d), n), _add(p, n)
+        toward = _sub(p, d)
+        aside = _sub(toward, n)
+        if any(t not in floors or t in blocked for t in (stub, hide, aside)):
+            continue
+        if not is_connected(floors - {stub}):
+            continue
+        mover = MoverPath("emerging_person", "human", "human", (hide, p, toward, aside),
+                          anchor=1, lead=PERSON_LEAD)
+        return StressorLayout("emerge", frozenset({stub}), (), mover, p,
+                              tuple(leg[k - 3:k + 2]), frozenset(leg) | {hide, aside})
     raise StressorFailed("no straight stretch of the first leg with room for a wall stub "
                          "and a person behind it")
 
 
 def _crossing(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: random.Random
               ) -> StressorLayout:
-    runs = _straight_runs(leg, 3, 1)
-    rng.shuffle(runs)
-    for k, d in runs:
-        p = leg[k]
-        for n in _perpendiculars(d, rng):
-            way = [_add(p, n, 2), _add(p, n, 1), p, _add(p, n, -1), _add(p, n, -2)]
-            if any(t not in floors or (t != p and t in blocked) for t in way):
-                continue
-            # The cart faces where it goes, so its length lies along its way.
-            heading = float(round(math.degrees(math.atan2(-n[1], -n[0]))) % 360)
-            mover = MoverPath("crossing_cart", "dynamic", "cart", tuple(way), anchor=2,
-                              lead=CART_LEAD, heading=heading)
-            return StressorLayout("crossing", frozenset(), (), mover, p,
-                                  tuple(leg[k - 3:k + 2]), frozenset(leg) | set(way))
+    for k, p, _d, n in _meeting_points(leg, rng):
+        way = [_add(p, n, 2), _add(p, n, 1), p, _add(p, n, -1), _add(p, n, -2)]
+        if any(t not in floors or (t != p and t in blocked) for t in way):
+            continue
+        # The cart faces where it goes, so its length lies along its way.
+        heading = float(round(math.degrees(math.atan2(-n[1], -n[0]))) % 360)
+        mover = MoverPath("crossing_cart", "dynamic", "cart", tuple(way), anchor=2,
+                          lead=CART_LEAD, heading=heading)
+        return StressorLayout("crossing", frozenset(), (), mover, p,
+                              tuple(leg[k - 3:k + 2]), frozenset(leg) | set(way))
     raise StressorFailed("no straight stretch of the first leg with two free tiles on "
                          "either side for a crossing cart")
 
@@ -283,7 +267,7 @@ def _oncoming(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: rando
             aside = _add(entrance, n)
             if aside not in floors or aside in blocked or walls & blocked:
                 continue
-            if not walls or not _connected(floors - walls):
+            if not walls or not is_connected(floors - walls):
                 continue
             path = (*reversed(corridor), entrance, aside)
             mover = MoverPath("oncoming_person", "human", "human", path,
@@ -334,7 +318,7 @@ def _gap(floors: set[Cell], goals: Sequence[Cell], leg: list[Cell], half: float,
         opening = rng.choice([t for t in openings if abs(t[lat] - at) == far])
         tables = [t for t in run if t != opening]
         rest = floors - set(tables)
-        if not _connected(rest):
+        if not is_connected(rest):
             continue
         heading = 90.0 if axis == 0 else 0.0  # the table's long side along the row
         row = tuple(RowObject(ROW_TYPE, t, heading) for t in tables)
