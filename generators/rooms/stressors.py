@@ -57,10 +57,11 @@ PERSON_LEAD = 1.5
 """m before the meeting point the planned robot is when a person reaches it."""
 ONCOMING_LEAD = 2.5
 """m before the corridor the planned robot is when the oncoming person reaches its near end."""
-ONCOMING_CLEAR = 0.5
-"""m before the corridor's entrance the robot, at its top speed, may be at the latest when
-the oncoming person, at its slowest and latest, has stepped aside past the entrance: a person
-and a robot face to face inside a one-tile corridor would wait for each other for good."""
+ONCOMING_CLEAR = 0.0
+"""m before the tile in front of the corridor the robot, at its top speed, may be at the
+latest when the oncoming person, at its slowest and latest, has stepped aside beside that
+tile: a person and a robot face to face inside a one-tile corridor would wait for each other
+for good (outside it the person has room to give way)."""
 HUMAN_SLOWEST = 0.85
 """The slowest per-run speed scale of a human (runtime/animator/variation.py, 1 - 0.15)."""
 CART_LEAD = 1.2
