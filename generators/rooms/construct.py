@@ -47,6 +47,7 @@ from rei.generators.rooms.geometry import (
 from rei.generators.rooms.space import MIX_BEHAVIOURS, NO_STRESSOR, RoomParameters, door_width
 from rei.generators.rooms.stressors import (
     ROW_TYPE,
+    Bodies,
     StressorFailed,
     StressorLayout,
     StressorPlan,
@@ -117,6 +118,8 @@ class CatalogueFacts:
     types: dict[str, ObjectType]
     headings: dict[str, tuple[float, ...]]
     """Headings at which each static type fits its tile."""
+    bodies: Bodies
+    """The robot's and the cart's sizes and the robot's top speed, for stressor timing."""
 
     @staticmethod
     def of(catalogue: Catalogue, tile: float = 1.0) -> CatalogueFacts:
@@ -129,7 +132,7 @@ class CatalogueFacts:
             fits = tuple(h for h in HEADINGS
                          if max(rotated_half_extents(otype, h)) <= tile / 2 - 1e-6)
             headings[name] = fits
-        return CatalogueFacts(types, headings)
+        return CatalogueFacts(types, headings, Bodies.of(catalogue, ROBOT_TYPE))
 
 
 def cell_name(cell: Cell) -> str:
@@ -352,7 +355,7 @@ def construct(params: RoomParameters, facts: CatalogueFacts, rng: random.Random)
     stressor: StressorPlan | None = None
     if layout is not None:
         try:
-            stressor = time_layout(layout, route, params)
+            stressor = time_layout(layout, route, params, facts.bodies)
         except StressorFailed as exc:
             raise AttemptFailed("stressor", str(exc)) from None
         if stressor.mover is not None:

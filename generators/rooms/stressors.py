@@ -36,14 +36,13 @@ import random
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
+from rei.catalogue import Catalogue
 from rei.generators.rooms.geometry import Cell, fast_route, is_connected
 from rei.generators.rooms.space import RoomParameters
 
 NOMINAL_SPEED = 0.25
 """m/s the robot is planned to drive at: the reference navigator's pace on a free straight
 (about 2.5 m in the first 10 s, bench/RESULTS.md), just below the Waffle's top speed."""
-TOP_SPEED = 0.26
-"""m/s, the Waffle's top speed: no robot gets anywhere sooner than at this speed."""
 START_DELAY = 1.0
 """s the robot is planned to need before it moves (first command, acceleration)."""
 HOLD_STEP = 2.0
@@ -70,14 +69,30 @@ CART_CLEARANCE = 0.2
 """m the cart keeps from the robot at its top speed (footprint to footprint, at least)."""
 CORRIDOR_LENGTH = 3
 """Tiles of the one-tile corridor."""
-ROBOT_HALF = (0.1405, 0.153)
-"""m, half the Waffle's footprint (length, width), for the cart's fairness margin."""
-CART_HALF = (0.3, 0.2)
-"""m, half the catalogue cart's footprint (length along its heading, width)."""
 ROW_TYPE = "table"
 """The catalogue type of the gap's row: 0.8 m along the row leaves a 0.2 m slot."""
+CART_TYPE = "cart"
+"""The catalogue type of the crossing cart."""
 
-STRESSOR_KINDS = ("emerge", "oncoming", "crossing", "gap")
+
+@dataclass(frozen=True)
+class Bodies:
+    """What the timing needs of the robot and the cart, from the catalogue."""
+
+    robot_half: tuple[float, float]
+    """m, half the robot's footprint (length along its heading, width)."""
+    top_speed: float
+    """m/s, the robot's drive limit: no robot gets anywhere sooner than at this speed."""
+    cart_half: tuple[float, float]
+    """m, half the cart's footprint (length along its heading, width)."""
+
+    @staticmethod
+    def of(catalogue: Catalogue, robot_type: str) -> Bodies:
+        robot = catalogue.types[robot_type]
+        if robot.drive is None:
+            raise ValueError(f"catalogue type '{robot_type}' has no drive")
+        return Bodies(robot.footprint.half_extents(), robot.drive.max_linear,
+                      catalogue.types[CART_TYPE].footprint.half_extents())
 
 
 class StressorFailed(Exception):
@@ -242,7 +257,7 @@ def _crossing(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: rando
             continue
         # The cart faces where it goes, so its length lies along its way.
         heading = float(round(math.degrees(math.atan2(-n[1], -n[0]))) % 360)
-        mover = MoverPath("crossing_cart", "dynamic", "cart", tuple(way), anchor=2,
+        mover = MoverPath("crossing_cart", "dynamic", CART_TYPE, tuple(way), anchor=2,
                           lead=CART_LEAD, heading=heading)
         return StressorLayout("crossing", frozenset(), (), mover, p,
                               tuple(leg[k - 3:k + 2]), frozenset(leg) | set(way))
@@ -343,8 +358,8 @@ def planned_arrival(route: Sequence[Cell], point: Cell, speed: float) -> float:
     return START_DELAY + route_lengths(route)[list(route).index(point)] / speed
 
 
-def time_layout(layout: StressorLayout, route: Sequence[Cell], params: RoomParameters
-                ) -> StressorPlan:
+def time_layout(layout: StressorLayout, route: Sequence[Cell], params: RoomParameters,
+                bodies: Bodies) -> StressorPlan:
     """The mover's vertex times from the final route; StressorFailed when the final route
     no longer meets the stressor where it was laid out, or the timing cannot be met."""
     if layout.kind == "gap":
@@ -357,8 +372,8 @@ def time_layout(layout: StressorLayout, route: Sequence[Cell], params: RoomParam
     if at < 0 or cells[at:at + len(layout.approach)] != list(layout.approach):
         raise StressorFailed("the objects moved the robot's route off the stressor")
     final = cells[:at + len(layout.approach)]
-    limit = params.max_speed if params.max_speed is not None else TOP_SPEED
-    nominal, top = min(NOMINAL_SPEED, limit), min(TOP_SPEED, limit)
+    limit = params.max_speed if params.max_speed is not None else bodies.top_speed
+    nominal, top = min(NOMINAL_SPEED, limit), min(bodies.top_speed, limit)
     arrival = planned_arrival(final, layout.point, nominal)
     meeting = arrival - mover.lead / nominal
     walk = route_lengths(mover.vertices)
@@ -367,9 +382,9 @@ def time_layout(layout: StressorLayout, route: Sequence[Cell], params: RoomParam
     if mover.role == "dynamic":
         # A scripted cart must have left the robot's lane before the robot, at its top
         # speed and on the straightest way, could be there.
-        reach = math.dist(final[0], layout.point) - (ROBOT_HALF[0] + CART_HALF[1]
-                                                     + CART_CLEARANCE)
-        lane = ROBOT_HALF[1] + CART_HALF[0] + CART_CLEARANCE
+        reach = math.dist(final[0], layout.point) - (bodies.robot_half[0]
+                                                     + bodies.cart_half[1] + CART_CLEARANCE)
+        lane = bodies.robot_half[1] + bodies.cart_half[0] + CART_CLEARANCE
         cleared = go + (walk[mover.anchor] + lane) / speed
         earliest = reach / top
         if cleared > earliest:

@@ -24,14 +24,11 @@ from rei.generators.rooms import (
     write_suite,
 )
 from rei.generators.rooms.stressors import (
-    CART_HALF,
     HOLD_STEP,
     HUMAN_SLOWEST,
     NOMINAL_SPEED,
     ONCOMING_CLEAR,
-    ROBOT_HALF,
     START_DELAY,
-    TOP_SPEED,
     route_lengths,
 )
 from rei.lang.room.checks import blocking_objects, rotated_half_extents
@@ -110,6 +107,12 @@ def _mover_times(room_text: str, name: str) -> list[tuple[str, float]]:
 
 @pytest.mark.parametrize("kind", ["emerge", "crossing", "oncoming"])
 def test_movers_are_timed_from_the_robots_planned_arrival(kind: str) -> None:
+    types = default_catalogue().types
+    robot = types["turtlebot3_waffle"]
+    assert robot.drive is not None
+    top = robot.drive.max_linear
+    robot_half = robot.footprint.half_extents()
+    cart_half = types["cart"].footprint.half_extents()
     suite = generate(_request(kind, 5, 4), Path("unused"))
     for pair in suite.pairs:
         plan, stress = pair.plan, pair.plan.stressor
@@ -136,16 +139,16 @@ def test_movers_are_timed_from_the_robots_planned_arrival(kind: str) -> None:
             # The scripted cart is out of the robot's lane before a robot at top speed could
             # be at the lane, by the straightest way.
             speed = float(plan.params.speed)
-            lane = ROBOT_HALF[1] + CART_HALF[0]
+            lane = robot_half[1] + cart_half[0]
             cleared = met + lane / speed
-            reach = math.dist(start, layout.point) - ROBOT_HALF[0] - CART_HALF[1]
-            assert cleared <= reach / TOP_SPEED + 0.02
+            reach = math.dist(start, layout.point) - robot_half[0] - cart_half[1]
+            assert cleared <= reach / top + 0.02
         if kind == "oncoming":
             # The person is out of the corridor and aside, at its slowest, before a robot
             # at top speed could reach the tile in front of the corridor.
             end = times[-1][1]
             reach = math.dist(start, layout.approach[0]) - ONCOMING_CLEAR
-            assert end / HUMAN_SLOWEST + HOLD_STEP <= reach / TOP_SPEED + 0.05
+            assert end / HUMAN_SLOWEST + HOLD_STEP <= reach / top + 0.05
 
 
 def _raster(room_doc: object, res: float) -> tuple[np.ndarray, float, float]:
