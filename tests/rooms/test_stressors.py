@@ -321,3 +321,32 @@ def test_a_planner_blind_to_its_footprint_heads_into_the_gap_the_reference_goes_
               if v["status"] == "fail"}
     assert "NO_ROBOT_COLLISION" in failed
     assert "row_table" in failed["NO_ROBOT_COLLISION"]["reason"]
+
+
+def test_an_unknown_stressor_is_refused_naming_the_option(tmp_path: Path,
+                                                          capsys: pytest.CaptureFixture[str]
+                                                          ) -> None:
+    from rei.lang.cli import main as rei_gen
+
+    status = rei_gen(["rooms", "-o", str(tmp_path / "out"), "--stressor", "emerj"])
+    assert status == 2
+    err = capsys.readouterr().err
+    assert "--stressor: expected one of none, emerge, oncoming, crossing, gap, found 'emerj'" in err
+    assert "did you mean 'emerge'" in err
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("preset", ["small", "medium", "large"])
+def test_every_stressor_fits_the_other_presets_rooms(tmp_path: Path, preset: str) -> None:
+    levels = {"stressor": ("emerge", "oncoming", "crossing", "gap")}
+    if preset == "small":  # its rooms are 7x5 and 8x5: too short a leg to time an encounter
+        levels |= {"size": ("10x6",), "spacing": ("6",)}
+    space = preset_space(preset).replaced(levels)
+    suite = generate(SuiteRequest(space, "systematic", 4, 2), tmp_path)
+    write_suite(suite, tmp_path, coverage_report(suite))
+    workspace = Workspace()
+    for pair in suite.pairs:
+        assert pair.plan.stressor is not None
+        problems = (workspace.check(tmp_path / pair.room_file)
+                    + workspace.check(tmp_path / pair.mission_file))
+        assert [str(d) for d in problems] == []
