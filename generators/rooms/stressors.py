@@ -338,7 +338,15 @@ def _gap(floors: set[Cell], goals: Sequence[Cell], leg: list[Cell], half: float,
             continue
         heading = 90.0 if axis == 0 else 0.0  # the table's long side along the row
         row = tuple(RowObject(ROW_TYPE, t, heading) for t in tables)
-        keep = frozenset({opening, _add(opening, cell(1, 0)), _add(opening, cell(-1, 0))})
+        # Free of other objects: the opening and the tiles either side of it (the way round
+        # stays open), and the slot's and the straight line's tiles (the slot stays the
+        # point's shortest way, with nothing else on the way to it).
+        steps = max(abs(dx), abs(dy)) * 10
+        line = {(round(start[0] + dx * m / steps), round(start[1] + dy * m / steps))
+                for m in range(steps + 1)}
+        keep = frozenset(t for t in line | {_add(u, cell(k, 0)) for u in (opening, *slot)
+                                            for k in (-1, 0, 1)}
+                         if t in floors) - set(tables)
         return StressorLayout("gap", frozenset(), row, None, slot[0], (), keep,
                               slot=slot, slot_width=round(1.0 - 2 * half, 6))
     raise StressorFailed("no place across the first leg for a row of tables with an opening "

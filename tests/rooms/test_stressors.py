@@ -212,7 +212,7 @@ def _shortest(free: np.ndarray, a: tuple[int, int], b: tuple[int, int]
 
 
 def test_the_gap_is_narrower_than_the_robot_and_on_the_direct_way(tmp_path: Path) -> None:
-    suite = generate(_request("gap", 11, 3), tmp_path)
+    suite = generate(_request("gap", 11, 8), tmp_path)
     write_suite(suite, tmp_path, coverage_report(suite))
     robot = default_catalogue().types["turtlebot3_waffle"].footprint.half_extents()
     res = 0.05
@@ -253,15 +253,32 @@ def test_the_gap_is_narrower_than_the_robot_and_on_the_direct_way(tmp_path: Path
         grown = _grow(occupied, int(math.ceil(min(robot) / res)))
         robot_len, robot_path = _shortest(~grown, a, b)
         assert point_path and robot_path
-        slot_box = (np.abs(np.array([x0 + (p[0] + 0.5) * res for p in point_path]) - mid[0])
-                    <= 0.5) & (np.abs(np.array([y0 + (p[1] + 0.5) * res for p in point_path])
-                                      - mid[1]) <= 0.5)
-        assert slot_box.any(), "the point's shortest way does not pass the slot"
-        robot_xy = np.array([(x0 + (p[0] + 0.5) * res, y0 + (p[1] + 0.5) * res)
-                             for p in robot_path])
-        assert not ((np.abs(robot_xy[:, 0] - mid[0]) <= 0.15)
-                    & (np.abs(robot_xy[:, 1] - mid[1]) <= 0.15)).any()
+        # Where each way crosses the row's centre line: the point between two tables of the
+        # row (through a slot: every neighbouring pair leaves one), the robot at the opening.
+        along = 0 if across == 1 else 1
+        row = {layout.cells[o.floor.name]  # type: ignore[union-attr]
+               for o in doc.room.room.objects if o.name.startswith("row_")}  # type: ignore[union-attr]
+        line = mid[along]
+
+        through, round_by = (_crossing(path, (x0, y0), res, along, line)
+                             for path in (point_path, robot_path))
+        low = math.floor(through)
+        assert abs(through - (low + 0.5)) <= 0.1 + res, "the point does not take a slot"
+        assert {_cell(line, along, low), _cell(line, along, low + 1)} <= row
+        assert _cell(line, along, round(round_by)) not in row, "the robot's way hits a table"
         assert robot_len > point_len + 1.0 / res  # going round costs at least a metre more
+
+
+def _crossing(path: list[tuple[int, int]], origin: tuple[float, float], res: float,
+              along: int, line: float) -> float:
+    """The lateral coordinate (m) at which a raster path crosses the line ``along`` = line."""
+    xy = np.array([(origin[0] + (p[0] + 0.5) * res, origin[1] + (p[1] + 0.5) * res)
+                   for p in path])
+    return float(xy[int(np.argmin(np.abs(xy[:, along] - line))), 1 - along])
+
+
+def _cell(line: float, along: int, lateral: int) -> tuple[int, int]:
+    return (round(line), lateral) if along == 0 else (lateral, round(line))
 
 
 def _closest_approach(run: Path, name: str) -> float:
