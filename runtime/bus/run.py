@@ -82,6 +82,9 @@ class RunController(BusController):
         return TracePublisher(self._sessions["simulation"], self.leave)
 
     def leave(self) -> None:
+        if self._left.alive and self.retries:
+            _say(f"bus: {self.retries} call(s) to the robot sent again while nobody could "
+                 f"answer (the router or the robot away), each answered once")
         self._left()
 
 
