@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING
 
 from rei.lang.cli_support import EXIT_BAD_INPUT, EXIT_RUN_ERROR
 from rei.lang.errors import printable_lines
-from rei.runtime.commands.robot import add_bus_options
+from rei.runtime.commands.robot import add_bus_options, join_bus
 from rei.runtime.commands.run import EVENTS, TRACE, add_verbosity, print_results, write_page
 
 if TYPE_CHECKING:
@@ -61,7 +61,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rei.runtime.bus import BusError, connect  # noqa: PLC0415
+    from rei.runtime.bus import BusError  # noqa: PLC0415
     from rei.runtime.bus.monitor import TraceStream, ask_header  # noqa: PLC0415
     from rei.runtime.bus.schema import TRACE as TRACE_KEY  # noqa: PLC0415
     from rei.runtime.bus.schema import config_key  # noqa: PLC0415
@@ -81,12 +81,9 @@ def run(args: argparse.Namespace) -> int:
         (out / stale).unlink(missing_ok=True)
     automata = generate_automata(args.vepl, out / "automata", replace=True)
     user = load_functions(args.functions, args.vepl)
-    try:
-        session = connect(args.bus, role="monitor", credentials=args.credentials)
-    except BusError as exc:
-        print(f"rei monitor: error: {exc}", file=sys.stderr)
-        return EXIT_BAD_INPUT if "expected" in str(exc) or "refused" in str(exc) \
-            or "credentials" in str(exc) else EXIT_RUN_ERROR
+    session = join_bus(args, "monitor")
+    if isinstance(session, int):
+        return session
     with session:
         stream = TraceStream(ask_header(session.call, config_key("trace"), 10.0),
                              args.silence)

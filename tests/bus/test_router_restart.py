@@ -16,7 +16,7 @@ import pytest
 
 from rei.runtime.bus.router import free_port
 from rei.runtime.commands.run import run_into
-from tests.bus.conftest import SAFETY
+from tests.bus.conftest import SAFETY, stop_all
 from tests.conftest import EXAMPLES, REPO
 
 MISSION = EXAMPLES / "medium_sparse" / "medium_sparse.mission"
@@ -63,12 +63,7 @@ def test_a_router_restart_is_survived(tmp_path: Path) -> None:
         assert "call(s) to the robot sent again while nobody could answer" in err
         assert started[1].wait(timeout=SAFETY) == 0
     finally:
-        for process in reversed(started):
-            if process.poll() is None:
-                process.terminate()
-                process.wait(timeout=SAFETY)
-            if process.stdout is not None:
-                process.stdout.close()
+        stop_all(started)
     run_into(MISSION, tmp_path / "local", monitor=False)
     assert (tmp_path / "dist" / "trace.jsonl").read_bytes() == \
         (tmp_path / "local" / "trace.jsonl").read_bytes()
