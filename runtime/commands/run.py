@@ -279,8 +279,8 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
                   out_dir / RECORDING):
         stale.unlink(missing_ok=True)
     trace_writer = TraceWriter(out_dir / TRACE)
-    if bus is not None:
-        bus_sinks.append(robot.publisher())
+    if bus is not None:  # right after the trace writer: it publishes the line just written
+        bus_sinks.append(robot.publisher(trace_writer))
     recorder: list[SampleSink] = []
     if recording:
         from rei.runtime.recording import McapRecorder  # noqa: PLC0415
