@@ -76,10 +76,13 @@ def judge_stream(header: StreamHeader, samples: Iterator[Sample],
                  read_end: Callable[[], tuple[float, str, str] | None], vepl: Path | None,
                  out_dir: Path, user: Any, automata: Any, source: str,
                  controller: str = "replay",
-                 measurements: Callable[[], dict[str, Any]] | None = None) -> RunSummary:
+                 measurements: Callable[[], dict[str, Any]] | None = None,
+                 judged: Callable[[Any, Sample], None] | None = None) -> RunSummary:
     """Monitor a stream (``replay``'s trace, `rei monitor`'s bus) into ``out_dir``; the
     summary (also written as summary.json). ``source`` names the stream in errors;
-    ``measurements`` gives more of the summary's measurements once the stream ended."""
+    ``measurements`` gives more of the summary's measurements once the stream ended;
+    ``judged(sink, sample)`` is told of each sample once the monitor has judged it (`rei
+    watch` shows it)."""
     from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
     from rei.runtime.collector.needs import check_needs  # noqa: PLC0415
     from rei.runtime.evaluator.summary import merge_summary, write_summary  # noqa: PLC0415
@@ -106,6 +109,8 @@ def judge_stream(header: StreamHeader, samples: Iterator[Sample],
             last = sample.time
             if header.faults:
                 seen.feed(sample.time, sample.faults)
+            if judged is not None:
+                judged(sink, sample)
     finally:
         close = getattr(samples, "close", None)
         if close is not None:
