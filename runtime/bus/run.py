@@ -24,7 +24,7 @@ from rei.runtime.bus.client import BusSession, connect
 from rei.runtime.bus.errors import BusError
 from rei.runtime.bus.robot import BusController, to_json
 from rei.runtime.bus.schema import TRACE, config_key, dumps
-from rei.runtime.collector.trace import TraceWriter
+from rei.runtime.collector.trace import TraceEncoder, TraceWriter
 from rei.runtime.errors import RunError
 from rei.runtime.messages import Sample, StreamHeader
 
@@ -45,38 +45,51 @@ def keyframe(sample: Sample) -> bytes:
 
 
 class TracePublisher:
-    """A ``SampleSink`` right after the trace writer, publishing on ``rei/v1/trace`` the
-    line it has just written (the header, each sample, the end: byte for byte
-    trace.jsonl's), a keyframe before every ``KEYFRAME``-th sample and the sample count
-    before the end line; after the end line, ``done`` (the run has nothing more to say on
-    the bus). It answers the header line as the configuration ``trace`` for a monitor that
-    joins late."""
+    """A ``SampleSink`` publishing the run's trace on ``rei/v1/trace``: the header, each
+    sample's line and the end line — those the trace ``writer`` has just written, byte for
+    byte trace.jsonl's, when the sink comes right after it; else encoded here by the
+    trace's own encoder (``encoder``) — a keyframe before every ``KEYFRAME``-th sample and
+    the sample count before the end line; after the end line, ``done`` (the run has
+    nothing more to say on the bus). It answers the header line as the configuration
+    ``trace`` for a monitor that joins late."""
 
-    def __init__(self, session: BusSession, writer: TraceWriter,
+    def __init__(self, session: BusSession, writer: TraceWriter | None = None,
                  done: Callable[[], None] = lambda: None) -> None:
         self.session, self.writer, self.done = session, writer, done
+        self.encoder = TraceEncoder(TRACE) if writer is None else None
+        """Without a writer: the encoder of the lines (a sample published to nobody may be
+        passed through it to keep the lines' changed rows right)."""
         self.samples = 0
         self._header = b""
 
     def _publish(self, payload: bytes) -> None:
         self.session.put(TRACE, payload)
 
+    def _written(self) -> str:
+        assert self.writer is not None
+        return self.writer.line
+
     def start(self, header: StreamHeader) -> None:
-        self._header = self.writer.line.encode("utf-8")
+        line = self._written() if self.encoder is None else self.encoder.header(header)
+        self._header = line.encode("utf-8")
         self.session.answer_raw(config_key("trace"), lambda _request: self._header)
         self._publish(self._header)
 
     def feed(self, sample: Sample) -> None:
         if sample.seq % KEYFRAME == 0:
             self._publish(keyframe(sample))
-        self._publish(self.writer.line.encode("utf-8"))
+        line = self._written() if self.encoder is None else self.encoder.sample(sample)
+        self._publish(line.encode("utf-8"))
         self.samples += 1
 
     def finish(self, end_time: float, outcome: str, reason: str) -> None:
         try:
             # how many samples there were: a monitor that missed the last ones knows it
-            self._publish(json.dumps({"samples": self.samples}).encode("utf-8"))
-            self._publish(self.writer.line.encode("utf-8"))
+            count = self.samples if self.encoder is None else self.encoder.line - 1
+            self._publish(json.dumps({"samples": count}).encode("utf-8"))
+            line = self._written() if self.encoder is None \
+                else self.encoder.end(end_time, outcome, reason)
+            self._publish(line.encode("utf-8"))
         finally:
             self.done()
 
@@ -93,7 +106,7 @@ class RunController(BusController):
 
     def publisher(self, writer: TraceWriter) -> TracePublisher:
         """The sink publishing the run's trace (placed right after ``writer``)."""
-        return TracePublisher(self._sessions["simulation"], writer, self.leave)
+        return TracePublisher(self._sessions["simulation"], writer, done=self.leave)
 
     def leave(self) -> None:
         if self._left.alive and self.retries:
