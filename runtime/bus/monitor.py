@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import json
 import queue
+import time
 from collections.abc import Callable, Iterator
 from typing import Any
 
@@ -228,10 +229,17 @@ class TraceStream:
 
 def ask_header(call: Callable[[str, bytes, float], bytes], key: str,
                timeout: float) -> Callable[[], bytes]:
+    """A function asking for the trace's header, again while nobody answers yet (the
+    simulation's answer may reach the router a moment after its first line), at most
+    ``timeout`` wall seconds."""
     def ask() -> bytes:
-        try:
-            return call(key, b"", timeout)
-        except BusError as exc:
-            raise BusError(f"joined late and could not get the trace's header: {exc}") \
-                from None
+        deadline = time.monotonic() + timeout
+        while True:
+            try:
+                return call(key, b"", max(0.1, deadline - time.monotonic()))
+            except BusError as exc:
+                if "no answer" not in str(exc) or time.monotonic() >= deadline:
+                    raise BusError(f"joined late and could not get the trace's header: "
+                                   f"{exc}") from None
+                time.sleep(0.05)
     return ask

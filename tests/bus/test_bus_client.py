@@ -158,6 +158,7 @@ def test_the_bus_folder_is_private(router: Router) -> None:
 
 def test_a_late_monitor_gets_the_trace_header_from_the_simulation(  # type: ignore[no-untyped-def]
         join, tmp_path: Path) -> None:
+    from rei.runtime.bus.monitor import ask_header
     from rei.runtime.bus.run import TracePublisher
     from rei.runtime.bus.schema import TRACE, config_key
     from rei.runtime.collector.trace import TraceDecoder, TraceWriter
@@ -171,8 +172,10 @@ def test_a_late_monitor_gets_the_trace_header_from_the_simulation(  # type: igno
     monitor.subscribe_raw(TRACE, inbox)
     assert sim.await_readers(TRACE, SAFETY)
     writer.start(header)
-    publisher.start(header)
-    line = monitor.call(config_key("trace"), b"", SAFETY)
-    assert TraceDecoder(line, "asked").header == header
-    assert inbox.wait(1)[0][1] == line
-    writer.finish(0.0, "interrupted", "a test")
+    try:
+        publisher.start(header)
+        line = ask_header(monitor.call, config_key("trace"), SAFETY)()
+        assert TraceDecoder(line, "asked").header == header
+        assert inbox.wait(1)[0][1] == line
+    finally:
+        writer.finish(0.0, "interrupted", "a test")
