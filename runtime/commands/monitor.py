@@ -21,7 +21,14 @@ from pathlib import Path
 from rei.lang.cli_support import EXIT_BAD_INPUT, EXIT_RUN_ERROR
 from rei.lang.errors import printable_lines
 from rei.runtime.commands.robot import add_bus_options, join_bus
-from rei.runtime.commands.run import EVENTS, TRACE, add_verbosity, print_results, write_page
+from rei.runtime.commands.run import (
+    EVENTS,
+    REPLAY_VERBOSE_HELP,
+    TRACE,
+    add_verbosity,
+    print_results,
+    write_page,
+)
 
 EXAMPLES = """\
 examples:
@@ -51,7 +58,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.add_argument("--silence", type=float, default=60.0, metavar="S",
                         help="wall seconds without a sample after which the run counts as "
                              "cut off (default 60)")
-    add_verbosity(parser)
+    add_verbosity(parser, REPLAY_VERBOSE_HELP)
     parser.set_defaults(func=run)
 
 

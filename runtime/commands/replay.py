@@ -24,9 +24,19 @@ from typing import Any, cast
 
 from rei.lang.cli_support import EXIT_RUN_ERROR
 from rei.lang.errors import printable_lines
-from rei.runtime.commands.run import add_verbosity, print_results, write_page
+from rei.runtime.commands.run import (
+    REPLAY_VERBOSE_HELP,
+    add_verbosity,
+    print_results,
+    write_page,
+)
 from rei.runtime.messages import Sample, StreamHeader
 from rei.runtime.results import RESULTS_VERSION, Outcome, RunSummary
+
+HELP_EXAMPLES = """\
+rei replay out/nav/trace.jsonl -o out/nav-strict --vepl examples/navigation/human_safety.vepl
+rei replay out/rec/recording.mcap -o out/rec-again -v     # every requirement, with reasons
+"""
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -40,7 +50,11 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                     "specification give the same events and verdicts as the live run. A "
                     "recording cut short by a crash is replayed up to its last complete chunk "
                     "and judged as an interrupted run. Results go to stdout, diagnostics to "
-                    "stderr.")
+                    "stderr. Exit status: 0 every requirement passed, 1 one failed or was "
+                    "inconclusive (or the .vepl declares no requirement: verdict UNJUDGED, "
+                    "never a pass), 2 invalid input (a bad .vepl, an unreadable trace, a .vepl "
+                    "reading data the trace lacks), 3 a monitor error or a recorded run error, "
+                    "130 a recorded interrupted run.")
     parser.add_argument("trace", type=Path, metavar="TRACE",
                         help="a trace.jsonl file or an MCAP recording (.mcap)")
     parser.add_argument("--vepl", type=Path, default=None, metavar="FILE",
@@ -52,7 +66,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                              "functions the specification declares with 'function'")
     parser.add_argument("-o", "--output", type=Path, required=True, metavar="DIR",
                         help="output folder (created if missing)")
-    add_verbosity(parser)
+    add_verbosity(parser, REPLAY_VERBOSE_HELP)
     parser.set_defaults(func=run)
 
 

@@ -21,6 +21,7 @@ from types import FrameType
 from typing import TYPE_CHECKING
 
 from rei.lang.cli_support import EXIT_BAD_INPUT, EXIT_OK, EXIT_RUN_ERROR
+from rei.runtime.commands.run import CONTROLLER_HELP
 
 if TYPE_CHECKING:
     from rei.runtime.bus import BusSession
@@ -67,8 +68,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         epilog=EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_bus_options(parser)
     parser.add_argument("--controller", default="reference", metavar="NAME",
-                        help="robot under test: reference, teleop, teleop:SCRIPT, or "
-                             "module:Class of your own navigator (default reference)")
+                        help=CONTROLLER_HELP + " (default reference)")
     parser.add_argument("--once", action="store_true",
                         help="stop after the first run ends")
     parser.set_defaults(func=run)

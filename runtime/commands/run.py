@@ -59,16 +59,38 @@ RECORDING = "recording.mcap"
 """Written with --record (rei.runtime.recording.RECORDING)."""
 
 
-def add_verbosity(parser: argparse.ArgumentParser) -> None:
-    """--quiet and --verbose, with the same meaning for rei run, replay, campaign and demo:
-    results on stdout, progress and diagnostics on stderr."""
+CONTROLLER_HELP = (
+    "robot under test: reference (REI's navigator), teleop:SCRIPT (a scripted drive; "
+    "SCRIPT is forward_backward, straight ahead and back, which plain teleop also "
+    "means, or circle, circles one way then the other), or module:Class of your own "
+    "navigator")
+"""Kept true to rei.runtime.robot.teleop.SCRIPTS by tests/test_help.py (importing the
+robot package for every `rei` command line would cost 0.2 s)."""
+QUIET_HELP = "no progress; print only the final verdict line (on stdout)"
+RUN_VERBOSE_HELP = ("more detail: every requirement with its reason, passed ones too, and the "
+                    "mission's events as they happen (on stderr)")
+REPLAY_VERBOSE_HELP = "more detail: every requirement with its reason, passed ones too"
+CAMPAIGN_VERBOSE_HELP = ("more detail: each failed run with the command that reruns it "
+                         "(on stderr)")
+
+
+def add_verbosity(parser: argparse.ArgumentParser, verbose_help: str = RUN_VERBOSE_HELP,
+                  quiet_help: str = QUIET_HELP) -> None:
+    """-q/--quiet and -v/--verbose for rei run, replay, campaign and demo: results on stdout,
+    progress and diagnostics on stderr; each command says what -v adds for it."""
     group = parser.add_mutually_exclusive_group()
-    group.add_argument("-q", "--quiet", action="store_true",
-                       help="no progress; print only the final verdict line (on stdout)")
-    group.add_argument("-v", "--verbose", action="store_true",
-                       help="more detail: every requirement with its reason, passed ones "
-                            "too (rei run also shows the mission's events as they happen, "
-                            "on stderr)")
+    group.add_argument("-q", "--quiet", action="store_true", help=quiet_help)
+    group.add_argument("-v", "--verbose", action="store_true", help=verbose_help)
+
+
+HELP_EXAMPLES = """\
+rei run examples/simple_wall/simple_wall.mission -o out/wall        # REI's navigator
+rei run examples/simple_wall/simple_wall.mission -o out/teleop --controller teleop:circle
+rei run examples/navigation/navigation.mission -o out/nav --seed 3 \\
+    --vepl examples/navigation/human_safety.vepl                        # your requirements
+rei run examples/navigation/navigation.mission -o out/mine --controller my_nav:Navigator
+rei run examples/navigation/navigation.mission -o out/rec --record -q  # + recording.mcap
+"""
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -82,7 +104,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                     "simulation runs in a supervised child process: a controller that kills "
                     "it, ends it or hangs it ends the run as an error, with a summary saying "
                     "so. Results go to stdout, progress and diagnostics to stderr. Exit "
-                    "status: 0 every requirement passed, 1 one failed or was inconclusive, "
+                    "status: 0 every requirement passed, 1 one failed or was inconclusive "
+                    "(or the .vepl declares no requirement: verdict UNJUDGED, never a pass), "
                     "2 invalid input, 3 a run error, 130 interrupted.")
     parser.add_argument("mission", type=Path, nargs="?", default=None, metavar="MISSION",
                         help="the .mission file (optional with --config)")
@@ -90,8 +113,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                         help="output folder (created if missing; required without --config)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the run (default 0)")
     parser.add_argument("--controller", default="reference", metavar="NAME",
-                        help="robot under test: reference, teleop, teleop:SCRIPT (a scripted "
-                             "drive), or module:Class of your own navigator (default reference)")
+                        help=CONTROLLER_HELP + " (default reference)")
     parser.add_argument("--duration", type=float, default=None, metavar="S",
                         help="stop after S simulated seconds (default: the mission's time limit)")
     parser.add_argument("--watchdog", type=float, default=5.0, metavar="S",
@@ -463,6 +485,10 @@ def final_line(summary: RunSummary, out_dir: Path, monitored: bool = True) -> st
     if not monitored:
         return (f"verdict: NOT JUDGED (--no-monitor: judge the trace with `rei replay`); "
                 f"outputs in {out_dir}")
+    if verdict == "unjudged":  # monitored, yet no requirement: nothing could pass
+        return (f"verdict: UNJUDGED (the .vepl declares no requirement, so the run cannot "
+                f"pass: add a `requirement` to it, or leave out --vepl for REI's default "
+                f"ones); total utility {summary.total_utility:g}; outputs in {out_dir}")
     return (f"verdict: {verdict.upper()}; total utility {summary.total_utility:g}; outputs "
             f"in {out_dir}")
 
