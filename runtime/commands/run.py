@@ -202,6 +202,7 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
     """
     from rei.generators.output import open_output  # noqa: PLC0415
     from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
+    from rei.runtime.cache import ArtifactCache  # noqa: PLC0415
     from rei.runtime.collector import TraceWriter, load_monitor_config  # noqa: PLC0415
     from rei.runtime.collector.needs import check_needs  # noqa: PLC0415
     from rei.runtime.evaluator import merge_summary, write_summary  # noqa: PLC0415
@@ -218,12 +219,19 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
     _make_folder(out_dir)
     # The specification is checked and generated first: a bad .vepl is reported (exit 2)
     # before any world is built.
-    automata = generate_automata(vepl, out_dir / "automata", replace=True) if monitor else None
+    # With $REI_CACHE_DIR (rei campaign sets it) generation is reused from earlier runs of the
+    # same files (rei.runtime.cache): the same bytes, without parsing or rendering again.
+    cache = ArtifactCache.from_environment()
+    automata = None
+    if monitor:
+        automata = (cache.automata(vepl, out_dir / "automata") if cache is not None
+                    else generate_automata(vepl, out_dir / "automata", replace=True))
     user = load_functions(functions, vepl) if monitor else {}
     monitor_sink = MonitorSink(vepl, out_dir, functions=user, automata=automata) \
         if monitor else None
     world_dir = out_dir / "world"
-    mission = generate_world(mission_path, world_dir, replace=True)
+    mission = (cache.world(mission_path, world_dir) if cache is not None
+               else generate_world(mission_path, world_dir, replace=True))
     if probe is not None:
         probe.begin(mission.name, mission.world.name)
     manifest = load_manifest(world_dir)
