@@ -41,7 +41,9 @@ if TYPE_CHECKING:
     from rei.generators.concrete import ConcreteMission
 
 CACHE_VARIABLE = "REI_CACHE_DIR"
-"""The environment variable naming the cache directory of `rei run` (unset: no cache)."""
+"""The environment variable naming the cache directory of `rei run` (unset: no cache);
+``off`` turns the cache off for `rei campaign` and `rei demo` too."""
+CACHE_OFF = "off"
 
 FORMAT = "rei-artifact-cache/1"
 CODE_PACKAGES = ("rei.lang", "rei.grammars", "rei.generators", "rei.runtime", "rei.catalogue")
@@ -106,9 +108,9 @@ class ArtifactCache:
 
     @classmethod
     def from_environment(cls) -> ArtifactCache | None:
-        """The cache ``$REI_CACHE_DIR`` names; None when it is unset or empty."""
+        """The cache ``$REI_CACHE_DIR`` names; None when it is unset, empty or ``off``."""
         folder = os.environ.get(CACHE_VARIABLE, "")
-        return cls(Path(folder)) if folder else None
+        return cls(Path(folder)) if folder and folder != CACHE_OFF else None
 
     # -- the two kinds a run generates ---------------------------------------------------
 

@@ -231,3 +231,35 @@ def test_runs_with_the_cache_write_the_same_bytes(tmp_path: Path,
             "automata/automata.py"} <= set(plain)
     assert files_of(tmp_path / "miss") == plain
     assert files_of(tmp_path / "hit") == plain
+
+
+def test_the_environment_names_the_cache_or_turns_it_off(
+        monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    from rei.runtime.campaign.execute import run_environment
+
+    monkeypatch.delenv(CACHE_VARIABLE, raising=False)
+    assert ArtifactCache.from_environment() is None
+    assert run_environment(tmp_path / "c")[CACHE_VARIABLE] == str(tmp_path / "c")
+    monkeypatch.setenv(CACHE_VARIABLE, "off")  # the user's word wins over the campaign's
+    assert ArtifactCache.from_environment() is None
+    assert run_environment(tmp_path / "c")[CACHE_VARIABLE] == "off"
+    monkeypatch.setenv(CACHE_VARIABLE, str(tmp_path / "mine"))
+    assert ArtifactCache.from_environment() == ArtifactCache(tmp_path / "mine")
+
+
+@pytest.mark.slow
+def test_a_campaign_generates_once_for_all_its_runs(tmp_path: Path,
+                                                    monkeypatch: pytest.MonkeyPatch) -> None:
+    import io
+
+    from rei.runtime.campaign import LocalEngine, plan_campaign, run_campaign
+
+    monkeypatch.delenv(CACHE_VARIABLE, raising=False)
+    plan = plan_campaign([EXAMPLES / "simple_wall"], repeat=3, seed=4, duration=1.0)
+    result = run_campaign(plan, tmp_path / "c", LocalEngine(2), {"command": ["test"]},
+                          stream=io.StringIO())
+    assert [r.status for r in result.records] == ["ran"] * 3
+    assert len(entries(tmp_path / "c" / "cache")) == 2  # one world, one set of automata
+    worlds = [files_of(tmp_path / "c" / "runs" / r.spec.run_id / "world")
+              for r in result.records]
+    assert worlds[0] and worlds[0] == worlds[1] == worlds[2]
