@@ -83,7 +83,10 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                     "it, ends it or hangs it ends the run as an error, with a summary saying "
                     "so. Results go to stdout, progress and diagnostics to stderr. Exit "
                     "status: 0 every requirement passed, 1 one failed or was inconclusive, "
-                    "2 invalid input, 3 a run error, 130 interrupted.")
+                    "2 invalid input, 3 a run error, 130 interrupted. With REI_CACHE_DIR=DIR "
+                    "the generated world and automata are reused from DIR while the files "
+                    "they were made from are unchanged (rei campaign does this for its runs; "
+                    "docs/campaign.md).")
     parser.add_argument("mission", type=Path, nargs="?", default=None, metavar="MISSION",
                         help="the .mission file (optional with --config)")
     parser.add_argument("-o", "--output", type=Path, default=None, metavar="DIR",
