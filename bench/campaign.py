@@ -146,7 +146,8 @@ def figures(args: argparse.Namespace, root: Path) -> int:
         print(f"  round {i + 1} (load average before: {load:.2f}): " + ", ".join(
             f"{k} {v[-1][0]:.1f} s wall / {v[-1][1]:.1f} CPU s" for k, v in rows.items()),
             flush=True)
-    simulated = sum(r.duration for r in CampaignStore.read(root / "whole-after-0")[2])
+    simulated = sum(r.summary.duration for r in CampaignStore.read(root / "whole-after-0")[2]
+                    if r.summary is not None)
 
     def best(key: str) -> tuple[float, float]:
         return min(rows[key], key=lambda pair: pair[1])
