@@ -668,10 +668,13 @@ class TraceEncoder:
             rows = np.nonzero((new != old).any(axis=1))[0].tolist()
         return [[i, *new[i].tolist()] for i in rows]
 
-    def sample(self, sample: Sample) -> str:
+    def sample(self, sample: Sample, whole: bool = False) -> str:
+        """The sample's line; with ``whole``, every object's row, not only the changed ones
+        (a line a reader that missed the previous one can still read: a bus's keyframe)."""
         assert self._rules is not None, "header() first"
-        line = _sample_json(sample, self._changed(sample.poses, self._poses),
-                            self._changed(sample.twists, self._twists), self._rules.data)
+        line = _sample_json(sample, self._changed(sample.poses, None if whole else self._poses),
+                            self._changed(sample.twists, None if whole else self._twists),
+                            self._rules.data)
         self._rules.sample(line, f"{self.where}:{self.line + 1}")
         self.line += 1
         # Only what was encoded is the base of the next sample's changed rows.
@@ -846,6 +849,12 @@ class TraceDecoder:
         self.header = _header(data, where)
         self._rules = _StreamRules(len(self.header.objects), self.header.data,
                                    tuple(n for n, _ in self.header.faults))
+
+    def resume_at(self, seq: int) -> None:
+        """Accept the sample numbered ``seq`` next: a reader that missed the ones before it
+        (a monitor on a bus) goes on, counting them missing. Only at a line that carries
+        every object's row (rows are changes: after a gap, a partial line would lose some)."""
+        self._rules.seq = seq
 
     def line(self, raw: bytes, where: str) -> Sample | tuple[float, str, str]:
         """The sample of a line, or (end time, outcome, reason) of the end line."""
