@@ -131,6 +131,8 @@ class BusSession:
         """Why the last one was dropped."""
         self.callback_errors = 0
         """Exceptions a subscriber's callback raised (kept out of Zenoh's threads)."""
+        self._allowed: set[tuple[str, str]] = set()
+        """(action, key) pairs the role was found to be allowed (checked once)."""
 
     # -- messages ---------------------------------------------------------------------------
 
@@ -158,7 +160,7 @@ class BusSession:
         return True
 
     def _publisher(self, key: str) -> Any:
-        self.access.check("publish", key)
+        self._check("publish", key)
         publisher = self._publishers.get(key)
         if publisher is None:
             z = self._zenoh
@@ -193,8 +195,13 @@ class BusSession:
         """Call ``callback(key, payload)`` for each payload on ``key`` (may hold wildcards)."""
         return Subscription([self._declare(key, callback)])
 
+    def _check(self, action: str, key: str) -> None:
+        if (action, key) not in self._allowed:
+            self.access.check(action, key)
+            self._allowed.add((action, key))
+
     def _declare(self, key: str, callback: Callable[[str, bytes], None]) -> Any:
-        self.access.check("subscribe", key)
+        self._check("subscribe", key)
 
         def handler(sample: Any) -> None:
             try:
@@ -224,7 +231,7 @@ class BusSession:
     def call(self, key: str, payload: bytes, timeout: float) -> bytes:
         """One request/answer on ``key``: the first answer's payload; ``BusError`` when
         none comes within ``timeout`` wall seconds."""
-        self.access.check("query", key)
+        self._check("query", key)
         z = self._zenoh
         try:
             replies = self._session.get(key, payload=payload, timeout=timeout,
@@ -248,7 +255,7 @@ class BusSession:
 
     def answer_raw(self, key: str, handler: Callable[[bytes], bytes]) -> None:
         """Answer every query on ``key`` with ``handler(request payload)``."""
-        self.access.check("answer", key)
+        self._check("answer", key)
 
         def on_query(query: Any) -> None:
             request = query.payload.to_bytes() if query.payload is not None else b""

@@ -6,7 +6,8 @@ decoded and checked by the trace's own rules (``TraceDecoder``). What the networ
 counted, never guessed over: a sample whose sequence number was already seen is a
 duplicate, one older than the newest seen a reordered one (both dropped: the monitor's
 clock only goes forward), and the numbers never seen are missed, as are those after a gap
-until the next line that carries every object's row (a keyframe) — the monitor's own
+until the next keyframe (every object's row; the lines carry only the changed ones) — the
+monitor's own
 ``missing`` count then makes every verdict that rests on something not happening
 inconclusive, never a pass. A monitor that joins late asks for the header
 (``config/trace``) and misses the samples before its first; one the bus cuts off (nothing
@@ -18,8 +19,11 @@ from __future__ import annotations
 
 import json
 import queue
+import time
 from collections.abc import Callable, Iterator
 from typing import Any
+
+import numpy as np
 
 from rei.runtime.bus.errors import BusError
 from rei.runtime.collector.trace import TraceDecoder, TraceError
@@ -62,7 +66,11 @@ class TraceStream:
         self.cut = ""
         """Why the stream ended without its end line ('' when it has one)."""
         self._lost = False
-        """A sample was missed and no line with every row has come since."""
+        """A sample was missed and no keyframe has let the lines be read since."""
+        self._keyframe: dict[str, Any] | None = None
+        self.lines: list[bytes] = []
+        """The lines judged (header first, end last when it came): trace.jsonl's own
+        bytes when nothing was missed."""
         self.total: int | None = None
         """The samples the run published (its count line, just before the end line)."""
         self.last_time = 0.0
@@ -88,6 +96,7 @@ class TraceStream:
             head = self._ask_header()
             self._queue_first = first
         self.decoder = TraceDecoder(head, f"{self.where}:header")
+        self.lines.append(head)
         return self.decoder.header
 
     _queue_first: bytes | None = None
@@ -111,6 +120,9 @@ class TraceStream:
                             f"{self._next - 1} (the monitor was cut off, or the run died)")
                 return
             data = self._peek(payload)
+            if isinstance(data, dict) and "keyframe" in data:
+                self._keyframe = data
+                continue
             if isinstance(data, dict) and set(data) == {"samples"}:
                 total = data["samples"]
                 if isinstance(total, int) and not isinstance(total, bool) and total >= 0:
@@ -133,6 +145,7 @@ class TraceStream:
                                 f"{self.total - 1}) before the run's end")
                     return
                 self.end = record
+                self.lines.append(payload)
                 return
             seq = data.get("seq") if isinstance(data, dict) else None
             if not isinstance(seq, int) or isinstance(seq, bool) or seq < 0:
@@ -145,16 +158,15 @@ class TraceStream:
                     self.reordered += 1
                 continue
             if seq > self._next or self._lost:
-                # after a gap only a line with every object's row can be read (a keyframe)
+                # rows are changes: after a gap only a keyframe of this very sample lets
+                # the line be read
                 self.missed.extend(range(self._next, seq))
-                self._next = seq
-                if not self._whole(data):
+                if not self._resume(seq):
                     self._lost = True
                     self.missed.append(seq)
                     self._next = seq + 1
                     continue
                 self._lost = False
-                self.decoder.resume_at(seq)
             try:
                 sample = self.decoder.line(payload, f"{self.where}:seq {seq}")
             except TraceError as exc:
@@ -168,15 +180,32 @@ class TraceStream:
             self._next = seq + 1
             self.received += 1
             self.last_time = sample.time
+            self.lines.append(payload)
             yield sample
 
-    def _whole(self, data: dict[str, Any]) -> bool:
-        """Whether a sample line carries every object's row (poses and twists)."""
+    def _resume(self, seq: int) -> bool:
+        """Whether the last keyframe is of sample ``seq`` and the decoder now reads on
+        from it."""
         assert self.decoder is not None
-        n = len(self.decoder.header.objects)
-        poses, twists = data.get("poses"), data.get("twists")
-        return isinstance(poses, list) and isinstance(twists, list) \
-            and len(poses) == n and len(twists) == n
+        frame = self._keyframe
+        if frame is None or frame.get("keyframe") != seq:
+            return False
+        try:
+            poses = self._rows(frame.get("poses"))
+            twists = self._rows(frame.get("twists"))
+            self.decoder.resume_at(seq, poses, twists)
+        except (TraceError, ValueError, TypeError) as exc:
+            self._malformed(f"{self.where}: keyframe {seq}: {exc}")
+            return False
+        return True
+
+    @staticmethod
+    def _rows(value: Any) -> np.ndarray:
+        array = np.array(value, dtype=float)
+        if array.ndim != 2 or array.shape[1] != 4 or not np.isfinite(array).all() \
+                or not np.array_equal(array[:, 0], np.arange(len(array))):
+            raise ValueError("expected every object's row [index, a, b, c], in order")
+        return array[:, 1:]
 
     def _malformed(self, reason: str) -> None:
         self.malformed += 1
@@ -200,10 +229,17 @@ class TraceStream:
 
 def ask_header(call: Callable[[str, bytes, float], bytes], key: str,
                timeout: float) -> Callable[[], bytes]:
+    """A function asking for the trace's header, again while nobody answers yet (the
+    simulation's answer may reach the router a moment after its first line), at most
+    ``timeout`` wall seconds."""
     def ask() -> bytes:
-        try:
-            return call(key, b"", timeout)
-        except BusError as exc:
-            raise BusError(f"joined late and could not get the trace's header: {exc}") \
-                from None
+        deadline = time.monotonic() + timeout
+        while True:
+            try:
+                return call(key, b"", max(0.1, deadline - time.monotonic()))
+            except BusError as exc:
+                if "no answer" not in str(exc) or time.monotonic() >= deadline:
+                    raise BusError(f"joined late and could not get the trace's header: "
+                                   f"{exc}") from None
+                time.sleep(0.05)
     return ask

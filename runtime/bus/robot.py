@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import collections
 import dataclasses
+import functools
 import math
 import threading
 import time
@@ -105,7 +106,7 @@ def from_json(hint: Any, value: Any, where: str) -> Any:  # noqa: PLR0911  (one 
     if dataclasses.is_dataclass(hint):
         if not isinstance(value, dict):
             raise ValueError(f"{where}: expected an object, found {value!r}")
-        hints = get_type_hints(hint)
+        hints = _hints(cast(type, hint))
         names = {f.name for f in dataclasses.fields(hint)}
         if set(value) - names:
             raise ValueError(f"{where}: unknown fields {sorted(set(value) - names)}")
@@ -118,20 +119,30 @@ def from_json(hint: Any, value: Any, where: str) -> Any:  # noqa: PLR0911  (one 
     raise ValueError(f"{where}: cannot decode {hint!r}")
 
 
-def encode_request(args: tuple[Any, ...]) -> bytes:
-    return dumps({"args": [to_json(a) for a in args]})
+@functools.cache
+def _hints(cls: type) -> dict[str, Any]:
+    """A dataclass's resolved field types (resolving them takes longer than a step)."""
+    return get_type_hints(cls)
 
 
-def decode_request(op: str, payload: bytes) -> tuple[Any, ...]:
-    """The arguments of the request ``op``; ValueError (or BusError) saying what is wrong."""
+def encode_request(args: tuple[Any, ...], call: int = 0) -> bytes:
+    return dumps({"call": call, "args": [to_json(a) for a in args]})
+
+
+def decode_request(op: str, payload: bytes) -> tuple[int, tuple[Any, ...]]:
+    """The call's number and the arguments of the request ``op``; ValueError (or BusError)
+    saying what is wrong."""
     data = loads(payload)
     if not isinstance(data, dict) or not isinstance(data.get("args"), list):
-        raise ValueError(f"{op}: expected {{\"args\": [...]}}")
+        raise ValueError(f"{op}: expected {{\"call\": N, \"args\": [...]}}")
+    call = data.get("call", 0)
+    if not isinstance(call, int) or isinstance(call, bool):
+        raise ValueError(f"{op}: call: expected a whole number, found {call!r}")
     kinds = OPS[op]
     if len(data["args"]) != len(kinds):
         raise ValueError(f"{op}: expected {len(kinds)} arguments, found {len(data['args'])}")
-    return tuple(from_json(k, v, f"{op}.args[{i}]") for i, (k, v)
-                 in enumerate(zip(kinds, data["args"], strict=True)))
+    return call, tuple(from_json(k, v, f"{op}.args[{i}]") for i, (k, v)
+                       in enumerate(zip(kinds, data["args"], strict=True)))
 
 
 class BusController(RemoteController):
@@ -148,6 +159,9 @@ class BusController(RemoteController):
         self._sessions = {"simulation": simulation, "mission": mission or simulation}
         self._lines: collections.deque[bytes] = collections.deque()
         self._op = ""
+        self._calls = 0
+        self.retries = 0
+        """Calls sent again after finding nobody to answer."""
         self._closed = False
         self.name = "bus"
         self.context: ControllerContext | None = None
@@ -161,7 +175,7 @@ class BusController(RemoteController):
         key = f"{ROBOT_CALL}/load"
         while True:
             try:
-                answer = session.call(key, encode_request(()), max(0.1, min(
+                answer = session.call(key, encode_request((), -1), max(0.1, min(
                     1.0, deadline - time.monotonic())))
                 break
             except BusError as exc:
@@ -183,15 +197,29 @@ class BusController(RemoteController):
 
     def _request(self, op: str, args: tuple[Any, ...]) -> bytes:
         self._op = op
-        return encode_request(args)
+        self._calls += 1
+        return encode_request(args, self._calls)
 
     def _send(self, data: bytes, deadline: float | None) -> bool:
+        """Call and keep the answer's lines; False when none came before the deadline. A
+        call that finds nobody to answer (the router restarting, the robot reconnecting)
+        is sent again after a bounded back-off (50 ms doubling to 1 s) until the deadline:
+        the robot answers a call it has answered already with the same answer (its
+        number), so a repeat never steps the controller twice."""
         session = self._sessions["mission" if self._op in MISSION_OPS else "simulation"]
-        remaining = FOREVER if deadline is None else max(0.0, deadline - time.monotonic())
-        try:
-            answer = session.call(f"{ROBOT_CALL}/{self._op}", data, remaining)
-        except BusError:
-            return False
+        end = time.monotonic() + FOREVER if deadline is None else deadline
+        pause = 0.05
+        while True:
+            try:
+                answer = session.call(f"{ROBOT_CALL}/{self._op}", data,
+                                      max(0.0, end - time.monotonic()))
+                break
+            except BusError:
+                if time.monotonic() + pause >= end:
+                    return False
+                time.sleep(pause)
+                pause = min(1.0, pause * 2)
+                self.retries += 1
         self._lines.extend(answer.split(b"\n"))
         return True
 
@@ -223,23 +251,34 @@ def serve_robot(session: BusSession, load: Callable[[], Any], once: bool,
     host = HostSide(lambda *args: load())
     lock = threading.Lock()
     runs = 0
+    last: tuple[int, bytes] = (0, b"")
+    """The last call's number and answer: a call sent again gets the same answer."""
 
     def handle(op: str, payload: bytes) -> bytes:
-        nonlocal runs
+        nonlocal runs, last
         try:
-            args = decode_request(op, payload)
+            call, args = decode_request(op, payload)
         except (ValueError, BusError) as exc:
             raise BusError(f"a malformed {op} request: {exc}") from None
         with lock:
-            if op == "close":
-                runs += 1
-                say(f"run {runs} ended")
-                if once:
-                    stop.set()
-                return b'{"ok": null}'
-            if op == "load":
-                say("a run began")
-            return b"\n".join(host.answers(op, args))
+            if call > 0 and call == last[0]:
+                return last[1]
+            answer = _answer(op, args)
+            last = (call, answer)
+            return answer
+
+    def _answer(op: str, args: tuple[Any, ...]) -> bytes:
+        nonlocal runs, last
+        if op == "close":
+            runs += 1
+            say(f"run {runs} ended")
+            if once:
+                stop.set()
+            return b'{"ok": null}'
+        if op == "load":  # a new run: its calls are numbered from 1 again
+            last = (0, b"")
+            say("a run began")
+        return b"\n".join(host.answers(op, args))
 
     def handler(op: str) -> Callable[[bytes], bytes]:
         return lambda payload: handle(op, payload)

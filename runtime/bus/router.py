@@ -3,7 +3,9 @@
 ``prepare`` writes the bus's folder (mode 0700): ``users.txt`` (the router's user/password
 dictionary), one ``<role>.json`` per role (that role's user, password, endpoint and CA
 certificate: what a component is given to join) and ``router.json5`` (the configuration the
-router runs with), every file mode 0600. Passwords are fresh per ``rei bus`` (``secrets``).
+router runs with), every file mode 0600. Passwords are fresh per ``rei bus`` (``secrets``),
+unless the folder holds an earlier bus's: a restarted bus keeps them, so its components can
+join again.
 ``Router`` opens Zenoh in router mode on that configuration: listening on one endpoint only
 (loopback unless told), multicast and gossip scouting off (nothing announces the bus or
 joins it uninvited), authentication always on, the access rules of ``rei.runtime.bus.access``
@@ -109,7 +111,10 @@ def prepare(folder: Path, host: str, port: int, access: AccessRules = DEFAULT_AC
     address = f"[{host}]" if ":" in host else host
     endpoint = f"{scheme}/{address}:{port}"
     _private_folder(folder)
-    passwords = {r.role: secrets.token_urlsafe(24) for r in access.roles}
+    # A bus restarted on its folder keeps its users: the components that were joined can
+    # join again (Zenoh clients reconnect by themselves).
+    passwords = {r.role: _kept_password(folder / f"{r.role}.json", r.role)
+                 or secrets.token_urlsafe(24) for r in access.roles}
     users = folder / "users.txt"
     _write_private(users, "".join(f"{user_of(r)}:{p}\n" for r, p in passwords.items()))
     credentials = {}
@@ -124,6 +129,18 @@ def prepare(folder: Path, host: str, port: int, access: AccessRules = DEFAULT_AC
     _write_private(config, json.dumps(router_config(endpoint, users, access, tls),
                                       indent=2) + "\n")
     return BusFolder(folder, endpoint, config, credentials)
+
+
+def _kept_password(path: Path, role: str) -> str | None:
+    """The password a role's credentials file of an earlier `rei bus` holds, if any."""
+    try:
+        check_private(path)
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError, BusError):
+        return None
+    password = data.get("password") if isinstance(data, dict) else None
+    ok = isinstance(password, str) and len(password) >= 24 and data.get("role") == role
+    return password if ok else None
 
 
 def check_private(path: Path) -> None:

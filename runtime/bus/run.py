@@ -5,9 +5,9 @@ it calls, the trace it publishes and the configuration it answers.
 robot's control calls) and as the mission executor (the only role that may send goals) —
 waits for a robot to answer (``BusController.load``) and, when asked, for a reader of the
 trace (a monitor) before the run begins: what is published before a subscription reaches
-the router is lost to it. ``TracePublisher`` is a sample sink publishing the trace's records
-with the trace's own encoder and rules (every number exact), with keyframes so a monitor
-that missed a sample can read on. This module must never import
+the router is lost to it. ``TracePublisher`` is a sample sink publishing the lines the trace
+writer has just written (a monitor elsewhere reads the very bytes of trace.jsonl), with
+keyframes so a monitor that missed a line can read on. This module must never import
 pybullet.
 """
 
@@ -24,45 +24,72 @@ from rei.runtime.bus.client import BusSession, connect
 from rei.runtime.bus.errors import BusError
 from rei.runtime.bus.robot import BusController, to_json
 from rei.runtime.bus.schema import TRACE, config_key, dumps
-from rei.runtime.collector.trace import TraceEncoder
+from rei.runtime.collector.trace import TraceEncoder, TraceWriter
 from rei.runtime.errors import RunError
 from rei.runtime.messages import Sample, StreamHeader
 
 KEYFRAME = 10
-"""Every KEYFRAME-th sample (seq 0, 10, 20, ...) carries every object's row on the bus; the
-others only the rows that changed, as in trace.jsonl. A reader that missed a sample reads
-on from the next keyframe."""
+"""Before every KEYFRAME-th sample (seq 0, 10, 20, ...) the bus carries a keyframe: every
+object's pose and twist at that sample. The sample lines themselves are trace.jsonl's,
+whose rows are only the changed ones; a reader that missed a line reads on from the next
+keyframe."""
+
+
+def keyframe(sample: Sample) -> bytes:
+    """The keyframe payload of ``sample``: ``{"keyframe": seq, "poses": [[i, x, y, yaw],
+    ...], "twists": [[i, vx, vy, wz], ...]}`` (the trace's row form, every row)."""
+    return json.dumps({"keyframe": sample.seq,
+                       "poses": [[i, *row] for i, row in enumerate(sample.poses.tolist())],
+                       "twists": [[i, *row] for i, row in enumerate(sample.twists.tolist())]},
+                      separators=(",", ":"), allow_nan=False).encode("utf-8")
 
 
 class TracePublisher:
-    """A ``SampleSink`` publishing the run's trace on ``rei/v1/trace``: the header, one
-    line per sample (every ``KEYFRAME``-th with every object's row), the end line; after
-    the end line, ``done`` (the run has nothing more to say on the bus). It answers the
-    header line as the configuration ``trace`` for a monitor that joins late."""
+    """A ``SampleSink`` publishing the run's trace on ``rei/v1/trace``: the header, each
+    sample's line and the end line — those the trace ``writer`` has just written, byte for
+    byte trace.jsonl's, when the sink comes right after it; else encoded here by the
+    trace's own encoder (``encoder``) — a keyframe before every ``KEYFRAME``-th sample and
+    the sample count before the end line; after the end line, ``done`` (the run has
+    nothing more to say on the bus). It answers the header line as the configuration
+    ``trace`` for a monitor that joins late."""
 
-    def __init__(self, session: BusSession, done: Callable[[], None] = lambda: None) -> None:
-        self.session, self.done = session, done
-        self.encoder = TraceEncoder(TRACE)
-        self.published = 0
+    def __init__(self, session: BusSession, writer: TraceWriter | None = None,
+                 done: Callable[[], None] = lambda: None) -> None:
+        self.session, self.writer, self.done = session, writer, done
+        self.encoder = TraceEncoder(TRACE) if writer is None else None
+        """Without a writer: the encoder of the lines (a sample published to nobody may be
+        passed through it to keep the lines' changed rows right)."""
+        self.samples = 0
         self._header = b""
 
-    def _publish(self, line: str) -> None:
-        self.session.put(TRACE, line.encode("utf-8"))
-        self.published += 1
+    def _publish(self, payload: bytes) -> None:
+        self.session.put(TRACE, payload)
+
+    def _written(self) -> str:
+        assert self.writer is not None
+        return self.writer.line
 
     def start(self, header: StreamHeader) -> None:
-        self._header = self.encoder.header(header).encode("utf-8")
+        line = self._written() if self.encoder is None else self.encoder.header(header)
+        self._header = line.encode("utf-8")
         self.session.answer_raw(config_key("trace"), lambda _request: self._header)
-        self._publish(self._header.decode("utf-8"))
+        self._publish(self._header)
 
     def feed(self, sample: Sample) -> None:
-        self._publish(self.encoder.sample(sample, whole=sample.seq % KEYFRAME == 0))
+        if sample.seq % KEYFRAME == 0:
+            self._publish(keyframe(sample))
+        line = self._written() if self.encoder is None else self.encoder.sample(sample)
+        self._publish(line.encode("utf-8"))
+        self.samples += 1
 
     def finish(self, end_time: float, outcome: str, reason: str) -> None:
         try:
             # how many samples there were: a monitor that missed the last ones knows it
-            self._publish(json.dumps({"samples": self.encoder.line - 1}))
-            self._publish(self.encoder.end(end_time, outcome, reason))
+            count = self.samples if self.encoder is None else self.encoder.line - 1
+            self._publish(json.dumps({"samples": count}).encode("utf-8"))
+            line = self._written() if self.encoder is None \
+                else self.encoder.end(end_time, outcome, reason)
+            self._publish(line.encode("utf-8"))
         finally:
             self.done()
 
@@ -77,11 +104,14 @@ class RunController(BusController):
         super().__init__(simulation, mission, timeout)
         self._left = weakref.finalize(self, _leave, simulation, mission)
 
-    def publisher(self) -> TracePublisher:
-        """The sink publishing the run's trace."""
-        return TracePublisher(self._sessions["simulation"], self.leave)
+    def publisher(self, writer: TraceWriter) -> TracePublisher:
+        """The sink publishing the run's trace (placed right after ``writer``)."""
+        return TracePublisher(self._sessions["simulation"], writer, done=self.leave)
 
     def leave(self) -> None:
+        if self._left.alive and self.retries:
+            _say(f"bus: {self.retries} call(s) to the robot sent again while nobody could "
+                 f"answer (the router or the robot away), each answered once")
         self._left()
 
 

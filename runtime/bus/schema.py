@@ -9,9 +9,9 @@ says, whatever its language:
   seconds) first; numbers are finite (NaN and Infinity are refused);
 * configuration is asked for with a query on ``rei/v1/config/<name>`` (``CONFIG_NAMES``)
   and answered with one JSON object;
-* the run's sample stream (the trace's lines: header, samples, end) travels on
-  ``rei/v1/trace`` for monitors and viewers, one trace line per sample, each sample with
-  every object's row (a file's trace lists only the rows that changed).
+* the run's sample stream travels on ``rei/v1/trace`` for monitors and viewers: trace.jsonl's
+  own lines (header, samples, end), a keyframe of every object's row before every 10th
+  sample and the sample count before the end (``rei.runtime.bus.run``).
 
 The version is in the key, so a v2 can run beside v1 on one router. Payloads larger than
 ``MAX_PAYLOAD`` are refused by the sender and dropped by the receiver. This module must

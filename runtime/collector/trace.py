@@ -668,13 +668,10 @@ class TraceEncoder:
             rows = np.nonzero((new != old).any(axis=1))[0].tolist()
         return [[i, *new[i].tolist()] for i in rows]
 
-    def sample(self, sample: Sample, whole: bool = False) -> str:
-        """The sample's line; with ``whole``, every object's row, not only the changed ones
-        (a line a reader that missed the previous one can still read: a bus's keyframe)."""
+    def sample(self, sample: Sample) -> str:
         assert self._rules is not None, "header() first"
-        line = _sample_json(sample, self._changed(sample.poses, None if whole else self._poses),
-                            self._changed(sample.twists, None if whole else self._twists),
-                            self._rules.data)
+        line = _sample_json(sample, self._changed(sample.poses, self._poses),
+                            self._changed(sample.twists, self._twists), self._rules.data)
         self._rules.sample(line, f"{self.where}:{self.line + 1}")
         self.line += 1
         # Only what was encoded is the base of the next sample's changed rows.
@@ -850,11 +847,18 @@ class TraceDecoder:
         self._rules = _StreamRules(len(self.header.objects), self.header.data,
                                    tuple(n for n, _ in self.header.faults))
 
-    def resume_at(self, seq: int) -> None:
-        """Accept the sample numbered ``seq`` next: a reader that missed the ones before it
-        (a monitor on a bus) goes on, counting them missing. Only at a line that carries
-        every object's row (rows are changes: after a gap, a partial line would lose some)."""
+    def resume_at(self, seq: int, poses: np.ndarray, twists: np.ndarray) -> None:
+        """Accept the sample numbered ``seq`` next, on top of every object's pose and twist
+        at that sample (a keyframe): a reader that missed the samples before it (a monitor
+        on a bus) goes on. Rows are changes, so after a gap only a keyframe makes the next
+        line readable."""
+        if poses.shape != self._rules.poses.shape or twists.shape != self._rules.twists.shape:
+            raise TraceError(f"a keyframe of {len(self._rules.poses)} rows expected, found "
+                             f"{len(poses)} and {len(twists)}")
         self._rules.seq = seq
+        self._rules.poses[:], self._rules.twists[:] = poses, twists
+        if self._rules.time is None:  # not the first sample of the stream: rows are changes
+            self._rules.time = 0.0
 
     def line(self, raw: bytes, where: str) -> Sample | tuple[float, str, str]:
         """The sample of a line, or (end time, outcome, reason) of the end line."""

@@ -2,8 +2,8 @@
 
 Joins the bus as the monitor, reads the run's trace as `rei run --bus` publishes it
 (``rei.runtime.bus.monitor``), feeds it through the same generated automata and evaluator
-as `rei run` and `rei replay`, and writes DIR/trace.jsonl (the trace as received, written
-by the trace's own writer: byte for byte the run's when nothing was lost), events.csv,
+as `rei run` and `rei replay`, and writes DIR/trace.jsonl (the lines received: byte for
+byte the run's; a stream with a gap is kept as trace.jsonl.partial), events.csv,
 summary.json (with a ``bus`` measurement: samples received, missed — by sequence number —,
 duplicated, reordered, malformed) and report.html. Exit status: 0 every requirement passed,
 1 one failed or was inconclusive (a sample missed makes the requirements it was evidence
@@ -16,13 +16,11 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-from collections.abc import Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from rei.lang.cli_support import EXIT_BAD_INPUT, EXIT_RUN_ERROR
 from rei.lang.errors import printable_lines
-from rei.runtime.commands.robot import add_bus_options
+from rei.runtime.commands.robot import add_bus_options, join_bus
 from rei.runtime.commands.run import (
     EVENTS,
     REPLAY_VERBOSE_HELP,
@@ -31,9 +29,6 @@ from rei.runtime.commands.run import (
     print_results,
     write_page,
 )
-
-if TYPE_CHECKING:
-    from rei.runtime.messages import Sample
 
 EXAMPLES = """\
 examples:
@@ -68,11 +63,11 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rei.runtime.bus import BusError, connect  # noqa: PLC0415
+    from rei.generators.output import open_output  # noqa: PLC0415
+    from rei.runtime.bus import BusError  # noqa: PLC0415
     from rei.runtime.bus.monitor import TraceStream, ask_header  # noqa: PLC0415
     from rei.runtime.bus.schema import TRACE as TRACE_KEY  # noqa: PLC0415
     from rei.runtime.bus.schema import config_key  # noqa: PLC0415
-    from rei.runtime.collector import TraceWriter  # noqa: PLC0415
     from rei.runtime.commands.replay import judge_stream  # noqa: PLC0415
     from rei.runtime.monitor import generate_automata  # noqa: PLC0415
     from rei.runtime.monitor.errors import MonitorError  # noqa: PLC0415
@@ -84,16 +79,13 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     out: Path = args.output
     out.mkdir(parents=True, exist_ok=True)
-    for stale in ("summary.json", TRACE, EVENTS, "report.html"):
+    for stale in ("summary.json", TRACE, TRACE + ".partial", EVENTS, "report.html"):
         (out / stale).unlink(missing_ok=True)
     automata = generate_automata(args.vepl, out / "automata", replace=True)
     user = load_functions(args.functions, args.vepl)
-    try:
-        session = connect(args.bus, role="monitor", credentials=args.credentials)
-    except BusError as exc:
-        print(f"rei monitor: error: {exc}", file=sys.stderr)
-        return EXIT_BAD_INPUT if "expected" in str(exc) or "refused" in str(exc) \
-            or "credentials" in str(exc) else EXIT_RUN_ERROR
+    session = join_bus(args, "monitor")
+    if isinstance(session, int):
+        return session
     with session:
         stream = TraceStream(ask_header(session.call, config_key("trace"), 10.0),
                              args.silence)
@@ -109,17 +101,9 @@ def run(args: argparse.Namespace) -> int:
         if not args.quiet:
             print(f"rei monitor: judging {header.mission} in {header.world}, seed "
                   f"{header.seed}", file=sys.stderr, flush=True)
-        writer = TraceWriter(out / TRACE)
-        writer.start(header)
-
-        def samples() -> Iterator[Sample]:
-            for sample in stream.samples():
-                writer.feed(sample)
-                yield sample
-
         try:
-            summary = judge_stream(header, samples(), stream.read_end, args.vepl, out, user,
-                                   automata, f"the run on {session.endpoint}",
+            summary = judge_stream(header, stream.samples(), stream.read_end, args.vepl, out,
+                                   user, automata, f"the run on {session.endpoint}",
                                    controller="bus",
                                    measurements=lambda: {
                                        "bus": {**stream.measurements(),
@@ -127,12 +111,16 @@ def run(args: argparse.Namespace) -> int:
         except MonitorError as exc:
             print(f"rei monitor: error: {printable_lines(str(exc))}", file=sys.stderr)
             return EXIT_RUN_ERROR
-        end_time, outcome, reason = stream.read_end()
-        writer.finish(end_time, outcome, reason)
+    # The lines judged are trace.jsonl's own bytes; a stream with a gap is no trace (its
+    # rows are changes): kept as trace.jsonl.partial, as a run cut short leaves its own.
+    whole = not stream.missed and stream.end is not None
+    trace = out / (TRACE if whole else TRACE + ".partial")
+    with open_output(trace) as file:
+        file.write("".join(line.decode("utf-8") + "\n" for line in stream.lines))
     bus = summary.measurements.get("bus", {})
     if bus.get("missed") or bus.get("duplicated") or bus.get("reordered"):
         print(f"rei monitor: missed {bus['missed']} sample(s) {bus['missed_samples']}, "
               f"{bus['duplicated']} duplicated, {bus['reordered']} reordered",
               file=sys.stderr)
-    page = write_page(out, out / TRACE)
+    page = write_page(out, trace if whole else None)
     return print_results(summary, out, page=page, quiet=args.quiet, verbose=args.verbose)

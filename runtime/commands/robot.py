@@ -18,9 +18,13 @@ import sys
 import threading
 from pathlib import Path
 from types import FrameType
+from typing import TYPE_CHECKING
 
 from rei.lang.cli_support import EXIT_BAD_INPUT, EXIT_OK, EXIT_RUN_ERROR
 from rei.runtime.commands.run import CONTROLLER_HELP
+
+if TYPE_CHECKING:
+    from rei.runtime.bus import BusSession
 
 EXAMPLES = """\
 examples:
@@ -36,6 +40,20 @@ def add_bus_options(parser: argparse.ArgumentParser, required: bool = True) -> N
     parser.add_argument("--credentials", type=Path, default=None, metavar="DIR",
                         help="the bus's credentials folder `rei bus` printed, or this role's "
                              "file in it (default: $REI_BUS_CREDENTIALS)")
+
+
+def join_bus(args: argparse.Namespace, role: str) -> BusSession | int:
+    """A session of ``role`` on the bus of ``--bus``/``--credentials``, or the exit status
+    after saying in one line why not (2: bad input or refused credentials, 3: no bus)."""
+    from rei.runtime.bus import BusError, connect  # noqa: PLC0415
+
+    try:
+        return connect(args.bus, role=role, credentials=args.credentials)
+    except BusError as exc:
+        print(f"rei {args.command}: error: {exc}", file=sys.stderr)
+        text = str(exc)
+        refused = "expected" in text or "refused" in text or "credentials" in text
+        return EXIT_BAD_INPUT if refused else EXIT_RUN_ERROR
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -57,7 +75,6 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rei.runtime.bus import BusError, connect  # noqa: PLC0415
     from rei.runtime.bus.robot import serve_robot  # noqa: PLC0415
     from rei.runtime.robot.select import load_controller  # noqa: PLC0415
 
@@ -73,12 +90,9 @@ def run(args: argparse.Namespace) -> int:
 
     previous = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
     try:
-        try:
-            session = connect(args.bus, role="robot", credentials=args.credentials)
-        except BusError as exc:
-            print(f"rei robot: error: {exc}", file=sys.stderr)
-            return EXIT_BAD_INPUT if "expected" in str(exc) or "refused" in str(exc) \
-                or "credentials" in str(exc) else EXIT_RUN_ERROR
+        session = join_bus(args, "robot")
+        if isinstance(session, int):
+            return session
         with session:
             say(f"{args.controller} ready on {session.endpoint}")
             runs = serve_robot(session, lambda: load_controller(args.controller, folder),

@@ -107,7 +107,10 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                     "so. Results go to stdout, progress and diagnostics to stderr. Exit "
                     "status: 0 every requirement passed, 1 one failed or was inconclusive "
                     "(or the .vepl declares no requirement: verdict UNJUDGED, never a pass), "
-                    "2 invalid input, 3 a run error, 130 interrupted.")
+                    "2 invalid input, 3 a run error, 130 interrupted. With REI_CACHE_DIR=DIR "
+                    "the generated world and automata are reused from DIR while the files "
+                    "they were made from are unchanged (rei campaign does this for its runs; "
+                    "docs/campaign.md).")
     parser.add_argument("mission", type=Path, nargs="?", default=None, metavar="MISSION",
                         help="the .mission file (optional with --config)")
     parser.add_argument("-o", "--output", type=Path, default=None, metavar="DIR",
@@ -247,6 +250,7 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
     """
     from rei.generators.output import open_output  # noqa: PLC0415
     from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
+    from rei.runtime.cache import ArtifactCache  # noqa: PLC0415
     from rei.runtime.collector import TraceWriter, load_monitor_config  # noqa: PLC0415
     from rei.runtime.collector.needs import check_needs  # noqa: PLC0415
     from rei.runtime.evaluator import merge_summary, write_summary  # noqa: PLC0415
@@ -263,12 +267,19 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
     _make_folder(out_dir)
     # The specification is checked and generated first: a bad .vepl is reported (exit 2)
     # before any world is built.
-    automata = generate_automata(vepl, out_dir / "automata", replace=True) if monitor else None
+    # With $REI_CACHE_DIR (rei campaign sets it) generation is reused from earlier runs of the
+    # same files (rei.runtime.cache): the same bytes, without parsing or rendering again.
+    cache = ArtifactCache.from_environment()
+    automata = None
+    if monitor:
+        automata = (cache.automata(vepl, out_dir / "automata") if cache is not None
+                    else generate_automata(vepl, out_dir / "automata", replace=True))
     user = load_functions(functions, vepl) if monitor else {}
     monitor_sink = MonitorSink(vepl, out_dir, functions=user, automata=automata) \
         if monitor else None
     world_dir = out_dir / "world"
-    mission = generate_world(mission_path, world_dir, replace=True)
+    mission = (cache.world(mission_path, world_dir) if cache is not None
+               else generate_world(mission_path, world_dir, replace=True))
     if probe is not None:
         probe.begin(mission.name, mission.world.name)
     manifest = load_manifest(world_dir)
@@ -302,8 +313,8 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
                   out_dir / RECORDING):
         stale.unlink(missing_ok=True)
     trace_writer = TraceWriter(out_dir / TRACE)
-    if bus is not None:
-        bus_sinks.append(robot.publisher())
+    if bus is not None:  # right after the trace writer: it publishes the line just written
+        bus_sinks.append(robot.publisher(trace_writer))
     recorder: list[SampleSink] = []
     if recording:
         from rei.runtime.recording import McapRecorder  # noqa: PLC0415

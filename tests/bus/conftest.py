@@ -3,6 +3,7 @@ with its own sessions and closes them)."""
 
 from __future__ import annotations
 
+import subprocess
 import threading
 from collections.abc import Iterator
 from pathlib import Path
@@ -57,3 +58,14 @@ class Inbox:
             assert self._changed.wait_for(lambda: len(self.items) >= n, SAFETY), \
                 f"{len(self.items)} of {n} deliveries arrived"
             return list(self.items)
+
+
+def stop_all(processes: list[subprocess.Popen[str]]) -> None:
+    """Stop what a test started (last first) and close its pipes."""
+    for process in reversed(processes):
+        if process.poll() is None:
+            process.terminate()
+            process.wait(timeout=SAFETY)
+        for stream in (process.stdout, process.stderr):
+            if stream is not None:
+                stream.close()

@@ -156,19 +156,26 @@ def test_the_bus_folder_is_private(router: Router) -> None:
     assert config["access_control"]["default_permission"] == "deny"
 
 
-def test_a_late_monitor_gets_the_trace_header_from_the_simulation(join) -> None:  # type: ignore[no-untyped-def]
+def test_a_late_monitor_gets_the_trace_header_from_the_simulation(  # type: ignore[no-untyped-def]
+        join, tmp_path: Path) -> None:
+    from rei.runtime.bus.monitor import ask_header
     from rei.runtime.bus.run import TracePublisher
     from rei.runtime.bus.schema import TRACE, config_key
-    from rei.runtime.collector.trace import TraceDecoder
+    from rei.runtime.collector.trace import TraceDecoder, TraceWriter
     from tests.runtime.test_trace import _header
 
     sim, monitor = join("simulation"), join("monitor")
     header = _header()
-    publisher = TracePublisher(sim)
+    writer = TraceWriter(tmp_path / "trace.jsonl")
+    publisher = TracePublisher(sim, writer)
     inbox = Inbox()
     monitor.subscribe_raw(TRACE, inbox)
     assert sim.await_readers(TRACE, SAFETY)
-    publisher.start(header)
-    line = monitor.call(config_key("trace"), b"", SAFETY)
-    assert TraceDecoder(line, "asked").header == header
-    assert inbox.wait(1)[0][1] == line
+    writer.start(header)
+    try:
+        publisher.start(header)
+        line = ask_header(monitor.call, config_key("trace"), SAFETY)()
+        assert TraceDecoder(line, "asked").header == header
+        assert inbox.wait(1)[0][1] == line
+    finally:
+        writer.finish(0.0, "interrupted", "a test")

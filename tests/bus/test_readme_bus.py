@@ -12,7 +12,7 @@ import sys
 from pathlib import Path
 
 from rei.runtime.bus.router import free_port
-from tests.bus.conftest import SAFETY
+from tests.bus.conftest import SAFETY, stop_all
 from tests.conftest import REPO
 
 SECTION = "## Distributed runs: `rei bus`, `rei robot`, `rei monitor`"
@@ -59,9 +59,4 @@ def test_the_readme_block_runs(tmp_path: Path) -> None:
         assert started[1].wait(timeout=SAFETY) == 0  # --once: the robot ended with the run
         assert subprocess.run(shlex.split(lines[6]), timeout=SAFETY).returncode == 0
     finally:
-        for process in reversed(started):
-            if process.poll() is None:
-                process.terminate()
-                process.wait(timeout=SAFETY)
-            if process.stdout is not None:
-                process.stdout.close()
+        stop_all(started)
