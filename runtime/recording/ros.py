@@ -24,7 +24,7 @@ import numpy as np
 from rosbags.typesys import Stores, get_typestore
 
 from rei.catalogue import Box, Cylinder, Footprint, Polygon
-from rei.runtime.messages import MissionEvent, ObservedObject, Sample, StreamHeader
+from rei.runtime.messages import LaserScan, MissionEvent, ObservedObject, Sample, StreamHeader
 
 STORE = Stores.ROS2_HUMBLE
 
@@ -133,7 +133,7 @@ class RosViews:
         s = sample.belief.scan
         if s is None:
             return None
-        ranges = np.asarray(s.ranges, dtype=np.float32)
+        ranges = ros_ranges(s)
         angle_max = s.angle_min + s.angle_increment * (len(ranges) - 1)
         return self._cdr(self._scan(
             self._stamp(sample.time, laser_frame(header)), s.angle_min, angle_max,
@@ -231,6 +231,35 @@ def _shape(fp: Footprint, tile: float, height: float
         points = list(fp.points)
         return "line", (0.02, 0.0, 0.0), [*points, points[0]]
     return "cube", (tile, tile, height), []
+
+
+def ros_ranges(scan: LaserScan) -> np.ndarray:
+    """A scan's ranges as ``LaserScan.ranges`` holds them: float32, and a beam without a
+    return (REI: ``range_max``, its laser clips there) as +inf, as REP 117 asks."""
+    ranges = np.asarray(scan.ranges, dtype=np.float32)
+    return np.where(ranges >= np.float32(scan.range_max), np.float32(np.inf), ranges)
+
+
+_CDR_LE = b"\x00\x01\x00\x00"
+"""CDR's encapsulation header: plain CDR, little-endian (what rosbags and ROS 2 write)."""
+
+
+def trace_cdr(line: str) -> bytes:
+    """A trace line as a CDR ``std_msgs/msg/String`` (bytes as rosbags serialises them:
+    the header, the length with its NUL, the UTF-8 text, the NUL)."""
+    data = line.encode("utf-8")
+    return _CDR_LE + (len(data) + 1).to_bytes(4, "little") + data + b"\x00"
+
+
+def trace_line(cdr: bytes) -> bytes | None:
+    """The UTF-8 text of a CDR ``std_msgs/msg/String`` (``trace_cdr``'s inverse), or None
+    when the bytes are not one."""
+    if len(cdr) < 9 or cdr[:4] != _CDR_LE:
+        return None
+    size = int.from_bytes(cdr[4:8], "little")
+    if size < 1 or 8 + size > len(cdr) or cdr[7 + size] != 0 or len(cdr) - 8 - size > 3:
+        return None
+    return cdr[8:7 + size]
 
 
 def stamp_ns(time: float) -> int:

@@ -2,7 +2,9 @@
 
 One channel per topic (see ``rei.runtime.recording.ros.TOPICS``) with its ``ros2msg`` schema
 and CDR messages, plus ``/rei/trace``: the exact JSON-lines trace (header record first, one
-record per sample, then the end record; message encoding ``json``), encoded by the trace's
+record per sample, then the end record; each line a ``std_msgs/msg/String``, so every ROS 2
+bag reader opens and copies the whole file: rosbags' ``Reader``/``AnyReader`` and
+``rosbags-convert`` among them), encoded by the trace's
 own ``TraceEncoder`` and so checked by the same rules. Messages are stamped with the
 simulated time (nanoseconds from the start of the run); nothing depends on the wall clock,
 so the same run gives the same bytes.
@@ -29,16 +31,12 @@ from rei.runtime.collector.trace import TraceEncoder, TraceError, TraceWriter
 from rei.runtime.evaluator.signal_log import SignalRow
 from rei.runtime.messages import Sample, StreamHeader
 from rei.runtime.recording.errors import RecordingError
-from rei.runtime.recording.ros import LATCHED, TOPICS, RosViews, stamp_ns
+from rei.runtime.recording.ros import LATCHED, TEXT, TOPICS, RosViews, stamp_ns, trace_cdr
 
 RECORDING = "recording.mcap"
 """The recording's name in a run's output folder."""
 
 TRACE_TOPIC = "/rei/trace"
-TRACE_SCHEMA = "rei/TraceRecord"
-TRACE_SCHEMA_TEXT = (b'{"title":"rei/TraceRecord","description":"One record of the REI trace '
-                     b'(docs/recording.md): the header, a sample, or the end record.",'
-                     b'"type":"object"}')
 PROFILE = "ros2"
 
 CHUNK_BYTES = 64 * 1024
@@ -121,9 +119,12 @@ class McapRecorder:
         writer = Writer(self._file, chunk_size=2**62, compression=CompressionType.ZSTD)
         writer.start(profile=PROFILE)
         self._writer = writer
-        trace_schema = writer.register_schema(TRACE_SCHEMA, "jsonschema", TRACE_SCHEMA_TEXT)
-        self._channels[TRACE_TOPIC] = writer.register_channel(TRACE_TOPIC, "json", trace_schema)
+        # The trace's lines travel as std_msgs/msg/String (CDR), like /rei/events: every ROS 2
+        # tool reads the channel (rosbags knows no 'jsonschema' schema encoding and refused
+        # the whole file over a JSON channel; rosbags-convert cannot copy a schemaless one).
         schemas: dict[str, int] = {}
+        schemas[TEXT] = writer.register_schema(TEXT, "ros2msg", self._views.schema(TEXT))
+        self._channels[TRACE_TOPIC] = writer.register_channel(TRACE_TOPIC, "cdr", schemas[TEXT])
         for topic, msgtype in TOPICS.items():
             if msgtype not in schemas:
                 schemas[msgtype] = writer.register_schema(msgtype, "ros2msg",
@@ -132,7 +133,7 @@ class McapRecorder:
             self._channels[topic] = writer.register_channel(topic, "cdr", schemas[msgtype],
                                                             metadata)
         self._sequence = dict.fromkeys(self._channels.values(), 0)
-        self._add(TRACE_TOPIC, 0.0, record.encode("utf-8"))
+        self._add(TRACE_TOPIC, 0.0, trace_cdr(record))
         self._add("/tf_static", 0.0, self._views.laser_mount(header, 0.0))
         self._add("/world/markers", 0.0, self._views.markers(header, 0.0))
 
@@ -142,7 +143,7 @@ class McapRecorder:
         record = self._written(f'{{"seq":{sample.seq},', f"sample {sample.seq}") \
             if self.trace is not None else self._encode(self._encoder.sample, sample)
         t = sample.time
-        self._add(TRACE_TOPIC, t, record.encode("utf-8"))
+        self._add(TRACE_TOPIC, t, trace_cdr(record))
         views = self._views
         self._add("/tf", t, views.transforms(sample, header, self._moved(sample)))
         data = header.data
@@ -164,7 +165,7 @@ class McapRecorder:
         record = self._written('{"end":', "the end record") if self.trace is not None \
             else self._encode(self._encoder.end, end_time, outcome, reason)
         self._record_signals()
-        self._add(TRACE_TOPIC, end_time, record.encode("utf-8"))
+        self._add(TRACE_TOPIC, end_time, trace_cdr(record))
         try:
             self._writer.finish()  # type: ignore[no-untyped-call]
             self._file.flush()
