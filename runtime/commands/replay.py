@@ -12,35 +12,73 @@ the results on stdout as `rei run` does (``print_results``: the same lines, --qu
 was inconclusive, 2 invalid input (a bad .vepl, an unreadable trace, or a .vepl whose queries
 read data the trace does not carry: VEPL-DATA), 3 a monitor error or a recorded run error, 130
 a recorded interrupted run.
+
+`rei replay BAG --mission M.mission [--map MAP]` judges a ROS 2 recording REI did not make
+(a Gazebo run of the launch target's world, a real robot): an MCAP file or a rosbag2 folder,
+read through ``rei.runtime.recording.bag`` against the mission's room and goals; DIR also
+gets the stream as REI's trace.jsonl (when its numbers are finite) and the generated world/.
+Data no verdict may rest on (gaps, stamps going backwards, non-finite values, bad scans)
+turns every verdict that would pass into inconclusive, naming the problem.
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+import textwrap
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import replace
 from pathlib import Path
-from typing import cast
+from typing import TYPE_CHECKING, cast
 
-from rei.lang.cli_support import EXIT_RUN_ERROR
+from rei.lang.cli_support import EXIT_BAD_INPUT, EXIT_RUN_ERROR
 from rei.lang.errors import printable_lines
 from rei.runtime.commands.run import add_verbosity, print_results, write_page
+from rei.runtime.messages import Sample, StreamHeader
 from rei.runtime.results import RESULTS_VERSION, Outcome, RunSummary
+
+if TYPE_CHECKING:
+    from rei.runtime.collector import TraceWriter
+    from rei.runtime.monitor.host import UserFunction
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser = sub.add_parser(
         "replay", help="monitor a recorded trace (or recording.mcap) with the event automata "
                        "of a .vepl file",
-        description="Feed a trace recorded by `rei run` (trace.jsonl, or the recording.mcap "
+        description=textwrap.fill(
+                    "Feed a trace recorded by `rei run` (trace.jsonl, or the recording.mcap "
                     "of `rei run --record`) through the event automata generated from a .vepl "
                     "specification (the default one unless --vepl) and write events.csv, "
                     "summary.json and report.html (the run's page). Same trace and "
                     "specification give the same events and verdicts as the live run. A "
                     "recording cut short by a crash is replayed up to its last complete chunk "
-                    "and judged as an interrupted run. Results go to stdout, diagnostics to "
-                    "stderr.")
+                    "and judged as an interrupted run. With --mission, TRACE is a ROS 2 "
+                    "recording REI did not make (MCAP file or rosbag2 folder), judged against "
+                    "the mission's room and goals. Results go to stdout, diagnostics to "
+                    "stderr.", 88),
+        epilog="examples:\n"
+               "  rei replay out/run/recording.mcap -o out/again\n"
+               "  rei replay my_bag/ --mission examples/simple_wall/simple_wall.mission "
+               "-o out/bag\n"
+               "  rei replay run.mcap --mission m.mission --map my_stack.toml --vepl my.vepl "
+               "-o out/bag",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("trace", type=Path, metavar="TRACE",
-                        help="a trace.jsonl file or an MCAP recording (.mcap)")
+                        help="a trace.jsonl file or an MCAP recording (.mcap); with --mission "
+                             "a ROS 2 recording: an MCAP file or a rosbag2 folder")
+    parser.add_argument("--mission", type=Path, default=None, metavar="M.mission",
+                        help="judge TRACE as a ROS 2 recording of this mission (from Gazebo "
+                             "or a real robot): ground truth from /tf (frames named as the "
+                             "room's bodies), belief from /odom, /scan, /cmd_vel, mission "
+                             "progress from Nav2's navigate_to_pose status or the poses; "
+                             "REI's own recording.mcap is then judged from its ROS channels "
+                             "alone")
+    parser.add_argument("--map", type=Path, default=None, metavar="MAP.toml",
+                        dest="topic_map",
+                        help="with --mission: rename topics and frames for another stack, a "
+                             "TOML file with [topics] (\"/scan\" = \"/robot1/scan\") and "
+                             "[frames] (map = \"world\"); see docs/recording.md")
     parser.add_argument("--vepl", type=Path, default=None, metavar="FILE",
                         help="the specification (default: REI's default.vepl); its queries "
                              "may read only the data the trace carries (its header's "
@@ -59,9 +97,7 @@ def replay(trace: Path, vepl: Path | None, out_dir: Path,
     """Monitor ``trace`` into ``out_dir``; the summary (also written as summary.json)."""
     from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
     from rei.runtime.collector.needs import check_needs  # noqa: PLC0415
-    from rei.runtime.evaluator.summary import merge_summary, write_summary  # noqa: PLC0415
-    from rei.runtime.faults.stage import SampledTimeline, fault_measurements  # noqa: PLC0415
-    from rei.runtime.monitor import MonitorSink, generate_automata  # noqa: PLC0415
+    from rei.runtime.monitor import generate_automata  # noqa: PLC0415
     from rei.runtime.monitor.functions import load_functions  # noqa: PLC0415
     from rei.runtime.recording import read_stream  # noqa: PLC0415
 
@@ -80,13 +116,40 @@ def replay(trace: Path, vepl: Path | None, out_dir: Path,
         if close is not None:
             close()
         raise
+    return _judge(header, samples, read_end, vepl, out_dir, user, automata)
+
+
+def _judge(header: StreamHeader, samples: Iterator[Sample],
+           read_end: Callable[[], tuple[float, str, str] | None], vepl: Path | None,
+           out_dir: Path, user: Mapping[str, UserFunction], automata: Path,
+           trace: TraceWriter | None = None, problems: Sequence[str] = ()) -> RunSummary:
+    """The samples through the monitor (and ``trace``, when given: a trace that cannot be
+    written is dropped, never the judgement); the summary, written as summary.json."""
+    from rei.runtime.collector.trace import TraceError  # noqa: PLC0415
+    from rei.runtime.evaluator.summary import merge_summary, write_summary  # noqa: PLC0415
+    from rei.runtime.faults.stage import SampledTimeline, fault_measurements  # noqa: PLC0415
+    from rei.runtime.monitor import MonitorSink  # noqa: PLC0415
+
     sink = MonitorSink(vepl, out_dir, functions=user, automata=automata)
     last = 0.0
     seen = SampledTimeline()
+
+    def record(write: Callable[[], None]) -> None:
+        nonlocal trace
+        if trace is None:
+            return
+        try:
+            write()
+        except TraceError:
+            trace.partial.unlink(missing_ok=True)  # non-finite data: no trace, same verdicts
+            trace = None
+
     try:
         sink.start(header)
+        record(lambda: trace.start(header) if trace is not None else None)
         for sample in samples:
             sink.feed(sample)
+            record(lambda s=sample: trace.feed(s) if trace is not None else None)
             last = sample.time
             if header.faults:
                 seen.feed(sample.time, sample.faults)
@@ -99,25 +162,83 @@ def replay(trace: Path, vepl: Path | None, out_dir: Path,
     end_time, outcome, reason = end if end is not None else (
         last, "interrupted", cut or "the trace has no end line")
     sink.finish(end_time, outcome, reason)
+    record(lambda: trace.finish(end_time, outcome, reason) if trace is not None else None)
     assert sink.result is not None
     # The end line was written by `rei run` from its summary's outcome; read back as is.
     base = RunSummary(RESULTS_VERSION, header.mission, header.world, header.seed, "replay",
                       cast(Outcome, outcome), reason, sink.result.duration, 0.0, {}, (),
                       fault_measurements(header.faults, seen.timeline()))
     summary = merge_summary(base, sink.result)
+    if problems or getattr(samples, "problems", None):
+        summary = _doubted(summary, list(problems) or
+                           [p.text() for p in getattr(samples, "problems", ())])
     write_summary(summary, out_dir)
     return summary
+
+
+def _doubted(summary: RunSummary, problems: list[str]) -> RunSummary:
+    """Every verdict that passed becomes inconclusive: the data it rests on has gaps,
+    stamps going backwards, non-finite values or bad scans (the recording's problems)."""
+    first = problems[0]
+    more = f" (and {len(problems) - 1} more problem(s), listed in measurements)" \
+        if len(problems) > 1 else ""
+    verdicts = tuple(replace(v, status="inconclusive",
+                             reason=f"the recording's data cannot support a pass: {first}"
+                                    f"{more}; {v.reason}")
+                     if v.status == "pass" else v for v in summary.verdicts)
+    return replace(summary, verdicts=verdicts,
+                   measurements={**summary.measurements, "recording_problems": problems[:100],
+                                 "recording_problem_count": len(problems)})
+
+
+def replay_bag(bag: Path, mission_path: Path, vepl: Path | None, out_dir: Path,
+               functions: str | None = None, topic_map: Path | None = None) -> RunSummary:
+    """Judge the ROS 2 recording ``bag`` (MCAP file or rosbag2 folder) as a run of
+    ``mission_path`` into ``out_dir``; the summary (also written as summary.json)."""
+    from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
+    from rei.runtime.collector import TraceWriter, load_monitor_config  # noqa: PLC0415
+    from rei.runtime.collector.needs import check_needs  # noqa: PLC0415
+    from rei.runtime.monitor import generate_automata  # noqa: PLC0415
+    from rei.runtime.monitor.functions import load_functions  # noqa: PLC0415
+    from rei.runtime.recording.bag import BagSamples, BagWorld, load_topic_map  # noqa: PLC0415
+    from rei.runtime.run import generate_world, stream_header  # noqa: PLC0415
+    from rei.runtime.world import load_manifest  # noqa: PLC0415
+
+    out_dir = Path(out_dir)
+    automata = generate_automata(vepl, out_dir / "automata", replace=True)
+    user = load_functions(functions, vepl)
+    mapping = load_topic_map(topic_map) if topic_map is not None else None
+    world_dir = out_dir / "world"
+    mission = generate_world(mission_path, world_dir, replace=True)
+    manifest = load_manifest(world_dir)
+    header = stream_header(manifest, load_monitor_config(world_dir), mission, 0)
+    check_needs(load_vepl(vepl), header.data, f"the mission '{mission.name}' to collect",
+                "name that data in the mission's monitor block, or drop the query")
+    world = BagWorld(header, mission.tasks(),
+                     tuple((b.x, b.y, b.yaw) for b in manifest.observed))
+    samples = BagSamples(bag, world, mapping)
+    (out_dir / "trace.jsonl").unlink(missing_ok=True)
+    return _judge(header, samples, samples.end, vepl, out_dir, user, automata,
+                  TraceWriter(out_dir / "trace.jsonl"))
 
 
 def run(args: argparse.Namespace) -> int:
     from rei.runtime.monitor.errors import MonitorError  # noqa: PLC0415
 
+    if args.topic_map is not None and args.mission is None:
+        print("rei replay: error: --map: expected --mission too (a mapping renames a ROS 2 "
+              "recording's topics and frames), found --map alone", file=sys.stderr)
+        return EXIT_BAD_INPUT
     try:
-        summary = replay(args.trace, args.vepl, args.output, args.functions)
+        if args.mission is not None:
+            summary = replay_bag(args.trace, args.mission, args.vepl, args.output,
+                                 args.functions, args.topic_map)
+        else:
+            summary = replay(args.trace, args.vepl, args.output, args.functions)
     except MonitorError as exc:
         print(f"rei replay: error: {printable_lines(str(exc))}", file=sys.stderr)
         return EXIT_RUN_ERROR
-    page = write_page(args.output, args.trace)
+    page = write_page(args.output, args.trace if args.mission is None else None)
     # the one pass rule of `rei run`; a recorded run error stays an error
     return print_results(summary, args.output, page=page, quiet=args.quiet,
                          verbose=args.verbose)

@@ -49,6 +49,14 @@ TF = "tf2_msgs/msg/TFMessage"
 MARKERS = "visualization_msgs/msg/MarkerArray"
 TEXT = "std_msgs/msg/String"
 
+NAV2_ACTION = "/navigate_to_pose/_action"
+"""Nav2's navigate_to_pose action as ROS 2 topics: ``/status`` (action_msgs/msg/
+GoalStatusArray) and ``/feedback`` (its FeedbackMessage), recorded with
+``--include-hidden-topics``."""
+NAV2_STATUS_TOPIC = f"{NAV2_ACTION}/status"
+GOAL_STATUS = "action_msgs/msg/GoalStatusArray"
+CLOCK = "rosgraph_msgs/msg/Clock"
+
 TOPICS: dict[str, str] = {
     "/scan": SCAN,
     "/odom": ODOMETRY,
@@ -58,16 +66,9 @@ TOPICS: dict[str, str] = {
     "/world/markers": MARKERS,
     "/rei/events": TEXT,
     "/rei/signals": TEXT,
+    NAV2_STATUS_TOPIC: GOAL_STATUS,
 }
 """Every ROS 2 topic of a recording and its message type."""
-
-NAV2_ACTION = "/navigate_to_pose/_action"
-"""Nav2's navigate_to_pose action as ROS 2 topics: ``/status`` (action_msgs/msg/
-GoalStatusArray) and ``/feedback`` (its FeedbackMessage), recorded with
-``--include-hidden-topics``."""
-NAV2_STATUS_TOPIC = f"{NAV2_ACTION}/status"
-GOAL_STATUS = "action_msgs/msg/GoalStatusArray"
-CLOCK = "rosgraph_msgs/msg/Clock"
 
 ROBOT_TOPICS: dict[str, str] = {
     "/tf": TF,
@@ -251,6 +252,17 @@ class RosViews:
             mesh_file=t["visualization_msgs/msg/MeshFile"]("", np.zeros(0, dtype=np.uint8)),
             mesh_use_embedded_materials=False)
 
+    def goal_status(self, index: int, accepted: float, state: NavState) -> bytes:
+        """Nav2's navigate_to_pose status as the robot reports the running task ``index``
+        (accepted at ``accepted``, simulated seconds): the claim the judge checks."""
+        t = self.store.types
+        ns = stamp_ns(accepted)
+        info = t["action_msgs/msg/GoalInfo"](
+            t["unique_identifier_msgs/msg/UUID"](goal_uuid(index)),
+            self._time(ns // 1_000_000_000, ns % 1_000_000_000))
+        status = t["action_msgs/msg/GoalStatus"](info, GOAL_STATUS_CODE[state])
+        return self._cdr(t[GOAL_STATUS]([status]), GOAL_STATUS)
+
     def text(self, payload: dict[str, Any]) -> bytes:
         return self._cdr(self._string(json.dumps(payload, separators=(",", ":"),
                                                  allow_nan=False, ensure_ascii=False)), TEXT)
@@ -303,6 +315,22 @@ def trace_line(cdr: bytes) -> bytes | None:
 def stamp_ns(time: float) -> int:
     """Simulated seconds as the recording's nanoseconds (the message log time)."""
     return int(round(time * 1e9))
+
+
+GOAL_STATUS_CODE: dict[NavState, int] = {
+    NavState.PENDING: 1,  # STATUS_ACCEPTED
+    NavState.ACTIVE: 2,  # STATUS_EXECUTING
+    NavState.SUCCEEDED: 4,
+    NavState.PREEMPTED: 5,  # STATUS_CANCELED
+    NavState.ABORTED: 6,
+}
+"""REI's navigation states as action_msgs/msg/GoalStatus codes (IDLE has none: no goal)."""
+
+
+def goal_uuid(index: int) -> np.ndarray:
+    """The goal id of the mission's task ``index`` (deterministic: the same run records
+    the same bytes): the index, big-endian, in the last bytes of 16."""
+    return np.frombuffer((index + 1).to_bytes(16, "big"), dtype=np.uint8).copy()
 
 
 # ---- ROS -> REI ------------------------------------------------------------------------------

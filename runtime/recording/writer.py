@@ -29,9 +29,17 @@ from mcap.writer import CompressionType, Writer
 from rei.generators.output import open_output
 from rei.runtime.collector.trace import TraceEncoder, TraceError, TraceWriter
 from rei.runtime.evaluator.signal_log import SignalRow
-from rei.runtime.messages import Sample, StreamHeader
+from rei.runtime.messages import NavState, Sample, StreamHeader
 from rei.runtime.recording.errors import RecordingError
-from rei.runtime.recording.ros import LATCHED, TEXT, TOPICS, RosViews, stamp_ns, trace_cdr
+from rei.runtime.recording.ros import (
+    LATCHED,
+    NAV2_STATUS_TOPIC,
+    TEXT,
+    TOPICS,
+    RosViews,
+    stamp_ns,
+    trace_cdr,
+)
 
 RECORDING = "recording.mcap"
 """The recording's name in a run's output folder."""
@@ -83,6 +91,9 @@ class McapRecorder:
         self._signals_seen = 0
         self._scan_time = 0.0
         self._poses: np.ndarray | None = None
+        self._task: tuple[int, float] | None = None
+        """(index, start time) of the latest task started."""
+        self._status: tuple[int, NavState] | None = None
 
     # ---- the sink ---------------------------------------------------------------------------
 
@@ -156,6 +167,11 @@ class McapRecorder:
         if "nav_state" in data:
             self._add("/cmd_vel", t, views.command(sample))
         for event in sample.events:
+            if event.kind == "task_start" and event.index is not None:
+                self._task = (event.index, event.time)
+        if "nav_state" in data:
+            self._goal_status(sample)
+        for event in sample.events:
             self._add("/rei/events", event.time, views.event(event))
         self._record_signals()
 
@@ -191,6 +207,35 @@ class McapRecorder:
             rows = np.nonzero((new != old).any(axis=1))[0].tolist()
         self._poses = new.copy()
         return rows
+
+    def _goal_status(self, sample: Sample) -> None:
+        """Nav2's action status as a Nav2 stack publishes it, on every change: the running
+        task's goal accepted, executing, and ended as the robot claimed (SUCCEEDED, also for
+        a claim the ground truth refused, ABORTED, CANCELED). A task ended by its timeout or
+        the mission's end gets no status: nothing the robot said ended it."""
+        claims = {"position": NavState.SUCCEEDED, "heading": NavState.SUCCEEDED,
+                  "aborted": NavState.ABORTED, "preempted": NavState.PREEMPTED}
+        for event in sample.events:
+            if event.index is None:
+                continue
+            if event.kind == "task_start":
+                self._task = (event.index, event.time)
+                self._publish_status(event.index, NavState.PENDING, event.time)
+            elif event.kind == "task_success":
+                self._publish_status(event.index, NavState.SUCCEEDED, event.time)
+            elif event.kind == "task_fail" and event.cause in claims:
+                self._publish_status(event.index, claims[event.cause], event.time)
+        state = sample.belief.nav_state
+        if self._task is not None and sample.belief.task is not None and \
+                state in (NavState.PENDING, NavState.ACTIVE):
+            self._publish_status(self._task[0], state, sample.time)
+
+    def _publish_status(self, index: int, state: NavState, time: float) -> None:
+        if self._task is None or (index, state) == self._status:
+            return
+        self._status = (index, state)
+        self._add(NAV2_STATUS_TOPIC, time,
+                  self._views.goal_status(index, self._task[1], state))
 
     def _record_signals(self) -> None:
         if self.signals is None:
