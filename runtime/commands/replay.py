@@ -141,7 +141,7 @@ def _judge(header: StreamHeader, samples: Iterator[Sample],
         try:
             write()
         except TraceError:
-            trace.partial.unlink(missing_ok=True)  # non-finite data: no trace, same verdicts
+            trace.abandon()  # non-finite data: no trace, the same verdicts
             trace = None
 
     try:
@@ -153,11 +153,20 @@ def _judge(header: StreamHeader, samples: Iterator[Sample],
             last = sample.time
             if header.faults:
                 seen.feed(sample.time, sample.faults)
+    except BaseException:
+        if trace is not None:
+            trace.abandon()
+        raise
     finally:
         close = getattr(samples, "close", None)
         if close is not None:
             close()
-    end = read_end()
+    try:
+        end = read_end()
+    except BaseException:
+        if trace is not None:
+            trace.abandon()
+        raise
     cut = getattr(samples, "cut_short", "")
     end_time, outcome, reason = end if end is not None else (
         last, "interrupted", cut or "the trace has no end line")

@@ -384,9 +384,10 @@ class BagSamples(Iterator[Sample]):
         if self._log_offset is None:
             return self._robot_time if math.isfinite(self._robot_time) else 0.0
         time = log_time * 1e-9 - self._log_offset
-        problem = self._rates.setdefault(topic, _Rate()).see(time)
-        if problem:
-            self._problem(topic, time, problem)
+        if topic != NAV2_STATUS_TOPIC:  # published on change, not at a rate: no gaps
+            problem = self._rates.setdefault(topic, _Rate()).see(time)
+            if problem:
+                self._problem(topic, time, problem)
         return time
 
     def _belief(self, topic: str, time: float, message: Any) -> None:
