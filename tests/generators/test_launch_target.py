@@ -4,8 +4,8 @@ full Gazebo world and a ROS 2 launch file naming only programs that exist."""
 from __future__ import annotations
 
 import json
-from pathlib import Path
 import re
+from pathlib import Path
 
 import pytest
 from lxml import etree
