@@ -26,7 +26,7 @@ from __future__ import annotations
 import argparse
 import sys
 import textwrap
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, cast
@@ -122,10 +122,9 @@ def replay(trace: Path, vepl: Path | None, out_dir: Path,
 def _judge(header: StreamHeader, samples: Iterator[Sample],
            read_end: Callable[[], tuple[float, str, str] | None], vepl: Path | None,
            out_dir: Path, user: Mapping[str, UserFunction], automata: Path,
-           trace: TraceWriter | None = None, problems: Sequence[str] = ()) -> RunSummary:
+           trace: TraceWriter | None = None) -> RunSummary:
     """The samples through the monitor (and ``trace``, when given: a trace that cannot be
     written is dropped, never the judgement); the summary, written as summary.json."""
-    from rei.runtime.collector.trace import TraceError  # noqa: PLC0415
     from rei.runtime.evaluator.summary import merge_summary, write_summary  # noqa: PLC0415
     from rei.runtime.faults.stage import SampledTimeline, fault_measurements  # noqa: PLC0415
     from rei.runtime.monitor import MonitorSink  # noqa: PLC0415
@@ -134,28 +133,18 @@ def _judge(header: StreamHeader, samples: Iterator[Sample],
     last = 0.0
     seen = SampledTimeline()
 
-    def record(write: Callable[[], None]) -> None:
-        nonlocal trace
-        if trace is None:
-            return
-        try:
-            write()
-        except TraceError:
-            trace.abandon()  # non-finite data: no trace, the same verdicts
-            trace = None
-
+    copy = _TraceCopy(trace)
     try:
         sink.start(header)
-        record(lambda: trace.start(header) if trace is not None else None)
+        copy.start(header)
         for sample in samples:
             sink.feed(sample)
-            record(lambda s=sample: trace.feed(s) if trace is not None else None)
+            copy.feed(sample)
             last = sample.time
             if header.faults:
                 seen.feed(sample.time, sample.faults)
     except BaseException:
-        if trace is not None:
-            trace.abandon()
+        copy.abandon()
         raise
     finally:
         close = getattr(samples, "close", None)
@@ -164,25 +153,56 @@ def _judge(header: StreamHeader, samples: Iterator[Sample],
     try:
         end = read_end()
     except BaseException:
-        if trace is not None:
-            trace.abandon()
+        copy.abandon()
         raise
     cut = getattr(samples, "cut_short", "")
     end_time, outcome, reason = end if end is not None else (
         last, "interrupted", cut or "the trace has no end line")
     sink.finish(end_time, outcome, reason)
-    record(lambda: trace.finish(end_time, outcome, reason) if trace is not None else None)
+    copy.finish(end_time, outcome, reason)
     assert sink.result is not None
     # The end line was written by `rei run` from its summary's outcome; read back as is.
     base = RunSummary(RESULTS_VERSION, header.mission, header.world, header.seed, "replay",
                       cast(Outcome, outcome), reason, sink.result.duration, 0.0, {}, (),
                       fault_measurements(header.faults, seen.timeline()))
     summary = merge_summary(base, sink.result)
-    if problems or getattr(samples, "problems", None):
-        summary = _doubted(summary, list(problems) or
-                           [p.text() for p in getattr(samples, "problems", ())])
+    problems = [p.text() for p in getattr(samples, "problems", ())]  # a bag's bad data
+    if problems:
+        summary = _doubted(summary, problems)
     write_summary(summary, out_dir)
     return summary
+
+
+class _TraceCopy:
+    """The judged stream copied into a trace.jsonl, as far as the trace's rules take it: a
+    sample they refuse (a bag's NaN pose) ends the copy, never the judgement."""
+
+    def __init__(self, writer: TraceWriter | None) -> None:
+        self.writer = writer
+
+    def _do(self, write: Callable[[TraceWriter], None]) -> None:
+        from rei.runtime.collector.trace import TraceError  # noqa: PLC0415
+
+        if self.writer is None:
+            return
+        try:
+            write(self.writer)
+        except TraceError:
+            self.abandon()
+
+    def start(self, header: StreamHeader) -> None:
+        self._do(lambda w: w.start(header))
+
+    def feed(self, sample: Sample) -> None:
+        self._do(lambda w: w.feed(sample))
+
+    def finish(self, end_time: float, outcome: str, reason: str) -> None:
+        self._do(lambda w: w.finish(end_time, outcome, reason))
+
+    def abandon(self) -> None:
+        if self.writer is not None:
+            self.writer.abandon()
+        self.writer = None
 
 
 def _doubted(summary: RunSummary, problems: list[str]) -> RunSummary:
