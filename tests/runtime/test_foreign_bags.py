@@ -213,3 +213,13 @@ def test_a_bad_mapping_file_is_a_located_error(tmp_path: Path,
     assert status == 2
     assert re.match(rf"^rei: error: {re.escape(str(mapping))}: topics\./scna: expected one of "
                     rf"REI's topics .*found '/scna'.*did you mean '/scan'", err), err
+
+
+def test_ground_truth_faster_than_the_sample_rate_is_sampled_at_it(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A pose bridge at 50 Hz: one sample per 0.1 s (the mission's rate), same judgement."""
+    bag = write_bag(tmp_path / "bag", variant(rate=50.0))
+    status, err, summary = _judge(bag, tmp_path / "out", capsys)
+    assert status == 0, err
+    assert summary["measurements"]["samples"] == 71  # t = 0.0, 0.1, ..., 7.0 (the end)
+    assert ("7.0", "SIG_MISSION_TASK_SUCCESS") in _events(tmp_path / "out")
