@@ -14,9 +14,12 @@ of 0, 3 ranges where the laser has 360). A hand-edited trace can therefore never
 FAIL into a PASS by deleting or rewriting mission events or the end line.
 
 The tolerance of each check is what sampling allows and no more: an event happens at a
-control tick at or before the sample that carries it, so the robot may have moved by its
-speed limit times that interval (and turned by its turn limit). A stream without mission
-facts (not made by a mission run) has only its scans checked. This module must never
+control tick at or before the sample that carries it, so the robot may have moved by twice
+its speed limit times that interval (and turned by twice its turn limit). The header's
+mission facts (goals, tolerances, limits) are the reference: a trace whose header was edited
+too is judged against the edited goals (`rei replay --mission` judges a recording's ROS
+channels against the .mission itself). A stream without mission facts (not made by a
+mission run) has only its scans checked. This module must never
 import pybullet, and never judges requirements: it only says whether the claims hold.
 """
 
@@ -202,9 +205,9 @@ class EvidenceAudit:
         that decided ``event`` and the sample ``s`` that carries it."""
         assert self.facts is not None
         dt = max(0.0, s.time - event.time)
-        speed = max(self.facts.speed_limit, math.hypot(s.robot_twist[0], s.robot_twist[1]))
-        turn = max(self.facts.turn_limit, abs(s.robot_twist[2]))
-        return speed * dt * 1.5 + 1e-6, turn * dt * 1.5 + 1e-6
+        # Twice the limits (a pushed robot can exceed them), never the sample's own recorded
+        # velocity: that is as editable as the claim it would excuse.
+        return 2.0 * self.facts.speed_limit * dt + 1e-6, 2.0 * self.facts.turn_limit * dt + 1e-6
 
     def _failure(self, event: MissionEvent, s: Sample, task: _Task, where: str) -> None:
         """A failure's cause, where the evidence can tell, must be what it says: a requirement

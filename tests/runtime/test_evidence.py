@@ -87,6 +87,17 @@ def _fail_to_success(lines: Lines) -> None:
     lines[-1].update(outcome="completed", reason="all 2 tasks succeeded")
 
 
+def _fail_to_success_fast(lines: Lines) -> None:
+    """The success claimed a sample period early, the sample's velocity inflated to excuse
+    the distance: the recorded velocity is as editable as the claim."""
+    _fail_to_success(lines)
+    for i, x in enumerate(lines):
+        for e in x.get("events", ()):
+            if e["kind"] == "task_success" and e["task"] == "at_the_wall":
+                e["time"] = lines[i - 1]["time"]
+                x["robot_twist"] = [100.0, 0.0, 0.0]
+
+
 def _outcome_completed(lines: Lines) -> None:
     lines[-1].update(outcome="completed", reason="all 2 tasks succeeded")
 
@@ -109,6 +120,9 @@ FORGERIES: dict[str, tuple[Callable[[Lines], None], str]] = {
         _fail_to_success, r"events\[0\]\.kind: expected task_fail \(the recorded ground-truth "
                           r"pose at t=4\.2 s is 0\.9\d\d m from goal 'at_the_wall', tolerance "
                           r"0\.25 m\), found task_success"),
+    "success claimed with an inflated velocity": (
+        _fail_to_success_fast, r"events\[0\]\.kind: expected task_fail \(the recorded "
+                               r"ground-truth pose at t=4\.2 s is 0\.9\d\d m from goal"),
     "end outcome failed -> completed": (
         _outcome_completed, r"outcome: expected 'failed' \(the events show 1 of 2 tasks "
                             r"failed\), found 'completed'"),
