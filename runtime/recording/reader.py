@@ -221,7 +221,8 @@ class RecordedSamples(Iterator[Sample]):
             topics = ", ".join(sorted(set(self._topics))) or "none"
             raise RecordingError(f"{self.path}: expected a {TRACE_TOPIC} channel carrying the "
                                  f"REI trace (recorded by `rei run --record`), found the "
-                                 f"topics: {topics}")
+                                 f"topics: {topics} (a ROS 2 recording REI did not make is "
+                                 f"judged with --mission M.mission)")
         try:
             self._decoder = TraceDecoder(data, self._where())
         except TraceError:

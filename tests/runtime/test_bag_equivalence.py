@@ -9,11 +9,14 @@ from __future__ import annotations
 
 import csv
 import json
+import subprocess
+import sys
 from pathlib import Path
 from typing import Any
 
 import pytest
 
+from rei.runtime.cli import main as rei
 from rei.runtime.commands.replay import replay_bag
 from rei.runtime.commands.run import run_into
 from tests.conftest import EXAMPLES
@@ -73,3 +76,36 @@ def test_the_cases_cover_what_the_issue_asks(judged: dict[str, tuple[Path, Path]
     human = _summary(judged["human collision"][0])
     assert "walker" in human["measurements"]["collided_with"]
     assert any(v["status"] == "fail" for v in human["verdicts"])
+
+
+def test_a_recording_without_reis_channels_is_judged_from_its_ros_channels(
+        judged: dict[str, tuple[Path, Path]], tmp_path: Path,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    """The issue's first finding: REI's recording with /rei/trace (and /rei/events,
+    /rei/signals) removed -- here by rosbags-convert, into a sqlite3 rosbag2 folder -- was
+    refused; without --mission it still is (saying how to judge it), with --mission it is
+    judged, with the trace's verdicts."""
+    live, _ = judged["simple_wall"]
+
+    def ros_only(storage: str) -> Path:
+        bag = tmp_path / f"ros_only_{storage}"
+        done = subprocess.run(
+            [str(Path(sys.executable).parent / "rosbags-convert"), "--src",
+             str(live / "recording.mcap"), "--dst", str(bag), "--dst-storage", storage,
+             "--exclude-topic", "/rei/trace", "/rei/events", "/rei/signals"],
+            capture_output=True, text=True, check=False)
+        assert done.returncode == 0 and "ERROR" not in done.stdout + done.stderr, done
+        return bag
+
+    bag, mcap = ros_only("sqlite3"), next(ros_only("mcap").glob("*.mcap"))
+    capsys.readouterr()
+    assert rei(["replay", str(mcap), "-o", str(tmp_path / "refused")]) == 2
+    err = capsys.readouterr().err
+    assert "expected a /rei/trace channel" in err and "--mission M.mission" in err, err
+    mission = CASES["simple_wall"][0]
+    for source in (bag, next(bag.glob("*.db3")), mcap):
+        out = tmp_path / f"judged-{source.suffix or 'folder'}"
+        status = rei(["replay", str(source), "--mission", str(mission), "-o", str(out), "-q"])
+        assert status == 0, capsys.readouterr().err
+        assert {v["requirement"]: v["status"] for v in _summary(out)["verdicts"]} == \
+            {v["requirement"]: v["status"] for v in _summary(live)["verdicts"]}
