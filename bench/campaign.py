@@ -8,7 +8,16 @@ the 1-worker local campaign measured in the same invocation. Cluster start-up is
 
 Targets (issue 8): scaling efficiency 1 -> 2 workers >= 90 %, Dask overhead < 10 %.
 
+With --figures, instead: what users feel, with the cache of generated worlds and automata off
+(before, REI_CACHE_DIR=off) and on (after), alternating in the same invocation — runs per CPU
+minute of a medium campaign on 2 workers, the start-up CPU seconds per run (the same campaign
+with runs cut after --startup-duration simulated seconds), and the wall time of `rei demo` on 2
+workers. CPU time is every process of the campaign, the runs' children included (getrusage of
+the waited-for children), so other jobs on a shared machine do not count, but slow it.
+Targets (issue 26): start-up <= 0.25 CPU s per run in a campaign, `rei demo` <= 20 s wall.
+
 Usage: python bench/campaign.py [--count N] [--repeat K] [--duration S] [--rounds R] [--seed S]
+       python bench/campaign.py --figures [--count N] [--repeat K] [--rounds R]
 """
 
 from __future__ import annotations
@@ -16,15 +25,24 @@ from __future__ import annotations
 import argparse
 import io
 import os
+import resource
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
-from contextlib import redirect_stdout
+from collections.abc import Iterator
+from contextlib import contextmanager, redirect_stdout
 from pathlib import Path
 
 from rei.lang.cli import main as rei_gen
-from rei.runtime.campaign import DaskEngine, LocalEngine, plan_campaign, run_campaign
+from rei.runtime.campaign import (
+    CampaignStore,
+    DaskEngine,
+    LocalEngine,
+    plan_campaign,
+    run_campaign,
+)
 from rei.runtime.campaign.cluster import loopback_cluster
 from rei.runtime.campaign.engines import CampaignEngine
 from rei.runtime.campaign.plan import CampaignPlan
@@ -64,6 +82,95 @@ def machine_scaling(n: int = 6_000_000) -> float:
     return one / (2 * two)
 
 
+def children_cpu() -> float:
+    """CPU seconds of every waited-for child process (and theirs) so far."""
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+@contextmanager
+def cache_setting(on: bool) -> Iterator[None]:
+    """REI_CACHE_DIR=off for the runs started meanwhile (before), or unset (after: the
+    campaign's own DIR/cache)."""
+    saved = os.environ.get("REI_CACHE_DIR")
+    if on:
+        os.environ.pop("REI_CACHE_DIR", None)
+    else:
+        os.environ["REI_CACHE_DIR"] = "off"
+    try:
+        yield
+    finally:
+        if saved is None:
+            os.environ.pop("REI_CACHE_DIR", None)
+        else:
+            os.environ["REI_CACHE_DIR"] = saved
+
+
+def measured(plan: CampaignPlan, out: Path, cache: bool) -> tuple[float, float]:
+    """(wall s, CPU s of all processes) of the campaign on 2 local workers."""
+    with cache_setting(cache):
+        cpu = children_cpu()
+        wall = timed(plan, LocalEngine(2), out)
+        return wall, children_cpu() - cpu
+
+
+def demo(out: Path, cache: bool) -> tuple[float, float]:
+    """(wall s, CPU s) of `rei demo -o OUT --workers 2`, as a user types it."""
+    with cache_setting(cache):
+        cpu = children_cpu()
+        start = time.perf_counter()
+        subprocess.run([sys.executable, "-m", "rei.runtime.cli", "demo", "-o", str(out),
+                        "--workers", "2", "-q"], check=False, stdout=subprocess.DEVNULL,
+                       stderr=subprocess.DEVNULL)
+        return time.perf_counter() - start, children_cpu() - cpu
+
+
+def figures(args: argparse.Namespace, root: Path) -> int:
+    plan = plan_campaign([root / "suite" / "index.csv"], repeat=args.repeat, seed=args.seed)
+    cut = plan_campaign([root / "suite" / "index.csv"], repeat=args.repeat, seed=args.seed,
+                        duration=args.startup_duration)
+    runs = len(plan.runs)
+    print(f"medium preset: {args.count} rooms x {args.repeat} repeats = {runs} runs on 2 local "
+          f"workers; {os.cpu_count()} CPUs; {args.rounds} rounds; before = REI_CACHE_DIR=off, "
+          f"after = the campaign's cache")
+    rows: dict[str, list[tuple[float, float]]] = {}
+    for i in range(args.rounds):
+        load = os.getloadavg()[0]
+        for cache in (False, True):
+            label = "after" if cache else "before"
+            rows.setdefault(f"whole {label}", []).append(
+                measured(plan, root / f"whole-{label}-{i}", cache))
+            rows.setdefault(f"start-up {label}", []).append(
+                measured(cut, root / f"cut-{label}-{i}", cache))
+            rows.setdefault(f"demo {label}", []).append(demo(root / f"demo-{label}-{i}", cache))
+        print(f"  round {i + 1} (load average before: {load:.2f}): " + ", ".join(
+            f"{k} {v[-1][0]:.1f} s wall / {v[-1][1]:.1f} CPU s" for k, v in rows.items()),
+            flush=True)
+    simulated = sum(r.summary.duration for r in CampaignStore.read(root / "whole-after-0")[2]
+                    if r.summary is not None)
+
+    def best(key: str) -> tuple[float, float]:
+        return min(rows[key], key=lambda pair: pair[1])
+
+    print()
+    print("| measure | before (no cache) | after (cache) |")
+    print("|---|---:|---:|")
+    for name, key, show in (
+            ("whole runs: runs per CPU minute", "whole", lambda w, c: f"{runs / c * 60:.1f}"),
+            ("whole runs: CPU s per run", "whole", lambda w, c: f"{c / runs:.2f}"),
+            ("whole runs: wall s (2 workers)", "whole", lambda w, c: f"{w:.1f}"),
+            (f"start-up: CPU s per run (runs cut at {args.startup_duration:g} simulated s)",
+             "start-up", lambda w, c: f"{c / runs:.3f}"),
+            ("`rei demo --workers 2`: wall s", "demo", lambda w, c: f"{w:.1f}"),
+            ("`rei demo --workers 2`: CPU s", "demo", lambda w, c: f"{c:.1f}")):
+        before, after = best(f"{key} before"), best(f"{key} after")
+        print(f"| {name} | {show(*before)} | {show(*after)} |")
+    print()
+    print(f"simulated per run (mean): {simulated / runs:.0f} s; best of {args.rounds} rounds "
+          f"by CPU time")
+    return 0
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--count", type=int, default=8, help="medium rooms (default 8)")
@@ -72,6 +179,11 @@ def main() -> int:
                         help="cap on simulated seconds per run (default: whole missions)")
     parser.add_argument("--rounds", type=int, default=2, help="measurements per setting")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--figures", action="store_true",
+                        help="runs per CPU minute, start-up per run and `rei demo` wall time, "
+                             "cache off (before) and on (after)")
+    parser.add_argument("--startup-duration", type=float, default=0.1, metavar="S",
+                        help="with --figures: simulated seconds of the start-up runs")
     args = parser.parse_args()
 
     with tempfile.TemporaryDirectory(prefix="rei-bench-campaign-") as tmp:
@@ -81,6 +193,8 @@ def main() -> int:
                               "--preset", "medium", "--seed", str(args.seed)])
         if status != 0:
             return status
+        if args.figures:
+            return figures(args, root)
         plan = plan_campaign([root / "suite" / "index.csv"], repeat=args.repeat,
                              seed=args.seed, duration=args.duration)
         runs = len(plan.runs)

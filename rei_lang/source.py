@@ -12,8 +12,12 @@ from __future__ import annotations
 
 import bisect
 import errno
+import hashlib
 import os
 import stat
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -98,7 +102,36 @@ def file_kind(mode: int) -> str | None:
     return next((name for test, name in _KINDS if test(mode)), "not a regular file")
 
 
+Reads = list[tuple[str, str | None]]
+_READS: ContextVar[Reads | None] = ContextVar("rei_source_reads", default=None)
+
+
+@contextmanager
+def recorded_reads() -> Iterator[Reads]:
+    """Every file ``read_bounded`` is asked for while the block runs, in order: (absolute
+    path, sha256 of the bytes read, or None when it could not be read). The inputs a result
+    was made from, by which a cache of generated artifacts (rei.runtime.cache) knows when
+    that result is stale."""
+    reads: Reads = []
+    token = _READS.set(reads)
+    try:
+        yield reads
+    finally:
+        _READS.reset(token)
+
+
 def read_bounded(path: str | Path, limit: int = MAX_SOURCE_BYTES) -> bytes | Diagnostic:
+    """At most ``limit + 1`` bytes of a regular file, or one diagnostic saying why not
+    (``_read_bounded``); noted for ``recorded_reads``."""
+    data = _read_bounded(path, limit)
+    reads = _READS.get()
+    if reads is not None:
+        digest = hashlib.sha256(data).hexdigest() if isinstance(data, bytes) else None
+        reads.append((os.path.abspath(path) if str(path) else "", digest))
+    return data
+
+
+def _read_bounded(path: str | Path, limit: int = MAX_SOURCE_BYTES) -> bytes | Diagnostic:
     """At most ``limit + 1`` bytes of a regular file, or one diagnostic saying why not.
 
     The file is checked with ``stat`` before it is opened (a FIFO would block ``open``),

@@ -1,8 +1,16 @@
-"""Shared fixtures: the examples, temporary REI files, and real external tools.
+"""Shared fixtures: the examples, temporary REI files, and real external tools; and how the
+suite is spread over parallel workers (pytest-xdist, `bash scripts/test` runs `-n auto`).
 
 A test that needs an external tool (Debian's `ign`, Chromium) is skipped on a developer's
 machine that lacks it, but fails in CI (CI=true), where .ci/run installs it: a green CI
 never hides a missing install step.
+
+Parallel workers are separate processes, so tests share nothing but the file system and the
+machine: write under ``tmp_path`` (each worker has its own), bind port 0 on 127.0.0.1, never a
+fixed path or port. A test file runs on one worker (`--dist loadfile`), so a module-scoped
+fixture (an expensive run shared by the file's tests) is still made once. (xdist's finer
+`--dist loadgroup` would split the files that share nothing, but pytest 9.2 ignores the group
+suffix xdist 3.8 writes into node ids, so its groups are not kept together.)
 """
 
 from __future__ import annotations
@@ -10,6 +18,7 @@ from __future__ import annotations
 import os
 import shutil
 import subprocess
+from collections.abc import Generator
 from pathlib import Path
 
 import pytest
@@ -47,6 +56,29 @@ def chromium(page: Path, tmp_path: Path, *args: str) -> subprocess.CompletedProc
                           check=True)
 
 
+def slow_tests(items: list[pytest.Item]) -> dict[str, int]:
+    """How many tests marked ``slow`` each test file holds."""
+    count: dict[str, int] = {}
+    for item in items:
+        module = item.nodeid.split("::")[0]
+        count[module] = count.get(module, 0) + (item.get_closest_marker("slow") is not None)
+    return count
+
+
+@pytest.hookimpl(wrapper=True)  # before every plain hook, xdist's own too
+def pytest_collection_modifyitems(config: pytest.Config,
+                                  items: list[pytest.Item]) -> Generator[None, None, None]:
+    """Under xdist (`bash scripts/test`: `--dist loadfile --no-loadscope-reorder`, each test
+    file on one worker, files handed out in collection order): the files with the most slow
+    tests come first, so no long file starts last while the other worker idles. Without xdist
+    the order is pytest's own."""
+    if getattr(config.option, "numprocesses", None) or hasattr(config, "workerinput"):
+        slow = slow_tests(items)
+        # A stable sort: equal files, and the tests within each file, keep their order.
+        items.sort(key=lambda item: -slow[item.nodeid.split("::")[0]])
+    return (yield)
+
+
 @pytest.fixture
 def examples_dir() -> Path:
     return EXAMPLES
@@ -66,3 +98,4 @@ def write(tmp_path: Path):  # type: ignore[no-untyped-def]
         return path
 
     return _write
+

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 import random
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -44,7 +44,16 @@ from rei.generators.rooms.geometry import (
     stays_connected,
     swept_cells,
 )
-from rei.generators.rooms.space import MIX_BEHAVIOURS, RoomParameters, door_width
+from rei.generators.rooms.space import MIX_BEHAVIOURS, NO_STRESSOR, RoomParameters, door_width
+from rei.generators.rooms.stressors import (
+    ROW_TYPE,
+    Bodies,
+    StressorFailed,
+    StressorLayout,
+    StressorPlan,
+    plan_layout,
+    time_layout,
+)
 from rei.lang.room.checks import rotated_half_extents
 
 GRID = "area"
@@ -99,6 +108,7 @@ class RoomPlan:
     goals: tuple[Cell, ...]
     route: tuple[Cell, ...]
     descriptors: Descriptors
+    stressor: StressorPlan | None = None
 
 
 @dataclass(frozen=True)
@@ -108,6 +118,8 @@ class CatalogueFacts:
     types: dict[str, ObjectType]
     headings: dict[str, tuple[float, ...]]
     """Headings at which each static type fits its tile."""
+    bodies: Bodies
+    """The robot's and the cart's sizes and the robot's top speed, for stressor timing."""
 
     @staticmethod
     def of(catalogue: Catalogue, tile: float = 1.0) -> CatalogueFacts:
@@ -120,7 +132,7 @@ class CatalogueFacts:
             fits = tuple(h for h in HEADINGS
                          if max(rotated_half_extents(otype, h)) <= tile / 2 - 1e-6)
             headings[name] = fits
-        return CatalogueFacts(types, headings)
+        return CatalogueFacts(types, headings, Bodies.of(catalogue, ROBOT_TYPE))
 
 
 def cell_name(cell: Cell) -> str:
@@ -159,8 +171,13 @@ def _split(length: int, rng: random.Random) -> int:
     return low + rng.randrange(high - low + 1)
 
 
-def grid_rows(params: RoomParameters, floors: set[Cell]) -> tuple[str, ...]:
-    walls = {(i + di, j + dj) for i, j in floors for di in (-1, 0, 1) for dj in (-1, 0, 1)}
+def grid_rows(params: RoomParameters, floors: set[Cell],
+              inner_walls: frozenset[Cell] = frozenset()) -> tuple[str, ...]:
+    """The grid block: floors, and walls around the floor plan as it was before
+    ``inner_walls`` (floors a stressor turned into walls) were taken out of it, so the outer
+    wall stays closed behind them."""
+    plan = floors | inner_walls
+    walls = {(i + di, j + dj) for i, j in plan for di in (-1, 0, 1) for dj in (-1, 0, 1)}
     rows = []
     for r in range(0, params.height + 2):
         rows.append("".join("." if (c, -r) in floors else "#" if (c, -r) in walls else " "
@@ -275,6 +292,17 @@ def construct(params: RoomParameters, facts: CatalogueFacts, rng: random.Random)
     outside = CellMask(box - floors)
     goals = _choose_goals(params, floors, rng)
     robot = goals[0]
+    layout: StressorLayout | None = None
+    row_cells: set[Cell] = set()
+    if params.stressor != NO_STRESSOR:
+        try:
+            layout = plan_layout(params, floors, goals,
+                                 max(facts.types[ROW_TYPE].footprint.half_extents()), rng)
+        except StressorFailed as exc:
+            raise AttemptFailed("stressor", str(exc)) from None
+        floors -= layout.walls
+        row_cells = {o.cell for o in layout.row}
+        outside = CellMask((box - floors) | row_cells)
 
     stops = goals + ([goals[0]] if params.cycles > 1 else [])
     crossing_wanted = params.crossing == "cross" and params.humans > 0
@@ -282,18 +310,26 @@ def construct(params: RoomParameters, facts: CatalogueFacts, rng: random.Random)
     reserved: set[Cell] = set(goals)
     humans: list[HumanPlan] = []
     taken = {robot}
+    if layout is not None:
+        reserved |= layout.keep_free | row_cells
+        if layout.mover is not None:
+            taken |= set(layout.mover.vertices)
     for k in range(params.humans):
         human, swept = _human(params, k, floors, outside, taken, robot, base, rng)
         humans.append(human)
         taken.add(human.vertices[0])
         reserved |= swept | set(human.vertices)
 
-    free = set(floors)
+    free = set(floors) - row_cells
     wanted = params.object_count(len(floors))
     candidates = sorted(floors - reserved)
     rng.shuffle(candidates)
     objects: list[PlacedObjectPlan] = []
     counts: dict[str, int] = {}
+    if layout is not None:
+        objects += [PlacedObjectPlan(f"row_{o.type}_{k + 1}", o.type, o.cell, o.heading)
+                    for k, o in enumerate(layout.row)]
+        wanted += len(layout.row)
     for cell in candidates:
         if len(objects) == wanted:
             break
@@ -321,6 +357,16 @@ def construct(params: RoomParameters, facts: CatalogueFacts, rng: random.Random)
         route = robot_route(scene)
     except UnreachableGoals:  # cannot happen while the free floor stays connected
         raise AttemptFailed("objects", "goals not reachable in order") from None
+    stressor: StressorPlan | None = None
+    if layout is not None:
+        try:
+            stressor = time_layout(layout, route, params, facts.bodies)
+        except StressorFailed as exc:
+            raise AttemptFailed("stressor", str(exc)) from None
+        if stressor.mover is not None:
+            scene = replace(scene, trajectories=(
+                *scene.trajectories, (tuple(c for c, _ in stressor.mover.vertices), False)),
+                humans=scene.humans + (stressor.mover.role == "human"))
     descriptors = describe(scene, route)
     if params.crossing == "cross" and humans:
         corridor = set(route)
@@ -333,6 +379,8 @@ def construct(params: RoomParameters, facts: CatalogueFacts, rng: random.Random)
     if first_step is not None:
         heading = math.degrees(math.atan2(first_step[1] - robot[1], first_step[0] - robot[0]))
         heading = float(round(heading) % 360)
-    return RoomPlan(params, grid_rows(params, floors), frozenset(floors), robot, heading,
-                    tuple(objects), tuple(humans), tuple(goals), tuple(route), descriptors)
+    inner = layout.walls if layout is not None else frozenset()
+    return RoomPlan(params, grid_rows(params, floors, inner), frozenset(floors), robot, heading,
+                    tuple(objects), tuple(humans), tuple(goals), tuple(route), descriptors,
+                    stressor)
 

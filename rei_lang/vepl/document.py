@@ -6,6 +6,7 @@ LanguageError with every problem. This module must never import the runtime.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -39,6 +40,15 @@ class VeplDocument:
 def analyse_vepl(source: SourceText | Diagnostic) -> VeplDocument:
     if isinstance(source, Diagnostic):
         return VeplDocument(None, None, (source,))
+    return _analysed(source.path, source.text)
+
+
+@functools.lru_cache(maxsize=8)
+def _analysed(path: str, text: str) -> VeplDocument:
+    """The analysis of one text, made once: a run reads its specification five times (the
+    automata's generator, the monitor, the user functions, the data check), and the result
+    depends on nothing but the path and the text (a document of frozen records)."""
+    source = SourceText(path, text)
     parsed = parse("vepl", source)
     if isinstance(parsed, Diagnostic):
         return VeplDocument(source, None, (parsed,))

@@ -63,6 +63,9 @@ class LocalEngine:
     workers: int = 1
     timeout: float | None = None
     runner: tuple[str, ...] = DEFAULT_RUNNER
+    cache: Path | None = None
+    """Where the runs share generated worlds and automata (rei.runtime.cache); run_campaign
+    gives the campaign's own ``DIR/cache`` when this is None."""
     name: str = field(default="local", init=False)
 
     def __post_init__(self) -> None:
@@ -86,7 +89,7 @@ class LocalEngine:
                 spec = queue.pop()
                 folder = work_dir(spec)
                 future = pool.submit(execute_run, spec, folder, timeout=self.timeout,
-                                     runner=self.runner, stop=stop)
+                                     runner=self.runner, stop=stop, cache=self.cache)
                 pending[future] = (spec, folder)
 
             # Submitting only as workers free up keeps partial folders to the running ones.

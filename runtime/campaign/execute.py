@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 from rei.generators.output import open_output
+from rei.runtime.cache import CACHE_VARIABLE
 from rei.runtime.campaign.plan import RunSpec
 from rei.runtime.processes import child_status, start_child, stop_child
 from rei.runtime.results import RunSummary
@@ -97,8 +98,9 @@ def _read_summary(path: Path) -> tuple[dict[str, Any] | None, str]:
 
 def execute_run(spec: RunSpec, work_dir: Path, *, timeout: float | None = None,
                 runner: Sequence[str] = DEFAULT_RUNNER,
-                stop: threading.Event | None = None) -> RunResult:
+                stop: threading.Event | None = None, cache: Path | None = None) -> RunResult:
     """Run ``spec`` with its output in ``work_dir`` (created); kill it after ``timeout`` s.
+    ``cache``: the run reuses generated worlds and automata from there (rei.runtime.cache).
 
     Setting ``stop`` kills the run at once and reports it interrupted (the campaign is ending);
     nothing else makes a run interrupted. On Linux the run dies with the calling thread, so
@@ -112,7 +114,7 @@ def execute_run(spec: RunSpec, work_dir: Path, *, timeout: float | None = None,
             open_output(work_dir / "campaign-stderr.txt", binary=True) as err:
         # Its own process group and death with this thread (rei.runtime.processes): Ctrl-C
         # reaches the campaign, which stops the runs; kill -9 of the campaign kills them too.
-        process = start_child(argv, stdout=out, stderr=err, env=run_environment())
+        process = start_child(argv, stdout=out, stderr=err, env=run_environment(cache))
         try:
             code = child_status(process)
             while code is None:
@@ -151,12 +153,15 @@ def execute_run(spec: RunSpec, work_dir: Path, *, timeout: float | None = None,
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
 
-def run_environment() -> dict[str, str]:
+def run_environment(cache: Path | None = None) -> dict[str, str]:
     """The environment of a run: one math-library thread per run unless the user chose
-    otherwise (parallel runs each spawning a thread per core would fight over the cores)."""
+    otherwise (parallel runs each spawning a thread per core would fight over the cores), and
+    the campaign's cache of generated artifacts, if any (a user's $REI_CACHE_DIR wins)."""
     env = dict(os.environ)
     for name in THREAD_VARIABLES:
         env.setdefault(name, "1")
+    if cache is not None and not env.get(CACHE_VARIABLE):
+        env[CACHE_VARIABLE] = os.path.abspath(cache)
     return env
 
 

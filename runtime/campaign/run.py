@@ -8,15 +8,18 @@ are missing. This module must never decide what a run's verdict is (that is `rei
 from __future__ import annotations
 
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, TextIO
 
-from rei.runtime.campaign.engines import CampaignEngine
+from rei.runtime.campaign.engines import CampaignEngine, LocalEngine
 from rei.runtime.campaign.plan import CampaignPlan
 from rei.runtime.campaign.progress import Progress
 from rei.runtime.campaign.static_pair import write_static_twins
 from rei.runtime.campaign.store import CampaignStore, RunRecord
+
+CACHE_FOLDER = "cache"
+"""``DIR/cache/``: the generated worlds and automata the campaign's runs share."""
 
 
 @dataclass(frozen=True)
@@ -40,6 +43,9 @@ def run_campaign(plan: CampaignPlan, root: Path, engine: CampaignEngine,
                  provenance: dict[str, Any], *, stream: TextIO | None = None) -> CampaignResult:
     """Run what is missing of ``plan`` in ``root``; write results.csv / results.parquet."""
     out = stream if stream is not None else sys.stderr
+    if isinstance(engine, LocalEngine) and engine.cache is None:
+        # Every run of a mission generates the same world and automata: once is enough.
+        engine = replace(engine, cache=root / CACHE_FOLDER)
     with CampaignStore.open(root, plan, provenance) as store:
         # Static twins are (re)written on every session before any run: they follow the
         # original files, and a run never reads a twin that is not complete.

@@ -25,29 +25,38 @@ from __future__ import annotations
 
 import argparse
 import sys
-import textwrap
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator
 from dataclasses import replace
 from pathlib import Path
-from typing import TYPE_CHECKING, cast
+from typing import TYPE_CHECKING, Any, cast
 
 from rei.lang.cli_support import EXIT_BAD_INPUT, EXIT_RUN_ERROR
 from rei.lang.errors import printable_lines
-from rei.runtime.commands.run import add_verbosity, print_results, write_page
+from rei.runtime.commands.run import (
+    REPLAY_VERBOSE_HELP,
+    add_verbosity,
+    print_results,
+    write_page,
+)
 from rei.runtime.messages import Sample, StreamHeader
 from rei.runtime.results import RESULTS_VERSION, Outcome, RunSummary
 
 if TYPE_CHECKING:
     from rei.runtime.collector import TraceWriter
-    from rei.runtime.monitor.host import UserFunction
+
+HELP_EXAMPLES = """\
+rei replay out/nav/trace.jsonl -o out/nav-strict --vepl examples/navigation/human_safety.vepl
+rei replay out/rec/recording.mcap -o out/rec-again -v     # every requirement, with reasons
+rei replay my_bag/ --mission examples/simple_wall/simple_wall.mission -o out/bag
+rei replay run.mcap --mission m.mission --map rei_bag_map.toml -o out/bag
+"""
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser = sub.add_parser(
         "replay", help="monitor a recorded trace (or recording.mcap) with the event automata "
                        "of a .vepl file",
-        description=textwrap.fill(
-                    "Feed a trace recorded by `rei run` (trace.jsonl, or the recording.mcap "
+        description="Feed a trace recorded by `rei run` (trace.jsonl, or the recording.mcap "
                     "of `rei run --record`) through the event automata generated from a .vepl "
                     "specification (the default one unless --vepl) and write events.csv, "
                     "summary.json and report.html (the run's page). Same trace and "
@@ -56,14 +65,11 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                     "and judged as an interrupted run. With --mission, TRACE is a ROS 2 "
                     "recording REI did not make (MCAP file or rosbag2 folder), judged against "
                     "the mission's room and goals. Results go to stdout, diagnostics to "
-                    "stderr.", 88),
-        epilog="examples:\n"
-               "  rei replay out/run/recording.mcap -o out/again\n"
-               "  rei replay my_bag/ --mission examples/simple_wall/simple_wall.mission "
-               "-o out/bag\n"
-               "  rei replay run.mcap --mission m.mission --map my_stack.toml --vepl my.vepl "
-               "-o out/bag",
-        formatter_class=argparse.RawDescriptionHelpFormatter)
+                    "stderr. Exit status: 0 every requirement passed, 1 one failed or was "
+                    "inconclusive (or the .vepl declares no requirement: verdict UNJUDGED, "
+                    "never a pass), 2 invalid input (a bad .vepl, an unreadable trace, a .vepl "
+                    "reading data the trace lacks), 3 a monitor error or a recorded run error, "
+                    "130 a recorded interrupted run.")
     parser.add_argument("trace", type=Path, metavar="TRACE",
                         help="a trace.jsonl file or an MCAP recording (.mcap); with --mission "
                              "a ROS 2 recording: an MCAP file or a rosbag2 folder")
@@ -88,15 +94,13 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                              "functions the specification declares with 'function'")
     parser.add_argument("-o", "--output", type=Path, required=True, metavar="DIR",
                         help="output folder (created if missing)")
-    add_verbosity(parser)
+    add_verbosity(parser, REPLAY_VERBOSE_HELP)
     parser.set_defaults(func=run)
 
 
 def replay(trace: Path, vepl: Path | None, out_dir: Path,
            functions: str | None = None) -> RunSummary:
     """Monitor ``trace`` into ``out_dir``; the summary (also written as summary.json)."""
-    from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
-    from rei.runtime.collector.needs import check_needs  # noqa: PLC0415
     from rei.runtime.monitor import generate_automata  # noqa: PLC0415
     from rei.runtime.monitor.functions import load_functions  # noqa: PLC0415
     from rei.runtime.recording import read_stream  # noqa: PLC0415
@@ -106,9 +110,33 @@ def replay(trace: Path, vepl: Path | None, out_dir: Path,
     automata = generate_automata(vepl, Path(out_dir) / "automata", replace=True)
     user = load_functions(functions, vepl)
     header, samples, read_end = read_stream(trace)
+    return judge_stream(header, samples, read_end, vepl, out_dir, user, automata,
+                        f"the trace '{trace}'")
+
+
+def judge_stream(header: StreamHeader, samples: Iterator[Sample],
+                 read_end: Callable[[], tuple[float, str, str] | None], vepl: Path | None,
+                 out_dir: Path, user: Any, automata: Any, source: str,
+                 controller: str = "replay",
+                 measurements: Callable[[], dict[str, Any]] | None = None,
+                 judged: Callable[[Any, Sample], None] | None = None,
+                 trace: TraceWriter | None = None) -> RunSummary:
+    """Monitor a stream (``replay``'s trace, `rei monitor`'s bus) into ``out_dir``; the
+    summary (also written as summary.json). ``source`` names the stream in errors;
+    ``measurements`` gives more of the summary's measurements once the stream ended;
+    ``judged(sink, sample)`` is told of each sample once the monitor has judged it (`rei
+    watch` shows it); ``trace``, when given, gets a copy of the stream (a trace that cannot be
+    written is dropped, never the judgement). A stream with ``problems`` (a ROS 2 bag's bad
+    data) has every verdict that would pass made inconclusive."""
+    from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
+    from rei.runtime.collector.needs import check_needs  # noqa: PLC0415
+    from rei.runtime.evaluator.summary import merge_summary, write_summary  # noqa: PLC0415
+    from rei.runtime.faults.stage import SampledTimeline, fault_measurements  # noqa: PLC0415
+    from rei.runtime.monitor import MonitorSink  # noqa: PLC0415
+
     try:
         # Never judge on data the recording does not carry (a false PASS): refuse first.
-        check_needs(load_vepl(vepl), header.data, f"the trace '{trace}' to carry",
+        check_needs(load_vepl(vepl), header.data, f"{source} to carry",
                     "record it again with a mission whose monitor block collects that data, or "
                     "drop the query")
     except BaseException:
@@ -116,23 +144,9 @@ def replay(trace: Path, vepl: Path | None, out_dir: Path,
         if close is not None:
             close()
         raise
-    return _judge(header, samples, read_end, vepl, out_dir, user, automata)
-
-
-def _judge(header: StreamHeader, samples: Iterator[Sample],
-           read_end: Callable[[], tuple[float, str, str] | None], vepl: Path | None,
-           out_dir: Path, user: Mapping[str, UserFunction], automata: Path,
-           trace: TraceWriter | None = None) -> RunSummary:
-    """The samples through the monitor (and ``trace``, when given: a trace that cannot be
-    written is dropped, never the judgement); the summary, written as summary.json."""
-    from rei.runtime.evaluator.summary import merge_summary, write_summary  # noqa: PLC0415
-    from rei.runtime.faults.stage import SampledTimeline, fault_measurements  # noqa: PLC0415
-    from rei.runtime.monitor import MonitorSink  # noqa: PLC0415
-
     sink = MonitorSink(vepl, out_dir, functions=user, automata=automata)
     last = 0.0
     seen = SampledTimeline()
-
     copy = _TraceCopy(trace)
     try:
         sink.start(header)
@@ -143,6 +157,8 @@ def _judge(header: StreamHeader, samples: Iterator[Sample],
             last = sample.time
             if header.faults:
                 seen.feed(sample.time, sample.faults)
+            if judged is not None:
+                judged(sink, sample)
     except BaseException:
         copy.abandon()
         raise
@@ -162,9 +178,10 @@ def _judge(header: StreamHeader, samples: Iterator[Sample],
     copy.finish(end_time, outcome, reason)
     assert sink.result is not None
     # The end line was written by `rei run` from its summary's outcome; read back as is.
-    base = RunSummary(RESULTS_VERSION, header.mission, header.world, header.seed, "replay",
+    base = RunSummary(RESULTS_VERSION, header.mission, header.world, header.seed, controller,
                       cast(Outcome, outcome), reason, sink.result.duration, 0.0, {}, (),
-                      fault_measurements(header.faults, seen.timeline()))
+                      {**fault_measurements(header.faults, seen.timeline()),
+                       **(measurements() if measurements is not None else {})})
     summary = merge_summary(base, sink.result)
     problems = [p.text() for p in getattr(samples, "problems", ())]  # a bag's bad data
     if problems:
@@ -247,8 +264,9 @@ def replay_bag(bag: Path, mission_path: Path, vepl: Path | None, out_dir: Path,
                      tuple((b.x, b.y, b.yaw) for b in manifest.observed))
     samples = BagSamples(bag, world, mapping)
     (out_dir / "trace.jsonl").unlink(missing_ok=True)
-    return _judge(header, samples, samples.end, vepl, out_dir, user, automata,
-                  TraceWriter(out_dir / "trace.jsonl"))
+    return judge_stream(header, samples, samples.end, vepl, out_dir, user, automata,
+                        f"the mission '{mission.name}'",
+                        trace=TraceWriter(out_dir / "trace.jsonl"))
 
 
 def run(args: argparse.Namespace) -> int:
