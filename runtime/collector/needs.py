@@ -23,6 +23,11 @@ MEASURE_DATA = {
     "odom_error": "odometry",
     "cmd_speed": "nav_state",
     "cmd_turn": "nav_state",
+    # the robot's own motion is the ground truth capped at its command while it is pushed
+    "own_speed": "nav_state",
+    "own_turn_rate": "nav_state",
+    "own_yaw_rate": "nav_state",
+    "pushed": "nav_state",
     "nav_state": "nav_state",
     "mission_state": "mission_events",
 }

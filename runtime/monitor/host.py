@@ -247,6 +247,7 @@ class AutomataHost:
             "min_distance_to_human_moving": None if math.isinf(m.min_distance_to_human_moving)
             else m.min_distance_to_human_moving,
             "path_length": m.path_length,
+            "pushed": {"seconds": m.pushed_time, "top_speed": m.pushed_top_speed},
             "time_to_goal": goals,
             "samples": self.samples,
             "sample_problems": dict(self.problems.counts),
