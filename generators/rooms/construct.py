@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 import random
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -44,7 +44,15 @@ from rei.generators.rooms.geometry import (
     stays_connected,
     swept_cells,
 )
-from rei.generators.rooms.space import MIX_BEHAVIOURS, RoomParameters, door_width
+from rei.generators.rooms.space import MIX_BEHAVIOURS, NO_STRESSOR, RoomParameters, door_width
+from rei.generators.rooms.stressors import (
+    ROW_TYPE,
+    StressorFailed,
+    StressorLayout,
+    StressorPlan,
+    plan_layout,
+    time_layout,
+)
 from rei.lang.room.checks import rotated_half_extents
 
 GRID = "area"
@@ -99,6 +107,7 @@ class RoomPlan:
     goals: tuple[Cell, ...]
     route: tuple[Cell, ...]
     descriptors: Descriptors
+    stressor: StressorPlan | None = None
 
 
 @dataclass(frozen=True)
@@ -275,6 +284,17 @@ def construct(params: RoomParameters, facts: CatalogueFacts, rng: random.Random)
     outside = CellMask(box - floors)
     goals = _choose_goals(params, floors, rng)
     robot = goals[0]
+    layout: StressorLayout | None = None
+    row_cells: set[Cell] = set()
+    if params.stressor != NO_STRESSOR:
+        try:
+            layout = plan_layout(params, floors, goals,
+                                 max(facts.types[ROW_TYPE].footprint.half_extents()), rng)
+        except StressorFailed as exc:
+            raise AttemptFailed("stressor", str(exc)) from None
+        floors -= layout.walls
+        row_cells = {o.cell for o in layout.row}
+        outside = CellMask((box - floors) | row_cells)
 
     stops = goals + ([goals[0]] if params.cycles > 1 else [])
     crossing_wanted = params.crossing == "cross" and params.humans > 0
@@ -282,18 +302,26 @@ def construct(params: RoomParameters, facts: CatalogueFacts, rng: random.Random)
     reserved: set[Cell] = set(goals)
     humans: list[HumanPlan] = []
     taken = {robot}
+    if layout is not None:
+        reserved |= layout.keep_free | row_cells
+        if layout.mover is not None:
+            taken |= set(layout.mover.vertices)
     for k in range(params.humans):
         human, swept = _human(params, k, floors, outside, taken, robot, base, rng)
         humans.append(human)
         taken.add(human.vertices[0])
         reserved |= swept | set(human.vertices)
 
-    free = set(floors)
+    free = set(floors) - row_cells
     wanted = params.object_count(len(floors))
     candidates = sorted(floors - reserved)
     rng.shuffle(candidates)
     objects: list[PlacedObjectPlan] = []
     counts: dict[str, int] = {}
+    if layout is not None:
+        objects += [PlacedObjectPlan(f"row_{o.type}_{k + 1}", o.type, o.cell, o.heading)
+                    for k, o in enumerate(layout.row)]
+        wanted += len(layout.row)
     for cell in candidates:
         if len(objects) == wanted:
             break
@@ -321,6 +349,16 @@ def construct(params: RoomParameters, facts: CatalogueFacts, rng: random.Random)
         route = robot_route(scene)
     except UnreachableGoals:  # cannot happen while the free floor stays connected
         raise AttemptFailed("objects", "goals not reachable in order") from None
+    stressor: StressorPlan | None = None
+    if layout is not None:
+        try:
+            stressor = time_layout(layout, route, params)
+        except StressorFailed as exc:
+            raise AttemptFailed("stressor", str(exc)) from None
+        if stressor.mover is not None:
+            scene = replace(scene, trajectories=(
+                *scene.trajectories, (tuple(c for c, _ in stressor.mover.vertices), False)),
+                humans=scene.humans + (stressor.mover.role == "human"))
     descriptors = describe(scene, route)
     if params.crossing == "cross" and humans:
         corridor = set(route)
@@ -334,5 +372,6 @@ def construct(params: RoomParameters, facts: CatalogueFacts, rng: random.Random)
         heading = math.degrees(math.atan2(first_step[1] - robot[1], first_step[0] - robot[0]))
         heading = float(round(heading) % 360)
     return RoomPlan(params, grid_rows(params, floors), frozenset(floors), robot, heading,
-                    tuple(objects), tuple(humans), tuple(goals), tuple(route), descriptors)
+                    tuple(objects), tuple(humans), tuple(goals), tuple(route), descriptors,
+                    stressor)
 

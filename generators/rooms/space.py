@@ -21,15 +21,20 @@ from rei.lang.suggest import did_you_mean
 
 FACTOR_NAMES: tuple[str, ...] = (
     "shape", "size", "objects", "mix", "humans", "vertices", "speed", "loop", "crossing",
-    "goals", "spacing", "cycles", "behaviour", "heading", "max_speed",
+    "goals", "spacing", "cycles", "behaviour", "heading", "max_speed", "stressor",
 )
 
 BEHAVIOUR_LEVELS = (*BEHAVIOURS, "mix")
 """A human behaviour for every human of a room, or ``mix``: yielding and social in turn."""
 MIX_BEHAVIOURS = ("yielding", "social")
 NO_LIMIT = "none"
+NO_STRESSOR = "none"
 
 SHAPES = ("rect", "L", "joined")
+STRESSORS = ("none", "emerge", "oncoming", "crossing", "gap")
+"""One stress scenario on the robot's first leg (generators/rooms/stressors.py): a person
+emerging from behind a corner, an oncoming person in a one-tile corridor, a cart crossing at
+a right angle, a furniture row whose gap on the direct line is narrower than the robot."""
 CROSSINGS = ("cross", "any")
 YES_NO = ("yes", "no")
 
@@ -95,7 +100,7 @@ PRESETS: Mapping[str, Mapping[str, tuple[str, ...]]] = {
         "mix": ("mixed", "furniture"), "humans": ("1",), "vertices": ("2",),
         "speed": ("0.8",), "loop": ("yes",), "crossing": ("cross",), "goals": ("2",),
         "spacing": ("4",), "cycles": ("1", "2"), "behaviour": ("yielding", "social"),
-        "heading": ("yes", "no"), "max_speed": ("none", "0.18"),
+        "heading": ("yes", "no"), "max_speed": ("none", "0.18"), "stressor": (NO_STRESSOR,),
     },
     # Thesis 7.4.5: a medium room, sparsely furnished, with one moving human.
     "medium": {
@@ -104,7 +109,7 @@ PRESETS: Mapping[str, Mapping[str, tuple[str, ...]]] = {
         "humans": ("1",), "vertices": ("3", "4", "5"), "speed": ("0.6", "1.0"),
         "loop": ("yes", "no"), "crossing": ("cross", "any"), "goals": ("3", "4"),
         "spacing": ("5", "8"), "cycles": ("1", "2"), "behaviour": ("social", "yielding"),
-        "heading": ("no", "yes"), "max_speed": (NO_LIMIT,),
+        "heading": ("no", "yes"), "max_speed": (NO_LIMIT,), "stressor": (NO_STRESSOR,),
     },
     # Thesis 7.4.6: a fairly large room.
     "large": {
@@ -113,7 +118,19 @@ PRESETS: Mapping[str, Mapping[str, tuple[str, ...]]] = {
         "vertices": ("4", "6"), "speed": ("0.8", "1.2"), "loop": ("yes",),
         "crossing": ("cross", "any"), "goals": ("3", "5"), "spacing": ("10", "16"),
         "cycles": ("1",), "behaviour": ("mix", "social"), "heading": ("no",),
-        "max_speed": (NO_LIMIT,),
+        "max_speed": (NO_LIMIT,), "stressor": (NO_STRESSOR,),
+    },
+    # Rooms that punish late perception and a planner blind to the robot's footprint: each
+    # puts one stressor on the first leg, timed from the robot's planned arrival. The
+    # people they add yield (so a careful navigator can pass) and no other human walks, so
+    # what fails is the stressor's doing. The systematic design lists the stressors first
+    # (they vary fastest), which is how `rei demo` takes one room of each.
+    "stress": {
+        "shape": ("rect", "L"), "size": ("10x6", "12x7"), "objects": ("3", "5"),
+        "mix": ("furniture", "mixed"), "humans": ("0",), "vertices": ("2",),
+        "speed": ("1.0", "0.8"), "loop": ("no",), "crossing": ("any",), "goals": ("2",),
+        "spacing": ("6",), "cycles": ("1",), "behaviour": ("yielding",), "heading": ("no",),
+        "max_speed": (NO_LIMIT,), "stressor": ("emerge", "crossing", "gap", "oncoming"),
     },
 }
 
@@ -151,6 +168,8 @@ class RoomParameters:
     """The mission's speed limit (m/s), None for the drive's own."""
     levels: tuple[tuple[str, str], ...]
     """The levels as written, factor by factor (for the index and the metadata)."""
+    stressor: str = NO_STRESSOR
+    """One of STRESSORS."""
 
     def level(self, name: str) -> str:
         return dict(self.levels)[name]
@@ -236,8 +255,13 @@ def parse_row(levels: Mapping[str, str], static_names: tuple[str, ...]) -> RoomP
     limit_text = levels["max_speed"]
     max_speed = None if limit_text == NO_LIMIT else _float("max-speed", limit_text, 0.0,
                                                              MAX_ROBOT_SPEED)
+    stressor = levels["stressor"]
+    if stressor not in STRESSORS:
+        raise ParameterError("stressor", f"one of {', '.join(STRESSORS)}",
+                             f"'{stressor}'" + did_you_mean(stressor, STRESSORS))
     return RoomParameters(
-        shape=shape, width=width, height=height, objects=objects, density=density, mix=mix,
+        stressor=stressor, shape=shape, width=width, height=height, objects=objects,
+        density=density, mix=mix,
         humans=_int("humans", levels["humans"], 0, MAX_HUMANS),
         vertices=_int("vertices", levels["vertices"], 2, MAX_VERTICES),
         speed=_walking_speed(levels["speed"]),

@@ -46,6 +46,7 @@ def room_text(name: str, plan: RoomPlan, provenance: Provenance) -> str:
         f"attempts={provenance.attempts}",
         f"// parameters: {levels}",
         f"// descriptors: {desc}",
+        *_stressor_comment(plan),
         f"room {name} {{",
         "    tile 1.0",
         "",
@@ -67,8 +68,47 @@ def room_text(name: str, plan: RoomPlan, provenance: Provenance) -> str:
                      f"total {_fmt(human.total_time)} {end} {{")
         lines += [f"        {cell_name(v)}" for v in human.vertices]
         lines.append(f"    }} behaviour {human.behaviour}")
+    lines += _mover_lines(plan)
     lines.append("}")
     return "\n".join(lines) + "\n"
+
+
+def _stressor_comment(plan: RoomPlan) -> list[str]:
+    """The stressor's facts a reader (or a test) wants without re-deriving them."""
+    stress = plan.stressor
+    if stress is None:
+        return []
+    layout = stress.layout
+    if layout.slot is not None:
+        a, b = layout.slot
+        return [f"// stressor: kind={layout.kind} slot={cell_name(a)},{cell_name(b)} "
+                f"slot_width_m={_fmt(layout.slot_width)}"]
+    assert stress.mover is not None and layout.mover is not None
+    return [f"// stressor: kind={layout.kind} mover={stress.mover.name} "
+            f"point={cell_name(layout.point)} arrival_s={_fmt(stress.arrival_s)} "
+            f"meeting_s={_fmt(stress.meeting_s)} lead_m={_fmt(layout.mover.lead)}"]
+
+
+def _mover_lines(plan: RoomPlan) -> list[str]:
+    """The stressor's person (a yielding human) or cart (a dynamic object), its wait written
+    as timed vertices on its first tile."""
+    stress = plan.stressor
+    if stress is None or stress.mover is None:
+        return []
+    mover = stress.mover
+    start = cell_name(mover.vertices[0][0])
+    if mover.role == "human":
+        head = f"    human {mover.name} on {start}"
+        tail = f"    }} behaviour {mover.behaviour}"
+    else:
+        head = f"    dynamic {mover.name} : {mover.type} on {start} heading {_fmt(mover.heading)}"
+        tail = "    }"
+    lines = ["", f"    // stressor: {plan.params.stressor} (timed from the robot's planned "
+                 f"arrival, see docs/rooms.md)",
+             f"{head} trajectory stop {{"]
+    lines += [f"        {cell_name(c)} at {_fmt(t)}" for c, t in mover.vertices]
+    lines.append(tail)
+    return lines
 
 
 def arrival_heading(previous: tuple[int, int], goal: tuple[int, int]) -> float:
@@ -117,6 +157,6 @@ def read_metadata(text: str) -> dict[str, dict[str, str]]:
         if not line.startswith("//"):
             break
         head, sep, rest = line[2:].strip().partition(": ")
-        if sep and head in ("generator", "parameters", "descriptors"):
+        if sep and head in ("generator", "parameters", "descriptors", "stressor"):
             out[head] = dict(item.split("=", 1) for item in rest.split() if "=" in item)
     return out

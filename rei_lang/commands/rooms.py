@@ -27,6 +27,10 @@ OVERRIDES = (
                   "and social in turn)"),
     ("heading", "whether the final goal has a heading: yes, no"),
     ("max_speed", "the mission's speed limit, m/s, or none"),
+    ("stressor", "a stress scenario on the first leg: none, emerge (a person steps out from "
+                 "behind a corner), oncoming (a person in a one-tile corridor), crossing (a "
+                 "cart crosses at a right angle), gap (a furniture gap narrower than the "
+                 "robot on the direct line)"),
 )
 
 
@@ -50,9 +54,11 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                         help="rooms to generate (default: the design's rows for systematic, "
                              "10 for random)")
     parser.add_argument("--seed", type=int, default=0, metavar="S", help="random seed")
-    parser.add_argument("--preset", choices=("small", "medium", "large"), default="medium",
+    parser.add_argument("--preset", choices=("small", "medium", "large", "stress"),
+                        default="medium",
                         help="thesis 7.4 room classes: small and dense, medium with a moving "
-                             "human, large (default: medium)")
+                             "human, large; or stress: one stressor per room, timed from the "
+                             "robot's planned arrival (default: medium)")
     parser.add_argument("--strategy", choices=("systematic", "random"), default="random",
                         help="systematic: full grid of levels, or a pairwise covering array "
                              "when the grid is larger than --max-grid; random: seeded picks")

@@ -36,11 +36,15 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.add_argument("-o", "--output", type=Path, required=True, metavar="DIR",
                         help="folder for the suite (DIR/suite) and the campaign (DIR/campaign)")
     parser.add_argument("--count", type=positive_int, default=6, metavar="N",
-                        help="rooms to generate (default 6)")
+                        help="rooms to generate (default 6; with the small preset half of "
+                             f"them, at most {STRESS_ROOMS}, are stress rooms)")
     parser.add_argument("--repeat", type=positive_int, default=2, metavar="K",
                         help="runs per mission, each with its own seed (default 2)")
-    parser.add_argument("--preset", choices=("small", "medium", "large"), default="small",
-                        help="room class of the suite (default small)")
+    parser.add_argument("--preset", choices=("small", "medium", "large", "stress"),
+                        default="small",
+                        help="room class of the suite (default small, with stress rooms: a "
+                             "person emerging from behind a corner, a crossing cart, a gap "
+                             "narrower than the robot)")
     parser.add_argument("--seed", type=int, default=0, metavar="S",
                         help="seed of the generated suite and of the campaign's runs (default 0)")
     parser.add_argument("--workers", type=positive_int, default=None, metavar="N",
@@ -57,25 +61,45 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.set_defaults(func=run)
 
 
+STRESS_ROOMS = 3
+"""Stress rooms the demo takes at most, half its rooms with the small preset: the stress
+preset's first systematic rows, a person emerging from behind a corner, a crossing cart and
+a gap narrower than the robot."""
+
+
+def stress_share(count: int, preset: str) -> int:
+    """How many of the demo's ``count`` rooms are stress rooms."""
+    return min(STRESS_ROOMS, count // 2) if preset == "small" else 0
+
+
 def generate_suite(out: Path, count: int, preset: str, seed: int) -> list[Path]:
-    """The suite's index, generated with `rei-gen rooms`; the bundled examples without it."""
-    index = out / "index.csv"
-    if index.is_file():
-        return [index]  # resuming: the same seed gave these files, keep them
+    """The suite's indexes, generated with `rei-gen rooms`: ``count`` rooms of ``preset``,
+    with the small preset ``stress_share`` of them stress rooms (in DIR/suite/stress); the
+    bundled examples without the generator."""
     try:
         from rei.lang.cli import main as rei_gen  # noqa: PLC0415
         from rei.lang.commands import rooms  # noqa: F401, PLC0415
     except ImportError:
         print(f"rei demo: `rei-gen rooms` is not installed; using {EXAMPLES}", file=sys.stderr)
         return [EXAMPLES]
-    report = io.StringIO()
-    with contextlib.redirect_stdout(report):  # the coverage report is in DIR/suite/coverage.txt
-        status = rei_gen(["rooms", "-o", str(out), "--count", str(count), "--preset", preset,
-                          "--seed", str(seed)])
-    if status != EXIT_OK or not index.is_file():
-        sys.stderr.write(report.getvalue())
-        raise SystemExit(status or EXIT_BAD_INPUT)
-    return [index]
+    stress = stress_share(count, preset)
+    suites = [(out, ["--count", str(count - stress), "--preset", preset])]
+    if stress:
+        suites.append((out / "stress", ["--count", str(stress), "--preset", "stress",
+                                        "--strategy", "systematic", "--prefix", "stress"]))
+    indexes = []
+    for folder, options in suites:
+        index = folder / "index.csv"
+        indexes.append(index)
+        if index.is_file():
+            continue  # resuming: the same seed gave these files, keep them
+        report = io.StringIO()
+        with contextlib.redirect_stdout(report):  # the coverage report is in coverage.txt
+            status = rei_gen(["rooms", "-o", str(folder), *options, "--seed", str(seed)])
+        if status != EXIT_OK or not index.is_file():
+            sys.stderr.write(report.getvalue())
+            raise SystemExit(status or EXIT_BAD_INPUT)
+    return indexes
 
 
 def run(args: argparse.Namespace) -> int:
@@ -96,7 +120,10 @@ def run(args: argparse.Namespace) -> int:
         if not args.quiet:
             print(text, file=sys.stderr)
 
-    say(f"1/3 generating {args.count} {args.preset} rooms into {out / 'suite'}")
+    stress = stress_share(args.count, args.preset)
+    rooms = (f"{args.count - stress} {args.preset} and {stress} stress" if stress
+             else f"{args.count} {args.preset}")
+    say(f"1/3 generating {rooms} rooms into {out / 'suite'}")
     inputs = generate_suite(out / "suite", args.count, args.preset, args.seed)
     plan = plan_campaign(inputs, repeat=args.repeat, seed=args.seed, controller=args.controller,
                          vepl=args.vepl)

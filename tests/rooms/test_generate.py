@@ -75,7 +75,7 @@ def _assert_valid_pair(room_path: Path, mission_path: Path) -> None:
 
 @settings(max_examples=25, deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(preset=st.sampled_from(["small", "medium", "large"]),
+@given(preset=st.sampled_from(["small", "medium", "large", "stress"]),
        seed=st.integers(min_value=0, max_value=2**31),
        shape=st.sampled_from(["rect", "L", "joined"]))
 def test_every_generated_pair_checks_clean_and_its_goals_are_reachable(
@@ -202,7 +202,7 @@ def test_impossible_requests_exit_2_naming_the_option_and_write_nothing(
     assert not out.exists()
 
 
-@pytest.mark.parametrize("preset", ["small", "medium", "large"])
+@pytest.mark.parametrize("preset", ["small", "medium", "large", "stress"])
 def test_every_preset_systematic_suite_checks_clean(tmp_path: Path, preset: str) -> None:
     space = preset_space(preset)
     suite = generate(SuiteRequest(space, "systematic", 3, 6), tmp_path)
@@ -213,7 +213,7 @@ def test_every_preset_systematic_suite_checks_clean(tmp_path: Path, preset: str)
 
 
 @pytest.mark.parametrize("strategy", ["random", "systematic"])
-@pytest.mark.parametrize("preset", ["small", "medium", "large"])
+@pytest.mark.parametrize("preset", ["small", "medium", "large", "stress"])
 def test_generated_missions_generate_every_target(tmp_path: Path, preset: str,
                                                   strategy: str) -> None:
     suite = generate(SuiteRequest(preset_space(preset), strategy, 1, 12), tmp_path)  # type: ignore[arg-type]

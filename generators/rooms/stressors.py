@@ -1,0 +1,411 @@
+"""Stressor scenarios on a generated room's first leg: what a navigator acting on late
+perception, or planning without its footprint, runs into — and a careful one passes.
+
+* ``emerge``: a wall stub beside the route hides a person standing right behind it; the
+  person steps into the route and walks a tile towards the robot, then off the route.
+* ``oncoming``: the route runs through a one-tile corridor (walls turned out of floors on
+  both sides for ``CORRIDOR_LENGTH`` tiles); a person walks it towards the robot and steps
+  aside past its near end.
+* ``crossing``: a cart (a scripted dynamic object) crosses the route at a right angle from
+  two tiles off it to two tiles beyond, and stays there.
+* ``gap``: a row of tables across the first leg, turned so two neighbours leave a slot
+  narrower than the robot where the straight line between the goals crosses the row, and one
+  open tile at least two tiles from the slot: the shortest way for a point goes through the
+  slot, the robot's goes round through the opening.
+
+Timing (the first three): the encounter is timed from the robot's *planned* arrival — its
+route on the static map (the inflated floor graph, as the descriptors walk it) driven at
+``NOMINAL_SPEED`` after ``START_DELAY`` — so the mover reaches the meeting point when the
+planned robot is ``lead`` metres before it. The mover waits on its first tile until then: the
+room file lists the wait as vertices ``HOLD_STEP`` seconds apart (so the per-run start delay,
+at most one vertex interval, stays short) and ends it with two vertices ``SETTLE`` seconds
+apart (so the spline stands still while waiting, instead of swinging back and forth). The
+cart is scripted, so it is also timed to have cleared the robot's lane before the robot could
+get there at its top speed: a careful robot is never hit, it only has to wait. People added
+here are ``yielding`` humans (they stop for the robot and step aside), the fairness every
+generated human has.
+
+All randomness comes from the ``random.Random`` passed in; this module never touches files,
+never imports the runtime, and never changes a room without keeping its floor connected.
+"""
+
+from __future__ import annotations
+
+import math
+import random
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from rei.generators.rooms.geometry import Cell, fast_route
+from rei.generators.rooms.space import RoomParameters
+
+NOMINAL_SPEED = 0.25
+"""m/s the robot is planned to drive at: the reference navigator's pace on a free straight
+(about 2.5 m in the first 10 s, bench/RESULTS.md), just below the Waffle's top speed."""
+TOP_SPEED = 0.26
+"""m/s, the Waffle's top speed: no robot gets anywhere sooner than at this speed."""
+START_DELAY = 1.0
+"""s the robot is planned to need before it moves (first command, acceleration)."""
+HOLD_STEP = 2.0
+"""s between the vertices that make a mover wait on its first tile."""
+SETTLE = 0.5
+"""s between the last two waiting vertices (a spline leaves a vertex at the mean of its two
+chord velocities; with the same tile on both sides of the wait, it stands still there)."""
+MIN_WAIT = 1.0
+"""s a mover waits at least: a shorter wait means the meeting point is too near the start."""
+PERSON_LEAD = 1.5
+"""m before the meeting point the planned robot is when a person reaches it."""
+ONCOMING_LEAD = 2.5
+"""m before the corridor the planned robot is when the oncoming person reaches its near end."""
+ONCOMING_CLEAR = 0.5
+"""m before the corridor's entrance the robot, at its top speed, may be at the latest when
+the oncoming person, at its slowest and latest, has stepped aside past the entrance: a person
+and a robot face to face inside a one-tile corridor would wait for each other for good."""
+HUMAN_SLOWEST = 0.85
+"""The slowest per-run speed scale of a human (runtime/animator/variation.py, 1 - 0.15)."""
+CART_LEAD = 1.2
+"""m before the crossing point the planned robot is when the cart's centre crosses."""
+CART_CLEARANCE = 0.2
+"""m the cart keeps from the robot at its top speed (footprint to footprint, at least)."""
+CORRIDOR_LENGTH = 3
+"""Tiles of the one-tile corridor."""
+ROBOT_HALF = (0.1405, 0.153)
+"""m, half the Waffle's footprint (length, width), for the cart's fairness margin."""
+CART_HALF = (0.3, 0.2)
+"""m, half the catalogue cart's footprint (length along its heading, width)."""
+ROW_TYPE = "table"
+"""The catalogue type of the gap's row: 0.8 m along the row leaves a 0.2 m slot."""
+
+STRESSOR_KINDS = ("emerge", "oncoming", "crossing", "gap")
+
+
+class StressorFailed(Exception):
+    """This attempt's layout has no place for the stressor (the caller retries)."""
+
+
+@dataclass(frozen=True)
+class RowObject:
+    """A static object the stressor puts down (the gap's row)."""
+
+    type: str
+    cell: Cell
+    heading: float
+
+
+@dataclass(frozen=True)
+class MoverPath:
+    """A mover's tiles before its timing is known: it waits on the first, walks the rest
+    through ``vertices[anchor]`` (the meeting point) and stops on the last."""
+
+    name: str
+    role: str
+    """'human' or 'dynamic'."""
+    type: str
+    vertices: tuple[Cell, ...]
+    anchor: int
+    lead: float
+    heading: float = 0.0
+
+
+@dataclass(frozen=True)
+class TimedMover:
+    name: str
+    role: str
+    type: str
+    vertices: tuple[tuple[Cell, float], ...]
+    """(tile, time in seconds) in walking order, the wait included."""
+    heading: float
+    behaviour: str
+    """'yielding' for people; dynamic objects are scripted."""
+
+
+@dataclass(frozen=True)
+class StressorLayout:
+    """What a stressor changes in a room, before the final route is known."""
+
+    kind: str
+    walls: frozenset[Cell]
+    """Floors turned into walls (the corner stub, the corridor's sides)."""
+    row: tuple[RowObject, ...]
+    mover: MoverPath | None
+    point: Cell
+    """Where the encounter is planned: the meeting point, or the slot's first tile."""
+    approach: tuple[Cell, ...]
+    """Consecutive cells of the first leg the final route must still drive in this order
+    (the straight approach to the meeting point, the corridor)."""
+    keep_free: frozenset[Cell]
+    """Tiles no other object may take: the first leg, the mover's tiles, the opening."""
+    slot: tuple[Cell, Cell] | None = None
+    """The gap's two tiles whose objects leave the slot between them."""
+    slot_width: float = 0.0
+
+
+@dataclass(frozen=True)
+class StressorPlan:
+    """A stressor with its timing, as the room file gets it."""
+
+    layout: StressorLayout
+    mover: TimedMover | None
+    arrival_s: float
+    """Planned time the robot reaches ``layout.point`` (0 for the gap)."""
+    meeting_s: float
+    """Time the mover reaches the meeting point (0 for the gap)."""
+
+
+def _sub(a: Cell, b: Cell) -> Cell:
+    return (a[0] - b[0], a[1] - b[1])
+
+
+def _add(a: Cell, b: Cell, k: int = 1) -> Cell:
+    return (a[0] + k * b[0], a[1] + k * b[1])
+
+
+def _perpendiculars(d: Cell, rng: random.Random) -> list[Cell]:
+    sides = [(-d[1], d[0]), (d[1], -d[0])]
+    rng.shuffle(sides)
+    return sides
+
+
+def _straight_runs(route: Sequence[Cell], before: int, after: int) -> list[tuple[int, Cell]]:
+    """(k, d): route indices whose ``before`` cells before and ``after`` cells after lie on
+    one axis-aligned straight line along d (unit step)."""
+    out = []
+    for k in range(before, len(route) - after):
+        d = _sub(route[k], route[k - 1])
+        if abs(d[0]) + abs(d[1]) != 1:
+            continue
+        if all(_sub(route[m], route[m - 1]) == d for m in range(k - before + 1, k + after + 1)):
+            out.append((k, d))
+    return out
+
+
+def _connected(cells: set[Cell]) -> bool:
+    if not cells:
+        return True
+    start = min(cells)
+    seen = {start}
+    frontier = [start]
+    while frontier:
+        nxt = []
+        for i, j in frontier:
+            for n in ((i + 1, j), (i - 1, j), (i, j + 1), (i, j - 1)):
+                if n in cells and n not in seen:
+                    seen.add(n)
+                    nxt.append(n)
+        frontier = nxt
+    return len(seen) == len(cells)
+
+
+def first_leg(floors: set[Cell], goals: Sequence[Cell]) -> list[Cell]:
+    """The robot's route from its start to the second goal on the inflated floor graph."""
+    leg = fast_route(floors, [goals[0], goals[1]])
+    if leg is None:
+        raise StressorFailed("the second goal is not reachable")
+    return leg
+
+
+def plan_layout(params: RoomParameters, floors: set[Cell], goals: Sequence[Cell],
+                row_half_extent: float, rng: random.Random) -> StressorLayout:
+    """Where the stressor goes in this floor plan; StressorFailed when nowhere fits."""
+    leg = first_leg(floors, goals)
+    kind = params.stressor
+    if kind == "gap":
+        return _gap(floors, goals, leg, row_half_extent, rng)
+    blocked = set(goals) | set(leg)
+    if kind == "emerge":
+        return _emerge(floors, leg, blocked, rng)
+    if kind == "crossing":
+        return _crossing(floors, leg, blocked, rng)
+    if kind == "oncoming":
+        return _oncoming(floors, leg, blocked, rng)
+    raise ValueError(kind)
+
+
+def _emerge(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: random.Random
+            ) -> StressorLayout:
+    runs = _straight_runs(leg, 3, 1)
+    rng.shuffle(runs)
+    for k, d in runs:
+        p = leg[k]
+        for n in _perpendiculars(d, rng):
+            stub, hide = _add(_sub(p, d), n), _add(p, n)
+            toward = _sub(p, d)
+            aside = _sub(toward, n)
+            tiles = (stub, hide, aside)
+            if any(t not in floors or t in blocked for t in tiles):
+                continue
+            rest = floors - {stub}
+            if not _connected(rest):
+                continue
+            mover = MoverPath("emerging_person", "human", "human", (hide, p, toward, aside),
+                              anchor=1, lead=PERSON_LEAD)
+            return StressorLayout("emerge", frozenset({stub}), (), mover, p,
+                                  tuple(leg[k - 3:k + 2]), frozenset(leg) | {hide, aside})
+    raise StressorFailed("no straight stretch of the first leg with room for a wall stub "
+                         "and a person behind it")
+
+
+def _crossing(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: random.Random
+              ) -> StressorLayout:
+    runs = _straight_runs(leg, 3, 1)
+    rng.shuffle(runs)
+    for k, d in runs:
+        p = leg[k]
+        for n in _perpendiculars(d, rng):
+            way = [_add(p, n, 2), _add(p, n, 1), p, _add(p, n, -1), _add(p, n, -2)]
+            if any(t not in floors or (t != p and t in blocked) for t in way):
+                continue
+            # The cart faces where it goes, so its length lies along its way.
+            heading = float(round(math.degrees(math.atan2(-n[1], -n[0]))) % 360)
+            mover = MoverPath("crossing_cart", "dynamic", "cart", tuple(way), anchor=2,
+                              lead=CART_LEAD, heading=heading)
+            return StressorLayout("crossing", frozenset(), (), mover, p,
+                                  tuple(leg[k - 3:k + 2]), frozenset(leg) | set(way))
+    raise StressorFailed("no straight stretch of the first leg with two free tiles on "
+                         "either side for a crossing cart")
+
+
+def _oncoming(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: random.Random
+              ) -> StressorLayout:
+    length = CORRIDOR_LENGTH
+    # One straight cell before the corridor and the corridor, whose far end (the person's
+    # start) must not be the goal.
+    runs = [(k, d) for k, d in _straight_runs(leg, 1, length - 1)
+            if k + length - 1 < len(leg) - 1]
+    # Farthest from the start first: the person must be out of the corridor before a robot
+    # at top speed gets there, which a corridor near the start leaves no time for.
+    runs.sort(key=lambda run: -run[0])
+    for a, d in runs:
+        corridor = leg[a:a + length]
+        entrance = leg[a - 1]
+        for n in _perpendiculars(d, rng):
+            walls = {_add(c, n, s) for c in corridor for s in (1, -1)} & floors
+            aside = _add(entrance, n)
+            if aside not in floors or aside in blocked or walls & blocked:
+                continue
+            if not walls or not _connected(floors - walls):
+                continue
+            path = (*reversed(corridor), entrance, aside)
+            mover = MoverPath("oncoming_person", "human", "human", path,
+                              anchor=len(corridor) - 1, lead=ONCOMING_LEAD)
+            return StressorLayout("oncoming", frozenset(walls), (), mover, corridor[0],
+                                  tuple(leg[a - 1:a + length]), frozenset(leg) | {aside})
+    raise StressorFailed(f"no straight stretch of {length + 1} tiles on the first leg for a "
+                         f"one-tile corridor")
+
+
+def _gap(floors: set[Cell], goals: Sequence[Cell], leg: list[Cell], half: float,
+         rng: random.Random) -> StressorLayout:
+    start, goal = goals[0], goals[1]
+    dx, dy = goal[0] - start[0], goal[1] - start[1]
+    axis = 0 if abs(dx) >= abs(dy) else 1  # the leg's main axis; the row runs across it
+    lat = 1 - axis
+    span = goal[axis] - start[axis]
+    step = 1 if span > 0 else -1
+    positions = [start[axis] + step * m for m in range(2, abs(span) - 1)]
+    rng.shuffle(positions)
+    for c in positions:
+        # Where the straight line between the goals crosses the row.
+        at = start[lat] + (c - start[axis]) * (goal[lat] - start[lat]) / span
+        low = math.floor(at)
+        if at == low and rng.random() < 0.5:
+            low -= 1
+
+        def cell(a: int, b: int) -> Cell:
+            return (a, b) if axis == 0 else (b, a)
+
+        slot = (cell(c, low), cell(c, low + 1))
+        if slot[0] not in floors or slot[1] not in floors:
+            continue
+        run = [slot[0], slot[1]]
+        for direction in (1, -1):
+            m = (low + 1) if direction == 1 else low
+            while cell(c, m + direction) in floors:
+                m += direction
+                run.append(cell(c, m))
+        run.sort()
+        if any(t in goals for t in run):
+            continue
+        openings = [t for t in run if min(abs(t[lat] - low), abs(t[lat] - low - 1)) >= 2
+                    and _add(t, cell(1, 0)) in floors and _add(t, cell(-1, 0)) in floors]
+        if not openings:
+            continue
+        far = max(abs(t[lat] - at) for t in openings)
+        opening = rng.choice([t for t in openings if abs(t[lat] - at) == far])
+        tables = [t for t in run if t != opening]
+        rest = floors - set(tables)
+        if not _connected(rest):
+            continue
+        heading = 90.0 if axis == 0 else 0.0  # the table's long side along the row
+        row = tuple(RowObject(ROW_TYPE, t, heading) for t in tables)
+        keep = frozenset({opening, _add(opening, cell(1, 0)), _add(opening, cell(-1, 0))})
+        return StressorLayout("gap", frozenset(), row, None, slot[0], (), keep,
+                              slot=slot, slot_width=round(1.0 - 2 * half, 6))
+    raise StressorFailed("no place across the first leg for a row of tables with an opening "
+                         "two tiles from the slot")
+
+
+def route_lengths(route: Sequence[Cell]) -> list[float]:
+    """Metres along ``route`` to each of its cells (tiles of 1 m)."""
+    out = [0.0]
+    for a, b in zip(route[:-1], route[1:], strict=True):
+        out.append(out[-1] + math.dist(a, b))
+    return out
+
+
+def planned_arrival(route: Sequence[Cell], point: Cell, speed: float) -> float:
+    """Seconds until the planned robot reaches ``point`` on ``route``."""
+    return START_DELAY + route_lengths(route)[list(route).index(point)] / speed
+
+
+def time_layout(layout: StressorLayout, route: Sequence[Cell], params: RoomParameters
+                ) -> StressorPlan:
+    """The mover's vertex times from the final route; StressorFailed when the final route
+    no longer meets the stressor where it was laid out, or the timing cannot be met."""
+    if layout.kind == "gap":
+        return StressorPlan(layout, None, 0.0, 0.0)
+    mover = layout.mover
+    assert mover is not None
+    cells = list(route)
+    first = layout.approach[0]
+    at = cells.index(first) if first in cells else -1
+    if at < 0 or cells[at:at + len(layout.approach)] != list(layout.approach):
+        raise StressorFailed("the objects moved the robot's route off the stressor")
+    final = cells[:at + len(layout.approach)]
+    limit = params.max_speed if params.max_speed is not None else TOP_SPEED
+    nominal, top = min(NOMINAL_SPEED, limit), min(TOP_SPEED, limit)
+    arrival = planned_arrival(final, layout.point, nominal)
+    meeting = arrival - mover.lead / nominal
+    walk = route_lengths(mover.vertices)
+    speed = params.speed
+    go = meeting - walk[mover.anchor] / speed
+    if mover.role == "dynamic":
+        # A scripted cart must have left the robot's lane before the robot, at its top
+        # speed and on the straightest way, could be there.
+        reach = math.dist(final[0], layout.point) - (ROBOT_HALF[0] + CART_HALF[1]
+                                                     + CART_CLEARANCE)
+        lane = ROBOT_HALF[1] + CART_HALF[0] + CART_CLEARANCE
+        cleared = go + (walk[mover.anchor] + lane) / speed
+        earliest = reach / top
+        if cleared > earliest:
+            go -= cleared - earliest
+    if layout.kind == "oncoming":
+        # Out of the corridor and aside, at its slowest (speed scale and a start delay of
+        # up to one vertex interval, below HOLD_STEP), before a robot at top speed arrives.
+        reach = math.dist(final[0], layout.approach[0]) - ONCOMING_CLEAR
+        latest = HUMAN_SLOWEST * (reach / top - HOLD_STEP) - walk[-1] / speed
+        go = min(go, latest)
+    if go < MIN_WAIT:
+        raise StressorFailed("the meeting point is too near the start to wait for the robot")
+    go = round(go, 2)
+    waiting = go - SETTLE
+    intervals = math.ceil(waiting / HOLD_STEP - 1e-9)
+    times = [round(k * waiting / intervals, 2) for k in range(intervals)]
+    times += [round(waiting, 2), go]
+    timed = [(mover.vertices[0], t) for t in times]
+    timed += [(v, round(go + walk[m] / speed, 2)) for m, v in enumerate(mover.vertices)
+              if m > 0]
+    behaviour = "yielding" if mover.role == "human" else "scripted"
+    return StressorPlan(layout, TimedMover(mover.name, mover.role, mover.type, tuple(timed),
+                                           mover.heading, behaviour),
+                        round(arrival, 2), round(go + walk[mover.anchor] / speed, 2))
