@@ -28,6 +28,10 @@ MEASURE_DATA = {
     "own_turn_rate": "nav_state",
     "own_yaw_rate": "nav_state",
     "pushed": "nav_state",
+    "settle_travel": "nav_state",  # own motion, after the mission events' last task end
+    "path_ratio": "mission_events",  # judged when the mission events say a task succeeded
+    "time_ratio": "mission_events",
+    "goal_spin": "nav_state",  # own motion, near the running task's goal
     "nav_state": "nav_state",
     "mission_state": "mission_events",
 }

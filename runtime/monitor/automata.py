@@ -111,6 +111,16 @@ class QueryInputs:
     own_turn_rate: float = 0.0
     own_yaw_rate: float = 0.0
     """Likewise |angular velocity| and signed angular velocity (rad/s)."""
+    settle_travel: float = 0.0
+    """Metres the robot's own motion covered since its last task ended, while no task runs
+    (the mission's settle period); 0 while a task runs and once the mission ended."""
+    path_ratio: float = 0.0
+    time_ratio: float = 0.0
+    """Of the last task that succeeded, until the next one starts (0: none, or not judged):
+    path driven / shortest collision-free path over the floors, and time taken / that path
+    at the allowed speed (rei.runtime.monitor.efficiency)."""
+    goal_spin: float = 0.0
+    """Radians the robot turned in place near the goal in the last task that succeeded."""
     pushed: float = 0.0
     """1 while the robot moves beyond its command because of a contact it did not drive
     into (a shove), else 0."""
