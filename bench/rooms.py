@@ -89,7 +89,7 @@ def main() -> None:
               "construction failures | checker rejections | construct ms | text ms | "
               "check ms | write ms | check-only rooms/CPU-s (baseline) | ratio (CPU) |")
         print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
-        for preset in ("small", "medium", "large"):
+        for preset in ("small", "medium", "large", "stress"):
             count = args.count if preset != "large" else max(1, args.count // 3)
             r = bench_preset(preset, count, args.seed, root / preset)
             print(f"| {preset} | {r['rooms']:.0f} | {100 * r['valid_share']:.0f}% | "

@@ -9,7 +9,7 @@ stressor's person or cart to the robot: median and worst over the runs. Never as
 tests; keep runs small on a shared machine (``--jobs 1``).
 
 Usage: python bench/stressors.py [--rooms N] [--seeds 0,1] [--controller NAME ...]
-       [--jobs N] [--out DIR]
+       [--stressor emerge,gap] [--jobs N] [--out DIR]
 A controller may be ``module:Class``; the checkout is on PYTHONPATH, so the test suite's
 ``tests.rooms.no_inflation:NoInflationPlanner`` (a point planner with no inflation) works.
 """
@@ -87,6 +87,8 @@ def main() -> int:
     parser.add_argument("--suite-seed", type=int, default=0, help="the suite's seed")
     parser.add_argument("--controller", action="append", default=None,
                         help="controller (repeatable; default reference)")
+    parser.add_argument("--stressor", default=None,
+                        help="only these stressors, comma-separated (default: the preset's)")
     parser.add_argument("--jobs", type=int, default=1, help="runs at once (default 1)")
     parser.add_argument("--out", type=Path, default=None, help="keep outputs here")
     args = parser.parse_args()
@@ -97,7 +99,8 @@ def main() -> int:
         suite = folder / "suite"
         subprocess.run([str(Path(sys.executable).parent / "rei-gen"), "rooms", "-o", str(suite),
                         "--preset", "stress", "--strategy", "systematic", "--count",
-                        str(args.rooms), "--seed", str(args.suite_seed), "--quiet"],
+                        str(args.rooms), "--seed", str(args.suite_seed), "--quiet",
+                        *(["--stressor", args.stressor] if args.stressor else [])],
                        check=True, stdout=subprocess.DEVNULL)
         jobs = []
         for mission in sorted(suite.glob("*.mission")):

@@ -47,6 +47,7 @@ from rei.generators.rooms.geometry import (
 from rei.generators.rooms.space import MIX_BEHAVIOURS, NO_STRESSOR, RoomParameters, door_width
 from rei.generators.rooms.stressors import (
     ROW_TYPE,
+    Bodies,
     StressorFailed,
     StressorLayout,
     StressorPlan,
@@ -117,6 +118,8 @@ class CatalogueFacts:
     types: dict[str, ObjectType]
     headings: dict[str, tuple[float, ...]]
     """Headings at which each static type fits its tile."""
+    bodies: Bodies
+    """The robot's and the cart's sizes and the robot's top speed, for stressor timing."""
 
     @staticmethod
     def of(catalogue: Catalogue, tile: float = 1.0) -> CatalogueFacts:
@@ -129,7 +132,7 @@ class CatalogueFacts:
             fits = tuple(h for h in HEADINGS
                          if max(rotated_half_extents(otype, h)) <= tile / 2 - 1e-6)
             headings[name] = fits
-        return CatalogueFacts(types, headings)
+        return CatalogueFacts(types, headings, Bodies.of(catalogue, ROBOT_TYPE))
 
 
 def cell_name(cell: Cell) -> str:
@@ -168,8 +171,13 @@ def _split(length: int, rng: random.Random) -> int:
     return low + rng.randrange(high - low + 1)
 
 
-def grid_rows(params: RoomParameters, floors: set[Cell]) -> tuple[str, ...]:
-    walls = {(i + di, j + dj) for i, j in floors for di in (-1, 0, 1) for dj in (-1, 0, 1)}
+def grid_rows(params: RoomParameters, floors: set[Cell],
+              inner_walls: frozenset[Cell] = frozenset()) -> tuple[str, ...]:
+    """The grid block: floors, and walls around the floor plan as it was before
+    ``inner_walls`` (floors a stressor turned into walls) were taken out of it, so the outer
+    wall stays closed behind them."""
+    plan = floors | inner_walls
+    walls = {(i + di, j + dj) for i, j in plan for di in (-1, 0, 1) for dj in (-1, 0, 1)}
     rows = []
     for r in range(0, params.height + 2):
         rows.append("".join("." if (c, -r) in floors else "#" if (c, -r) in walls else " "
@@ -352,7 +360,7 @@ def construct(params: RoomParameters, facts: CatalogueFacts, rng: random.Random)
     stressor: StressorPlan | None = None
     if layout is not None:
         try:
-            stressor = time_layout(layout, route, params)
+            stressor = time_layout(layout, route, params, facts.bodies)
         except StressorFailed as exc:
             raise AttemptFailed("stressor", str(exc)) from None
         if stressor.mover is not None:
@@ -371,7 +379,8 @@ def construct(params: RoomParameters, facts: CatalogueFacts, rng: random.Random)
     if first_step is not None:
         heading = math.degrees(math.atan2(first_step[1] - robot[1], first_step[0] - robot[0]))
         heading = float(round(heading) % 360)
-    return RoomPlan(params, grid_rows(params, floors), frozenset(floors), robot, heading,
+    inner = layout.walls if layout is not None else frozenset()
+    return RoomPlan(params, grid_rows(params, floors, inner), frozenset(floors), robot, heading,
                     tuple(objects), tuple(humans), tuple(goals), tuple(route), descriptors,
                     stressor)
 

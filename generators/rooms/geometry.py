@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import heapq
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 
 import networkx as nx
 import numpy as np
@@ -230,6 +230,28 @@ def bfs_route(free: set[Cell], stops: Sequence[Cell]) -> list[Cell] | None:
     return cells
 
 
+def _flood(cells: set[Cell], start: Cell, barrier: Cell | None = None) -> Iterator[Cell]:
+    """The cells of ``cells`` 4-connected to ``start`` (``start`` first), breadth first, never
+    through ``barrier``; lazily, so a caller can stop as soon as it knows enough."""
+    seen = {start} if barrier is None else {start, barrier}
+    frontier = [start]
+    yield start
+    while frontier:
+        nxt = []
+        for i, j in frontier:
+            for n in ((i + 1, j), (i - 1, j), (i, j + 1), (i, j - 1)):
+                if n in cells and n not in seen:
+                    seen.add(n)
+                    nxt.append(n)
+                    yield n
+        frontier = nxt
+
+
+def is_connected(cells: set[Cell]) -> bool:
+    """Whether the 4-connected set ``cells`` is one piece (an empty set is)."""
+    return not cells or sum(1 for _ in _flood(cells, min(cells))) == len(cells)
+
+
 def stays_connected(free: set[Cell], cell: Cell) -> bool:
     """Whether removing ``cell`` from the 4-connected set ``free`` keeps its free neighbours
     connected to each other (so the whole free set stays one component)."""
@@ -238,18 +260,11 @@ def stays_connected(free: set[Cell], cell: Cell) -> bool:
     if len(neighbours) <= 1:
         return True
     targets = set(neighbours[1:])
-    seen = {cell, neighbours[0]}
-    frontier = [neighbours[0]]
-    while frontier and targets:
-        nxt = []
-        for a, b in frontier:
-            for n in ((a + 1, b), (a - 1, b), (a, b + 1), (a, b - 1)):
-                if n in free and n not in seen:
-                    seen.add(n)
-                    targets.discard(n)
-                    nxt.append(n)
-        frontier = nxt
-    return not targets
+    for reached in _flood(free, neighbours[0], barrier=cell):
+        targets.discard(reached)
+        if not targets:
+            return True
+    return False
 
 
 def entries(samples: np.ndarray, corridor: set[Cell], loop: bool) -> int:

@@ -33,17 +33,16 @@ from __future__ import annotations
 
 import math
 import random
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
-from rei.generators.rooms.geometry import Cell, fast_route
+from rei.catalogue import Catalogue
+from rei.generators.rooms.geometry import Cell, fast_route, is_connected
 from rei.generators.rooms.space import RoomParameters
 
 NOMINAL_SPEED = 0.25
 """m/s the robot is planned to drive at: the reference navigator's pace on a free straight
 (about 2.5 m in the first 10 s, bench/RESULTS.md), just below the Waffle's top speed."""
-TOP_SPEED = 0.26
-"""m/s, the Waffle's top speed: no robot gets anywhere sooner than at this speed."""
 START_DELAY = 1.0
 """s the robot is planned to need before it moves (first command, acceleration)."""
 HOLD_STEP = 2.0
@@ -57,10 +56,11 @@ PERSON_LEAD = 1.5
 """m before the meeting point the planned robot is when a person reaches it."""
 ONCOMING_LEAD = 2.5
 """m before the corridor the planned robot is when the oncoming person reaches its near end."""
-ONCOMING_CLEAR = 0.5
-"""m before the corridor's entrance the robot, at its top speed, may be at the latest when
-the oncoming person, at its slowest and latest, has stepped aside past the entrance: a person
-and a robot face to face inside a one-tile corridor would wait for each other for good."""
+ONCOMING_CLEAR = 0.0
+"""m before the tile in front of the corridor the robot, at its top speed, may be at the
+latest when the oncoming person, at its slowest and latest, has stepped aside beside that
+tile: a person and a robot face to face inside a one-tile corridor would wait for each other
+for good (outside it the person has room to give way)."""
 HUMAN_SLOWEST = 0.85
 """The slowest per-run speed scale of a human (runtime/animator/variation.py, 1 - 0.15)."""
 CART_LEAD = 1.2
@@ -69,14 +69,30 @@ CART_CLEARANCE = 0.2
 """m the cart keeps from the robot at its top speed (footprint to footprint, at least)."""
 CORRIDOR_LENGTH = 3
 """Tiles of the one-tile corridor."""
-ROBOT_HALF = (0.1405, 0.153)
-"""m, half the Waffle's footprint (length, width), for the cart's fairness margin."""
-CART_HALF = (0.3, 0.2)
-"""m, half the catalogue cart's footprint (length along its heading, width)."""
 ROW_TYPE = "table"
 """The catalogue type of the gap's row: 0.8 m along the row leaves a 0.2 m slot."""
+CART_TYPE = "cart"
+"""The catalogue type of the crossing cart."""
 
-STRESSOR_KINDS = ("emerge", "oncoming", "crossing", "gap")
+
+@dataclass(frozen=True)
+class Bodies:
+    """What the timing needs of the robot and the cart, from the catalogue."""
+
+    robot_half: tuple[float, float]
+    """m, half the robot's footprint (length along its heading, width)."""
+    top_speed: float
+    """m/s, the robot's drive limit: no robot gets anywhere sooner than at this speed."""
+    cart_half: tuple[float, float]
+    """m, half the cart's footprint (length along its heading, width)."""
+
+    @staticmethod
+    def of(catalogue: Catalogue, robot_type: str) -> Bodies:
+        robot = catalogue.types[robot_type]
+        if robot.drive is None:
+            raise ValueError(f"catalogue type '{robot_type}' has no drive")
+        return Bodies(robot.footprint.half_extents(), robot.drive.max_linear,
+                      catalogue.types[CART_TYPE].footprint.half_extents())
 
 
 class StressorFailed(Exception):
@@ -179,23 +195,6 @@ def _straight_runs(route: Sequence[Cell], before: int, after: int) -> list[tuple
     return out
 
 
-def _connected(cells: set[Cell]) -> bool:
-    if not cells:
-        return True
-    start = min(cells)
-    seen = {start}
-    frontier = [start]
-    while frontier:
-        nxt = []
-        for i, j in frontier:
-            for n in ((i + 1, j), (i - 1, j), (i, j + 1), (i, j - 1)):
-                if n in cells and n not in seen:
-                    seen.add(n)
-                    nxt.append(n)
-        frontier = nxt
-    return len(seen) == len(cells)
-
-
 def first_leg(floors: set[Cell], goals: Sequence[Cell]) -> list[Cell]:
     """The robot's route from its start to the second goal on the inflated floor graph."""
     leg = fast_route(floors, [goals[0], goals[1]])
@@ -221,46 +220,47 @@ def plan_layout(params: RoomParameters, floors: set[Cell], goals: Sequence[Cell]
     raise ValueError(kind)
 
 
-def _emerge(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: random.Random
-            ) -> StressorLayout:
+def _meeting_points(leg: list[Cell], rng: random.Random
+                    ) -> Iterator[tuple[int, Cell, Cell, Cell]]:
+    """(k, p, d, n) in a random order: a cell p = leg[k] that the route approaches straight
+    along d for three cells and leaves along d, and a side n across the route there."""
     runs = _straight_runs(leg, 3, 1)
     rng.shuffle(runs)
     for k, d in runs:
-        p = leg[k]
         for n in _perpendiculars(d, rng):
-            stub, hide = _add(_sub(p, d), n), _add(p, n)
-            toward = _sub(p, d)
-            aside = _sub(toward, n)
-            tiles = (stub, hide, aside)
-            if any(t not in floors or t in blocked for t in tiles):
-                continue
-            rest = floors - {stub}
-            if not _connected(rest):
-                continue
-            mover = MoverPath("emerging_person", "human", "human", (hide, p, toward, aside),
-                              anchor=1, lead=PERSON_LEAD)
-            return StressorLayout("emerge", frozenset({stub}), (), mover, p,
-                                  tuple(leg[k - 3:k + 2]), frozenset(leg) | {hide, aside})
+            yield k, leg[k], d, n
+
+
+def _emerge(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: random.Random
+            ) -> StressorLayout:
+    for k, p, d, n in _meeting_points(leg, rng):
+        stub, hide = _add(_sub(p, d), n), _add(p, n)
+        toward = _sub(p, d)
+        aside = _sub(toward, n)
+        if any(t not in floors or t in blocked for t in (stub, hide, aside)):
+            continue
+        if not is_connected(floors - {stub}):
+            continue
+        mover = MoverPath("emerging_person", "human", "human", (hide, p, toward, aside),
+                          anchor=1, lead=PERSON_LEAD)
+        return StressorLayout("emerge", frozenset({stub}), (), mover, p,
+                              tuple(leg[k - 3:k + 2]), frozenset(leg) | {hide, aside})
     raise StressorFailed("no straight stretch of the first leg with room for a wall stub "
                          "and a person behind it")
 
 
 def _crossing(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: random.Random
               ) -> StressorLayout:
-    runs = _straight_runs(leg, 3, 1)
-    rng.shuffle(runs)
-    for k, d in runs:
-        p = leg[k]
-        for n in _perpendiculars(d, rng):
-            way = [_add(p, n, 2), _add(p, n, 1), p, _add(p, n, -1), _add(p, n, -2)]
-            if any(t not in floors or (t != p and t in blocked) for t in way):
-                continue
-            # The cart faces where it goes, so its length lies along its way.
-            heading = float(round(math.degrees(math.atan2(-n[1], -n[0]))) % 360)
-            mover = MoverPath("crossing_cart", "dynamic", "cart", tuple(way), anchor=2,
-                              lead=CART_LEAD, heading=heading)
-            return StressorLayout("crossing", frozenset(), (), mover, p,
-                                  tuple(leg[k - 3:k + 2]), frozenset(leg) | set(way))
+    for k, p, _d, n in _meeting_points(leg, rng):
+        way = [_add(p, n, 2), _add(p, n, 1), p, _add(p, n, -1), _add(p, n, -2)]
+        if any(t not in floors or (t != p and t in blocked) for t in way):
+            continue
+        # The cart faces where it goes, so its length lies along its way.
+        heading = float(round(math.degrees(math.atan2(-n[1], -n[0]))) % 360)
+        mover = MoverPath("crossing_cart", "dynamic", CART_TYPE, tuple(way), anchor=2,
+                          lead=CART_LEAD, heading=heading)
+        return StressorLayout("crossing", frozenset(), (), mover, p,
+                              tuple(leg[k - 3:k + 2]), frozenset(leg) | set(way))
     raise StressorFailed("no straight stretch of the first leg with two free tiles on "
                          "either side for a crossing cart")
 
@@ -283,7 +283,7 @@ def _oncoming(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: rando
             aside = _add(entrance, n)
             if aside not in floors or aside in blocked or walls & blocked:
                 continue
-            if not walls or not _connected(floors - walls):
+            if not walls or not is_connected(floors - walls):
                 continue
             path = (*reversed(corridor), entrance, aside)
             mover = MoverPath("oncoming_person", "human", "human", path,
@@ -334,11 +334,19 @@ def _gap(floors: set[Cell], goals: Sequence[Cell], leg: list[Cell], half: float,
         opening = rng.choice([t for t in openings if abs(t[lat] - at) == far])
         tables = [t for t in run if t != opening]
         rest = floors - set(tables)
-        if not _connected(rest):
+        if not is_connected(rest):
             continue
         heading = 90.0 if axis == 0 else 0.0  # the table's long side along the row
         row = tuple(RowObject(ROW_TYPE, t, heading) for t in tables)
-        keep = frozenset({opening, _add(opening, cell(1, 0)), _add(opening, cell(-1, 0))})
+        # Free of other objects: the opening and the tiles either side of it (the way round
+        # stays open), and the slot's and the straight line's tiles (the slot stays the
+        # point's shortest way, with nothing else on the way to it).
+        steps = max(abs(dx), abs(dy)) * 10
+        line = {(round(start[0] + dx * m / steps), round(start[1] + dy * m / steps))
+                for m in range(steps + 1)}
+        keep = frozenset(t for t in line | {_add(u, cell(k, 0)) for u in (opening, *slot)
+                                            for k in (-1, 0, 1)}
+                         if t in floors) - set(tables)
         return StressorLayout("gap", frozenset(), row, None, slot[0], (), keep,
                               slot=slot, slot_width=round(1.0 - 2 * half, 6))
     raise StressorFailed("no place across the first leg for a row of tables with an opening "
@@ -358,8 +366,8 @@ def planned_arrival(route: Sequence[Cell], point: Cell, speed: float) -> float:
     return START_DELAY + route_lengths(route)[list(route).index(point)] / speed
 
 
-def time_layout(layout: StressorLayout, route: Sequence[Cell], params: RoomParameters
-                ) -> StressorPlan:
+def time_layout(layout: StressorLayout, route: Sequence[Cell], params: RoomParameters,
+                bodies: Bodies) -> StressorPlan:
     """The mover's vertex times from the final route; StressorFailed when the final route
     no longer meets the stressor where it was laid out, or the timing cannot be met."""
     if layout.kind == "gap":
@@ -372,8 +380,8 @@ def time_layout(layout: StressorLayout, route: Sequence[Cell], params: RoomParam
     if at < 0 or cells[at:at + len(layout.approach)] != list(layout.approach):
         raise StressorFailed("the objects moved the robot's route off the stressor")
     final = cells[:at + len(layout.approach)]
-    limit = params.max_speed if params.max_speed is not None else TOP_SPEED
-    nominal, top = min(NOMINAL_SPEED, limit), min(TOP_SPEED, limit)
+    limit = params.max_speed if params.max_speed is not None else bodies.top_speed
+    nominal, top = min(NOMINAL_SPEED, limit), min(bodies.top_speed, limit)
     arrival = planned_arrival(final, layout.point, nominal)
     meeting = arrival - mover.lead / nominal
     walk = route_lengths(mover.vertices)
@@ -382,9 +390,9 @@ def time_layout(layout: StressorLayout, route: Sequence[Cell], params: RoomParam
     if mover.role == "dynamic":
         # A scripted cart must have left the robot's lane before the robot, at its top
         # speed and on the straightest way, could be there.
-        reach = math.dist(final[0], layout.point) - (ROBOT_HALF[0] + CART_HALF[1]
-                                                     + CART_CLEARANCE)
-        lane = ROBOT_HALF[1] + CART_HALF[0] + CART_CLEARANCE
+        reach = math.dist(final[0], layout.point) - (bodies.robot_half[0]
+                                                     + bodies.cart_half[1] + CART_CLEARANCE)
+        lane = bodies.robot_half[1] + bodies.cart_half[0] + CART_CLEARANCE
         cleared = go + (walk[mover.anchor] + lane) / speed
         earliest = reach / top
         if cleared > earliest:
