@@ -20,6 +20,7 @@ import pytest
 
 from rei.runtime.monitor.model import PushTracker
 from tests.monitor.streams import human
+from tests.runtime.test_humans import ROOM as HUMANS_ROOM
 from tests.monitor.test_default_requirements import Tick, run
 
 REPO = Path(__file__).resolve().parents[2]
@@ -91,19 +92,9 @@ def test_a_robot_pushing_into_a_person_fails(tmp_path: Path) -> None:
 
 # ---- the real simulator ----------------------------------------------------------------------
 
-ROOM = """room corridor {
-    grid g {
-        "###########"
-        "#.........#"
-        "#.........#"
-        "#.........#"
-        "###########"
-    }
-    robot r : turtlebot3_waffle on g_2_5
-    human walker PERSON
-}
-"""
-WALKS_IN = "on g_2_1 trajectory stop { g_2_1 at 0  g_2_9 at 8 }"
+WALKER = "on g_2_1 trajectory stop { g_2_1 at 0  g_2_9 at 8 }BEHAVIOUR"
+ROOM = HUMANS_ROOM.replace(WALKER, "PERSON")  # test_humans' corridor, the walker's line apart
+WALKS_IN = WALKER.replace("BEHAVIOUR", "")  # scripted: it walks on through the robot
 STANDS = "on g_2_7"
 MISSION = """mission stand in "corridor.room" {
     goal here at g_2_5 tolerance 0.3 timeout 5
