@@ -14,7 +14,9 @@ Reported per navigator: seeds caught (and flagged), failed runs, and what caught
 requirement whose verdict was "fail" (counted over the failed runs the reference passed; names
 are read from the runs' summary.json, none is assumed here), "inconclusive" verdicts apart, and
 the runs whose only failure is the task outcome ("task:failed (timeout)", "task:crashed", ...).
-Then: detection rate (defects caught on every seed / defects; and caught seed-campaigns /
+A second table names, per defect and seed, the requirements that caught it (the target: a
+named requirement on every seed). Then: detection rate (defects caught on every seed / defects;
+and caught seed-campaigns /
 defect seed-campaigns), the reference's false-alarm rate (its campaigns with any failed run),
 which defects were caught only by task outcomes, and each navigator's campaign wall time (noisy
 on a shared machine) and simulated seconds (deterministic: longer missions, time-outs) relative
@@ -211,6 +213,9 @@ def summarise(navs: list[Navigator], results: dict[str, list[CampaignOutcome]],
             "caught_by": dict(caught.most_common()),
             "caught_by_all_failed_runs": dict(catchers(camps).most_common()),
             "caught_by_requirement": bool(named),
+            "per_seed": {str(c.seed): dict(Counter(k for r in runs for k in r.catchers)
+                                           .most_common())
+                         for c, runs in zip(camps, new, strict=True)},
             "time_vs_reference": sum(ratios) / len(ratios) if ratios else None,
             "simulated_vs_reference": sum(sim) / len(sim) if sim else None,
         })
@@ -240,7 +245,34 @@ def summarise(navs: list[Navigator], results: dict[str, list[CampaignOutcome]],
                                         if r["seeds_caught"] and not r["caught_by_requirement"]],
         "caught_by_a_requirement": [r["navigator"] for r in defects
                                     if r["caught_by_requirement"]],
+        "caught_by_a_requirement_every_seed": [
+            r["navigator"] for r in defects if r["per_seed"] and all(
+                any(not k.startswith((TASK, INCONCLUSIVE)) for k in found)
+                for found in r["per_seed"].values())],
     }
+
+
+def named_catchers(found: dict[str, int]) -> str:
+    """The requirements that failed in the runs the reference passed, most runs first; the
+    task outcome or inconclusive verdicts only when no requirement failed."""
+    named = [f"{k} ({n})" for k, n in found.items() if not k.startswith((TASK, INCONCLUSIVE))]
+    if named:
+        return ", ".join(named)
+    other = [f"{k} ({n})" for k, n in found.items()]
+    return ("only " + ", ".join(other)) if other else "not caught"
+
+
+def seed_table(summary: dict[str, Any]) -> str:
+    """Per defect and seed: which requirement caught it (runs the reference passed)."""
+    seeds = [str(s) for s in summary["seeds"]]
+    lines = ["| navigator | " + " | ".join(f"seed {s}" for s in seeds) + " |",
+             "|---|" + "---|" * len(seeds)]
+    for r in summary["rows"]:
+        if r["navigator"] == REFERENCE:
+            continue
+        cells = [named_catchers(r["per_seed"].get(s, {})) for s in seeds]
+        lines.append(f"| {r['navigator']} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
 
 
 def table(summary: dict[str, Any], markdown: bool) -> str:
@@ -279,6 +311,14 @@ def table(summary: dict[str, Any], markdown: bool) -> str:
         f"{', '.join(summary['caught_only_by_task_outcome']) or 'none'}.",
         f"* Caught by a named requirement: "
         f"{', '.join(summary['caught_by_a_requirement']) or 'none'}.",
+        f"* Caught by a named requirement on every seed: "
+        f"{len(summary['caught_by_a_requirement_every_seed'])}/{n_defects} "
+        f"({', '.join(summary['caught_by_a_requirement_every_seed']) or 'none'}).",
+        "",
+        "Per defect and seed, the requirements that failed in runs the reference passed "
+        "(number of runs):",
+        "",
+        seed_table(summary),
     ]
     return "\n".join(lines)
 

@@ -12,6 +12,7 @@ from rei.lang.mission.model import (
     COLLECTED_DATA,
     DEFAULT_HEADING_TOLERANCE,
     DEFAULT_SAMPLE_RATE,
+    DEFAULT_SETTLE,
     DEFAULT_TOLERANCE,
     Mission,
 )
@@ -77,6 +78,8 @@ def print_mission(mission: Mission, room_path: str) -> str:
         lines.append(f"    time_limit {_num(mission.time_limit)}")
     if mission.max_speed is not None:
         lines.append(f"    max_speed {_num(mission.max_speed)}")
+    if mission.settle != DEFAULT_SETTLE:
+        lines.append(f"    settle {_num(mission.settle)}")
     if mission.sample_rate != DEFAULT_SAMPLE_RATE or mission.data != COLLECTED_DATA:
         lines.append(f"    monitor {{ rate {_num(mission.sample_rate)} Hz  data "
                      f"{', '.join(mission.data)} }}")

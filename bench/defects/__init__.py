@@ -36,6 +36,8 @@ DEFECTS: tuple[Defect, ...] = (
     _defect("perception", "BlindSector", "blind-sector"),
     _defect("timing", "StaleScans", "stale-scans"),
     _defect("timing", "ControlLatency", "control-latency"),
+    _defect("timing", "CommandDropout", "command-dropout"),
+    _defect("timing", "DelayedScans", "delayed-scans"),
     _defect("control", "ExceedsDriveLimit", "exceeds-drive-limit"),
     _defect("control", "IgnoresMissionSpeed", "ignores-mission-speed"),
     _defect("control", "NoSlowZone", "no-slow-zone"),

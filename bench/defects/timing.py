@@ -70,3 +70,71 @@ class ControlLatency(ReferenceNavigator):
         while self._queue and self._queue[0][0] <= observation.time - LATENCY + 1e-9:
             self._released = self._queue.popleft()[1]
         return self._released
+
+
+DROPOUT_PERIOD = 2.0
+"""Seconds between the starts of two of CommandDropout's outages."""
+DROPOUT_LENGTH = 0.6
+"""Seconds each outage lasts."""
+
+
+class CommandDropout(ReferenceNavigator):
+    """Defect: for 0.6 s of every 2 s no command reaches the drive, and the base keeps
+    executing the last one it received (the navigator goes on deciding, unaware).
+
+    Imitates: `cmd_vel` over a lossy wireless link or a saturated DDS writer dropping
+    messages, with a base driver that holds the last command instead of timing out to zero.
+
+    Expected catcher: the collision requirements and HUMAN_SLOW_ZONE (it keeps driving
+    towards a person it has already seen), task failures from overshooting goals
+    (MISSION_GOALS_REACHED), SMOOTH_MOTION (late corrections).
+    """
+
+    name = "command-dropout"
+
+    def reset(self, context: ControllerContext) -> None:
+        super().reset(context)
+        self._held = STOP
+
+    def step(self, observation: Observation) -> VelocityCommand:
+        command = super().step(observation)
+        if observation.time % DROPOUT_PERIOD >= DROPOUT_LENGTH:
+            self._held = command  # delivered
+        return self._held
+
+
+SCAN_DELAY = 0.6
+"""Seconds DelayedScans' scans arrive after they were taken."""
+
+
+class DelayedScans(ReferenceNavigator):
+    """Defect: every laser scan reaches the navigator 0.6 s after it was taken (at the laser's
+    full rate), and the navigator treats it as the world now.
+
+    Imitates: a laser driver or a message filter with a deep queue on an overloaded computer
+    (a TF wait, a `message_filters` cache), delivering old scans without dropping any.
+
+    Expected catcher: the collision requirements with moving humans and dynamic objects
+    (MISSION_WITH_HUMAN_TRAJECTORY, NO_ROBOT_COLLISION), HUMAN_SLOW_ZONE (a person is seen
+    where they were); the stressor rooms' emerging people and crossing carts.
+    """
+
+    name = "delayed-scans"
+
+    def reset(self, context: ControllerContext) -> None:
+        super().reset(context)
+        self._scans: deque[tuple[float, LaserScan]] = deque()
+        self._last_time: float | None = None
+        self._delivered: tuple[LaserScan, float] | None = None
+
+    def step(self, observation: Observation) -> VelocityCommand:
+        if observation.scan is not None and observation.scan_time != self._last_time:
+            self._last_time = observation.scan_time
+            taken = observation.scan_time if observation.scan_time is not None \
+                else observation.time
+            self._scans.append((taken, observation.scan))
+        while self._scans and self._scans[0][0] <= observation.time - SCAN_DELAY + 1e-9:
+            taken, scan = self._scans.popleft()
+            self._delivered = (scan, taken)
+        scan, taken = self._delivered if self._delivered is not None else (None, None)
+        return super().step(replace(observation, scan=scan, scan_time=taken))

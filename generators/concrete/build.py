@@ -84,7 +84,7 @@ def concretise_mission(doc: MissionDocument) -> ConcreteMission:
                                   goal.timeout, math.radians(goal.heading_tolerance_deg)))
     return ConcreteMission(mission.name, mission.path, world, tuple(goals), mission.cycles,
                            mission.effective_time_limit(), mission.max_speed,
-                           mission.sample_rate, mission.data, mission.faults)
+                           mission.sample_rate, mission.data, mission.faults, mission.settle)
 
 
 def load_concrete_mission(path: str | Path, workspace: Workspace | None = None) -> ConcreteMission:

@@ -146,6 +146,8 @@ class ConcreteMission:
     """What the data collector forwards (the mission's ``monitor`` block)."""
     faults: tuple[FaultDefinition, ...] = ()
     """The mission's ``fault`` section (rei.runtime.faults.fault_stage builds the stage)."""
+    settle: float = 0.0
+    """Seconds the mission goes on after its last task ended (the .mission's ``settle``)."""
 
     def tasks(self) -> tuple[ConcreteGoal, ...]:
         """The goals in the order they are sent (the sequence repeated ``cycles`` times)."""

@@ -30,7 +30,7 @@ FORMAT_VERSION = 4
 causes, scenario facts, requirement premises; 4: queries with several parameters, the floors
 of objects and goals)."""
 INTERPOLATED = {"laser_min", "laser_clearance", "speed", "time", "odom_error", "turn_rate",
-                "yaw_rate"}
+                "yaw_rate", "own_speed", "own_turn_rate", "own_yaw_rate", "settle_travel"}
 """Measures that change continuously between samples (crossings are replayed in order)."""
 
 

@@ -174,7 +174,7 @@ def mission_completions(text_before: str, room: Room | None,
         return _floors(room)
     if prev == "in":
         return [Candidate(f'"{name}"', "file", "room file") for name in room_files]
-    if prev in ("cycles", "time_limit", "max_speed", "tolerance", "heading",
+    if prev in ("cycles", "time_limit", "max_speed", "settle", "tolerance", "heading",
                 "heading_tolerance", "timeout", "rate"):
         return []
     if ctx.blocks and ctx.blocks[-1] == "fault":

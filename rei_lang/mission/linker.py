@@ -19,6 +19,7 @@ from rei.lang.mission.model import (
     COLLECTED_DATA,
     DEFAULT_HEADING_TOLERANCE,
     DEFAULT_SAMPLE_RATE,
+    DEFAULT_SETTLE,
     DEFAULT_TIMEOUT,
     DEFAULT_TOLERANCE,
     MAX_SAMPLE_RATE,
@@ -36,7 +37,8 @@ from rei.lang.source import SourceText
 from rei.lang.suggest import did_you_mean
 
 MAX_CYCLES = 10_000
-_WORDS = {"FaultSection": "fault", "TimeLimit": "time_limit", "MaxSpeed": "max_speed"}
+_WORDS = {"FaultSection": "fault", "TimeLimit": "time_limit", "MaxSpeed": "max_speed",
+          "Settle": "settle"}
 
 
 def room_path_of(textx_mission: Any, source: SourceText) -> str:
@@ -58,6 +60,7 @@ def link_mission(textx_mission: Any, source: SourceText, room_doc: RoomDocument
     cycles: float | None = None
     time_limit: float | None = None
     max_speed: float | None = None
+    settle: float | None = None
     sample_rate: float | None = None
     data: tuple[str, ...] = COLLECTED_DATA
     seen: set[str] = set()
@@ -79,6 +82,8 @@ def link_mission(textx_mission: Any, source: SourceText, room_doc: RoomDocument
         elif kind == "TimeLimit":
             time_limit = number(item.seconds, item, "time_limit (seconds)", low=0.0,
                                 high=MAX_TIME, low_open=True)
+        elif kind == "Settle":
+            settle = number(item.seconds, item, "settle (seconds)", low=0.0, high=MAX_TIME)
         elif kind == "MaxSpeed":
             max_speed = number(item.value, item, "max_speed (m/s)", low=0.0, high=100.0,
                                low_open=True)
@@ -102,6 +107,7 @@ def link_mission(textx_mission: Any, source: SourceText, room_doc: RoomDocument
         sample_rate=sample_rate if sample_rate is not None else DEFAULT_SAMPLE_RATE,
         data=data,
         faults=tuple(faults),
+        settle=settle if settle is not None else DEFAULT_SETTLE,
     )
     if len(goals) < 2:
         diagnostics.append(Diagnostic(mission.span, "MISSION-GOALS",

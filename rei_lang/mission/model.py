@@ -15,6 +15,9 @@ DEFAULT_TIMEOUT = 120.0
 DEFAULT_HEADING_TOLERANCE = 15.0
 """Degrees; how far the final heading may be off a goal's heading (ignored without one)."""
 DEFAULT_SAMPLE_RATE = 10.0
+DEFAULT_SETTLE = 3.0
+"""Seconds a mission goes on after its last task ended (``settle``): a navigator that never
+stops, or drifts off after reporting success, is seen doing it."""
 """Samples per second of simulation time: twice the default laser rate, so no scan is lost."""
 MAX_SAMPLE_RATE = 1000.0
 """Samples per second at most (the run's physics rate, default 100, must be a multiple)."""
@@ -56,13 +59,16 @@ class Mission:
     """What the data collector forwards, a subset of COLLECTED_DATA in its order."""
     faults: tuple[FaultDefinition, ...] = ()
     """The ``fault`` section: what is injected between the sensors and the robot under test."""
+    settle: float = DEFAULT_SETTLE
+    """Seconds the mission goes on after its last task ended (``settle``)."""
 
     def task_sequence(self) -> tuple[Goal, ...]:
         """The goals in the order they are sent: the sequence repeated ``cycles`` times."""
         return self.goals * self.cycles
 
     def effective_time_limit(self) -> float:
-        """The mission's time limit: as written, or the sum of the tasks' timeouts."""
+        """The mission's time limit: as written, or the sum of the tasks' timeouts and the
+        settle period."""
         if self.time_limit is not None:
             return self.time_limit
-        return sum(g.timeout for g in self.task_sequence())
+        return sum(g.timeout for g in self.task_sequence()) + self.settle

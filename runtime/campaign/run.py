@@ -63,7 +63,7 @@ def run_campaign(plan: CampaignPlan, root: Path, engine: CampaignEngine,
                 record = store.record(spec, result, work)
                 if record is not None:
                     ran += 1
-                    progress.update(record.passed)
+                    progress.update(record.verdict)
         finally:
             progress.finish()
             # Tables always match the records, also after Ctrl-C (they are rebuilt on resume).

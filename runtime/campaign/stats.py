@@ -5,9 +5,10 @@ A rate from 3 repeats is not a rate from 300: every rate carries its Wilson scor
 the normal approximation. A mission whose repeats disagree (some pass, some fail) is labelled
 flaky. Against a required pass rate each mission gets one verdict (``mission_verdicts``), and
 with ``--pair-static`` each failing mission is told apart by whether its runs in the same room
-without people fail too (``classify_pairs``). The campaign's exit status, junit.xml and the
-report all take the verdicts from here, so they cannot disagree. This module must never read
-files.
+without people fail too (``classify_pairs``). The campaign's status and exit code
+(``campaign_outcome``: the one rule behind `rei campaign`, `rei demo` and `rei report`),
+junit.xml and the report all take the verdicts from here, so they cannot disagree. This module
+must never read files.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from dataclasses import dataclass
 from statistics import NormalDist
 from typing import Literal
 
+from rei.lang.cli_support import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_RUN_ERROR
 from rei.runtime.campaign.store import RunRecord
 
 
@@ -83,7 +85,11 @@ DEFAULT_PASS_RATE = 1.0
 """Every run must pass: without --pass-rate a campaign is as strict as its runs (exit status 0
 only when every run passed), which is what a CI job that never asked for a rate expects."""
 
-MissionVerdictKind = Literal["pass", "fail", "flaky"]
+MissionVerdictKind = Literal["pass", "fail", "flaky", "inconclusive"]
+
+FAILING_RUNS = frozenset({"fail", "error"})
+"""Run verdicts that show something wrong; the others that do not pass (inconclusive,
+unjudged, interrupted) only leave the question open."""
 
 
 @dataclass(frozen=True)
@@ -142,17 +148,91 @@ def mission_verdicts(records: Iterable[RunRecord], required: float = DEFAULT_PAS
     a diagnosis, not the mission under test: they never count towards its verdict."""
     check_pass_rate(required)
     tested = [r for r in records if not r.spec.static_pair]
-    return [judge_mission(rate, required) for rate in success_rates(tested, by_mission, confidence)]
+    failing = {by_mission(r) for r in tested if r.verdict in FAILING_RUNS}
+    out = []
+    for rate in success_rates(tested, by_mission, confidence):
+        verdict = judge_mission(rate, required)
+        if verdict.verdict != "pass" and rate.key not in failing:
+            # Nothing failed, something was not decided: the mission is an open question, not
+            # a failure (a smoke test cut short by --duration is the common case).
+            verdict = MissionVerdict(rate, required, "inconclusive",
+                                     f"{verdict.reason}; no run failed, "
+                                     f"{rate.runs - rate.passed} inconclusive")
+        out.append(verdict)
+    return out
 
 
 def campaign_passed(verdicts: Iterable[MissionVerdict]) -> bool:
-    """Every mission passed; a flaky one does not (CI must not go green on an open question)."""
+    """Every mission passed; a flaky or inconclusive one does not (CI must not go green on an
+    open question)."""
     return all(v.verdict == "pass" for v in verdicts)
+
+
+# -- the campaign's one status and exit code ---------------------------------------------
+
+CampaignStatus = Literal["pass", "fail", "inconclusive", "error", "interrupted", "incomplete"]
+
+
+@dataclass(frozen=True)
+class CampaignOutcome:
+    """What a campaign folder says as a whole: its status word and the exit code of every
+    command that reports on it (`rei campaign`, `rei demo`, `rei report`)."""
+
+    status: CampaignStatus
+    exit_code: int
+    missions: int
+    missions_passed: int
+    run_errors: int
+    """Runs (static twins included) that crashed, hung or ended in a run error."""
+    missing: int
+    """Planned runs with no record."""
+
+    def line(self) -> str:
+        """The final line the commands print (before the report's location)."""
+        more = [f"{self.run_errors} run(s) errored"] if self.run_errors else []
+        if self.missing:
+            more.append(f"{self.missing} planned run(s) not recorded")
+        return (f"verdict: {self.status.upper()}; {self.missions_passed} of {self.missions} "
+                f"missions passed" + "".join(f"; {m}" for m in more))
+
+
+def campaign_outcome(records: Iterable[RunRecord], verdicts: Iterable[MissionVerdict], *,
+                     planned: int, interrupted: bool = False) -> CampaignOutcome:
+    """The exit rule of a campaign, in order of precedence:
+
+    130 interrupted (the session stopped before its runs were done; resume it);
+    3   a run errored (crashed, hung, the controller raised, a bad mission file): the campaign
+        could not judge that run, which no pass rate may hide;
+    1   a mission failed or is flaky (status "fail"), or none failed but one is inconclusive
+        (status "inconclusive"), or planned runs have no record (status "incomplete");
+    0   every mission passed and every planned run is recorded.
+    """
+    runs = list(records)
+    judged = list(verdicts)
+    errors = sum(r.verdict == "error" for r in runs)
+    kinds = {v.verdict for v in judged}
+    missing = max(0, planned - len(runs))
+    status: CampaignStatus
+    if interrupted:
+        status, code = "interrupted", EXIT_INTERRUPTED
+    elif errors:
+        status, code = "error", EXIT_RUN_ERROR
+    elif kinds & {"fail", "flaky"}:
+        status, code = "fail", EXIT_FAILED
+    elif "inconclusive" in kinds:
+        status, code = "inconclusive", EXIT_FAILED
+    elif missing or not judged:
+        status, code = "incomplete", EXIT_FAILED
+    else:
+        status, code = "pass", EXIT_OK
+    return CampaignOutcome(status, code, len(judged), sum(v.verdict == "pass" for v in judged),
+                           errors, missing)
 
 
 # -- paired static runs: the people or the room? ----------------------------------------
 
-PairCause = Literal["passes", "fails with people only", "fails in the static room too"]
+PairCause = Literal["passes", "fails with people only", "fails in the static room too",
+                    "inconclusive with people only", "inconclusive in the static room too"]
 
 
 @dataclass(frozen=True)
@@ -174,7 +254,10 @@ def classify_pairs(records: Iterable[RunRecord], confidence: float = 0.95
                    ) -> list[PairedMission]:
     """Per paired mission: "passes" when every run with people passed; "fails in the static
     room too" when some failing run's static twin failed as well (the room, the navigator or
-    the mission is the problem, people or not); else "fails with people only"."""
+    the mission is the problem, people or not); else "fails with people only". A mission whose
+    runs with people did not pass but none failed (inconclusive, as in a smoke test cut short)
+    is "inconclusive in the static room too" or "inconclusive with people only" alike: an
+    open question is never labelled a failure. "Failed" is a run verdict of fail or error."""
     all_records = list(records)
     static = {r.spec.pair: r for r in all_records if r.spec.static_pair}
     people = [r for r in all_records if not r.spec.static_pair and r.spec.pair in static]
@@ -183,17 +266,31 @@ def classify_pairs(records: Iterable[RunRecord], confidence: float = 0.95
         [static[r.spec.pair] for r in people], lambda r: by_mission_of_pair(r), confidence)}
     failed: dict[str, int] = {}
     both: dict[str, int] = {}
+    really: set[str] = set()
+    """Missions with a run with people that failed (not only inconclusive ones)."""
+    static_fails: set[str] = set()
     for record in people:
         key = by_mission(record)
         if not record.passed:
             failed[key] = failed.get(key, 0) + 1
-            if not static[record.spec.pair].passed:
+            twin = static[record.spec.pair]
+            if not twin.passed:
                 both[key] = both.get(key, 0) + 1
+            if record.verdict in FAILING_RUNS:
+                really.add(key)
+                if twin.verdict in FAILING_RUNS:
+                    static_fails.add(key)
     out = []
     for key, rate in rates.items():
-        cause: PairCause = ("passes" if not failed.get(key) else
-                            "fails in the static room too" if both.get(key) else
-                            "fails with people only")
+        cause: PairCause
+        if not failed.get(key):
+            cause = "passes"
+        elif key in really:
+            cause = ("fails in the static room too" if key in static_fails
+                     else "fails with people only")
+        else:
+            cause = ("inconclusive in the static room too" if both.get(key)
+                     else "inconclusive with people only")
         out.append(PairedMission(key, rate, static_rates[key], failed.get(key, 0),
                                  both.get(key, 0), cause))
     return out

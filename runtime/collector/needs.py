@@ -23,6 +23,15 @@ MEASURE_DATA = {
     "odom_error": "odometry",
     "cmd_speed": "nav_state",
     "cmd_turn": "nav_state",
+    # the robot's own motion is the ground truth capped at its command while it is pushed
+    "own_speed": "nav_state",
+    "own_turn_rate": "nav_state",
+    "own_yaw_rate": "nav_state",
+    "pushed": "nav_state",
+    "settle_travel": "nav_state",  # own motion, after the mission events' last task end
+    "path_ratio": "mission_events",  # judged when the mission events say a task succeeded
+    "time_ratio": "mission_events",
+    "goal_spin": "nav_state",  # own motion, near the running task's goal
     "nav_state": "nav_state",
     "mission_state": "mission_events",
 }

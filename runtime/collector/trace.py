@@ -743,6 +743,14 @@ class TraceWriter:
         os.replace(self.partial, self.path)
 
 
+    def abandon(self) -> None:
+        """Stop writing and remove the partial file (a stream that broke off: no trace)."""
+        if self._file is not None:
+            self._file.close()
+            self._file = None
+        self.partial.unlink(missing_ok=True)
+
+
 def write(path: str | Path, header: StreamHeader, samples: Iterator[Sample] | list[Sample],
           end_time: float, outcome: str = "completed", reason: str = "") -> None:
     """Write a whole trace at once (what a run streams through ``TraceWriter``)."""

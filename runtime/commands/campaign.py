@@ -2,10 +2,11 @@
 
 Writes the results store (results.parquet / results.csv, a folder per run), report.html and
 junit.xml into DIR. Each mission gets a verdict against the required pass rate (--pass-rate,
-judged on the Wilson interval of its rate; see docs/campaign.md). Exit status 0 when every
-mission passes, 1 when any mission fails or is flaky (a crashed or hung run is a run that did
-not pass), 2 for bad input, 130 when interrupted — Ctrl-C or SIGTERM of the campaign, the only
-way a run goes unrecorded (run the same command to resume).
+judged on the Wilson interval of its rate; see docs/campaign.md). Exit status (one rule for
+`rei campaign`, `rei demo` and `rei report`: rei.runtime.campaign.stats.campaign_outcome) 0
+when every mission passes, 1 when a mission fails, is flaky or is inconclusive, 2 for bad
+input, 3 when any run errored (crashed, hung, a run error), 130 when interrupted — Ctrl-C or
+SIGTERM of the campaign, the only way a run goes unrecorded (run the same command to resume).
 """
 
 from __future__ import annotations
@@ -21,7 +22,13 @@ from collections.abc import Iterator
 from pathlib import Path
 from types import FrameType
 
-from rei.lang.cli_support import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK
+from rei.lang.cli_support import EXIT_INTERRUPTED
+
+EXIT_STATUS_HELP = ("Exit status: 0 every mission passes (--pass-rate), 1 a mission fails, is "
+                    "flaky or is inconclusive (none failed, one could not be decided), 2 bad "
+                    "input, 3 a run errored (crashed, hung, the controller raised), 130 "
+                    "interrupted.")
+"""The exit rule as `rei campaign`, `rei demo` and `rei report` state it in their --help."""
 
 
 def positive_int(text: str) -> int:
@@ -80,10 +87,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                     "results.parquet/.csv, runs/RUN_ID/, report.html, junit.xml. Interrupted "
                     "(Ctrl-C, SIGTERM)? Run the same command again: only the missing runs run. "
                     "A run that dies any other way (kill -9, out of memory, a crash) is "
-                    "recorded as crashed, and runs killed with the campaign die with it. Exit "
-                    "status: 0 every mission passes (--pass-rate), 1 a mission fails or is "
-                    "flaky (crashed and hung runs did not pass), 2 bad input, 130 "
-                    "interrupted.")
+                    "recorded as crashed, and runs killed with the campaign die with it. "
+                    + EXIT_STATUS_HELP)
     parser.add_argument("missions", nargs="+", type=Path, metavar="MISSIONS",
                         help=".mission files, folders with .mission files, or a suite index .csv")
     parser.add_argument("-o", "--output", type=Path, required=True, metavar="DIR",
@@ -224,11 +229,12 @@ def _terminate_as_interrupt() -> Iterator[None]:
 
 def finish(root: Path, *, no_report: bool = False, complete: bool = True,
            pass_rate: float | None = None, quiet: bool = False, verbose: bool = False) -> int:
-    """Write junit.xml and the report of a campaign folder; the exit status of its mission
-    verdicts against ``pass_rate`` (None: the rate the campaign's last session required)."""
+    """Write junit.xml and the report of a campaign folder; the exit status of the campaign
+    (``campaign_outcome``) on its mission verdicts against ``pass_rate`` (None: the rate the
+    campaign's last session required). ``complete`` False: the session was interrupted."""
     from rei.runtime.campaign import CampaignStore  # noqa: PLC0415
     from rei.runtime.campaign.stats import (  # noqa: PLC0415
-        campaign_passed,
+        campaign_outcome,
         classify_pairs,
         mission_verdicts,
     )
@@ -238,7 +244,7 @@ def finish(root: Path, *, no_report: bool = False, complete: bool = True,
     outcome = build_report(root, html=not no_report)
     if not quiet:
         print(outcome.describe(), file=sys.stderr)
-    _, manifest, records = CampaignStore.read(root)
+    plan, manifest, records = CampaignStore.read(root)
     required = required_pass_rate(manifest) if pass_rate is None else pass_rate
     verdicts = mission_verdicts(records, required)
     causes = {p.mission: p.cause for p in classify_pairs(records)}
@@ -253,11 +259,8 @@ def finish(root: Path, *, no_report: bool = False, complete: bool = True,
         for record in outcome.failed:
             print(f"    {record.spec.run_id}: {record.verdict}; rerun: "
                   f"{rerun_command(record.spec)}", file=sys.stderr)
-    passed = campaign_passed(verdicts)
-    good = sum(v.verdict == "pass" for v in verdicts)
+    status = campaign_outcome(records, verdicts, planned=len(plan.runs),
+                              interrupted=not complete)
     where = f"; report: {outcome.html}" if outcome.html is not None else ""
-    print(f"verdict: {'PASS' if passed else 'FAIL'}{'' if complete else ' (incomplete)'}; "
-          f"{good} of {len(verdicts)} missions passed{where}")
-    if not complete:
-        return EXIT_INTERRUPTED
-    return EXIT_OK if passed else EXIT_FAILED
+    print(status.line() + where)
+    return status.exit_code

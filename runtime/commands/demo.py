@@ -4,8 +4,10 @@ The README's first command: everything on the embedded defaults (catalogue, defa
 reference controller), a couple of minutes on two cores; ``--controller`` and ``--vepl`` put a
 user's own navigator and monitoring specification on the same suite, as `rei campaign` would.
 It uses `rei-gen rooms` when that generator is installed and the bundled examples otherwise.
-Exit status 0 when the campaign finished (failed runs are results to look at, not a failure of
-the demo), 2 for bad input.
+It exits as `rei campaign` does (one rule, rei.runtime.campaign.stats.campaign_outcome), so a
+CI job gating a navigator on `rei demo --controller X` fails when the navigator does: 0 every
+mission passes, 1 a mission fails or is inconclusive, 2 bad input, 3 a run errored, 130
+interrupted.
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ import sys
 from pathlib import Path
 
 from rei.lang.cli_support import EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_OK
-from rei.runtime.commands.campaign import positive_int
+from rei.runtime.commands.campaign import EXIT_STATUS_HELP, positive_int
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
@@ -42,7 +44,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                     "every mission --repeat times in parallel with `rei campaign`, and write "
                     "DIR/campaign/report.html. Test your own navigator on the defaults with "
                     "--controller module:Class (and your requirements with --vepl FILE). Run "
-                    "the same command again to resume an interrupted demo.")
+                    "the same command again to resume an interrupted demo. " + EXIT_STATUS_HELP)
     parser.add_argument("-o", "--output", type=Path, required=True, metavar="DIR",
                         help="folder for the suite (DIR/suite) and the campaign (DIR/campaign)")
     parser.add_argument("--count", type=positive_int, default=6, metavar="N",
@@ -148,10 +150,10 @@ def run(args: argparse.Namespace) -> int:
         print("rei demo: interrupted; run the same command again to finish", file=sys.stderr)
         return EXIT_INTERRUPTED
     say("3/3 writing the report")
-    finish(out / "campaign", quiet=args.quiet, verbose=args.verbose)
+    status = finish(out / "campaign", quiet=args.quiet, verbose=args.verbose)
     report = (out / "campaign" / "report.html").resolve()
     print(f"{'' if args.quiet else chr(10)}Open the report: {report.as_uri()}")
     if not args.quiet:
         print(f"Re-run any failure with the command listed in it; rebuild it with "
               f"`rei report {out / 'campaign'}`.")
-    return EXIT_OK
+    return status

@@ -12,6 +12,13 @@ the results on stdout as `rei run` does (``print_results``: the same lines, --qu
 was inconclusive, 2 invalid input (a bad .vepl, an unreadable trace, or a .vepl whose queries
 read data the trace does not carry: VEPL-DATA), 3 a monitor error or a recorded run error, 130
 a recorded interrupted run.
+
+`rei replay BAG --mission M.mission [--map MAP]` judges a ROS 2 recording REI did not make
+(a Gazebo run of the launch target's world, a real robot): an MCAP file or a rosbag2 folder,
+read through ``rei.runtime.recording.bag`` against the mission's room and goals; DIR also
+gets the stream as REI's trace.jsonl (when its numbers are finite) and the generated world/.
+Data no verdict may rest on (gaps, stamps going backwards, non-finite values, bad scans)
+turns every verdict that would pass into inconclusive, naming the problem.
 """
 
 from __future__ import annotations
@@ -19,10 +26,11 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Callable, Iterator
+from dataclasses import replace
 from pathlib import Path
-from typing import Any, cast
+from typing import TYPE_CHECKING, Any, cast
 
-from rei.lang.cli_support import EXIT_RUN_ERROR
+from rei.lang.cli_support import EXIT_BAD_INPUT, EXIT_RUN_ERROR
 from rei.lang.errors import printable_lines
 from rei.runtime.commands.run import (
     REPLAY_VERBOSE_HELP,
@@ -33,9 +41,14 @@ from rei.runtime.commands.run import (
 from rei.runtime.messages import Sample, StreamHeader
 from rei.runtime.results import RESULTS_VERSION, Outcome, RunSummary
 
+if TYPE_CHECKING:
+    from rei.runtime.collector import TraceWriter
+
 HELP_EXAMPLES = """\
 rei replay out/nav/trace.jsonl -o out/nav-strict --vepl examples/navigation/human_safety.vepl
 rei replay out/rec/recording.mcap -o out/rec-again -v     # every requirement, with reasons
+rei replay my_bag/ --mission examples/simple_wall/simple_wall.mission -o out/bag
+rei replay run.mcap --mission m.mission --map rei_bag_map.toml -o out/bag
 """
 
 
@@ -49,14 +62,29 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                     "summary.json and report.html (the run's page). Same trace and "
                     "specification give the same events and verdicts as the live run. A "
                     "recording cut short by a crash is replayed up to its last complete chunk "
-                    "and judged as an interrupted run. Results go to stdout, diagnostics to "
+                    "and judged as an interrupted run. With --mission, TRACE is a ROS 2 "
+                    "recording REI did not make (MCAP file or rosbag2 folder), judged against "
+                    "the mission's room and goals. Results go to stdout, diagnostics to "
                     "stderr. Exit status: 0 every requirement passed, 1 one failed or was "
                     "inconclusive (or the .vepl declares no requirement: verdict UNJUDGED, "
                     "never a pass), 2 invalid input (a bad .vepl, an unreadable trace, a .vepl "
                     "reading data the trace lacks), 3 a monitor error or a recorded run error, "
                     "130 a recorded interrupted run.")
     parser.add_argument("trace", type=Path, metavar="TRACE",
-                        help="a trace.jsonl file or an MCAP recording (.mcap)")
+                        help="a trace.jsonl file or an MCAP recording (.mcap); with --mission "
+                             "a ROS 2 recording: an MCAP file or a rosbag2 folder")
+    parser.add_argument("--mission", type=Path, default=None, metavar="M.mission",
+                        help="judge TRACE as a ROS 2 recording of this mission (from Gazebo "
+                             "or a real robot): ground truth from /tf (frames named as the "
+                             "room's bodies), belief from /odom, /scan, /cmd_vel, mission "
+                             "progress from Nav2's navigate_to_pose status or the poses; "
+                             "REI's own recording.mcap is then judged from its ROS channels "
+                             "alone")
+    parser.add_argument("--map", type=Path, default=None, metavar="MAP.toml",
+                        dest="topic_map",
+                        help="with --mission: rename topics and frames for another stack, a "
+                             "TOML file with [topics] (\"/scan\" = \"/robot1/scan\") and "
+                             "[frames] (map = \"world\"); see docs/recording.md")
     parser.add_argument("--vepl", type=Path, default=None, metavar="FILE",
                         help="the specification (default: REI's default.vepl); its queries "
                              "may read only the data the trace carries (its header's "
@@ -91,12 +119,15 @@ def judge_stream(header: StreamHeader, samples: Iterator[Sample],
                  out_dir: Path, user: Any, automata: Any, source: str,
                  controller: str = "replay",
                  measurements: Callable[[], dict[str, Any]] | None = None,
-                 judged: Callable[[Any, Sample], None] | None = None) -> RunSummary:
+                 judged: Callable[[Any, Sample], None] | None = None,
+                 trace: TraceWriter | None = None) -> RunSummary:
     """Monitor a stream (``replay``'s trace, `rei monitor`'s bus) into ``out_dir``; the
     summary (also written as summary.json). ``source`` names the stream in errors;
     ``measurements`` gives more of the summary's measurements once the stream ended;
     ``judged(sink, sample)`` is told of each sample once the monitor has judged it (`rei
-    watch` shows it)."""
+    watch` shows it); ``trace``, when given, gets a copy of the stream (a trace that cannot be
+    written is dropped, never the judgement). A stream with ``problems`` (a ROS 2 bag's bad
+    data) has every verdict that would pass made inconclusive."""
     from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
     from rei.runtime.collector.needs import check_needs  # noqa: PLC0415
     from rei.runtime.evaluator.summary import merge_summary, write_summary  # noqa: PLC0415
@@ -116,24 +147,35 @@ def judge_stream(header: StreamHeader, samples: Iterator[Sample],
     sink = MonitorSink(vepl, out_dir, functions=user, automata=automata)
     last = 0.0
     seen = SampledTimeline()
+    copy = _TraceCopy(trace)
     try:
         sink.start(header)
+        copy.start(header)
         for sample in samples:
             sink.feed(sample)
+            copy.feed(sample)
             last = sample.time
             if header.faults:
                 seen.feed(sample.time, sample.faults)
             if judged is not None:
                 judged(sink, sample)
+    except BaseException:
+        copy.abandon()
+        raise
     finally:
         close = getattr(samples, "close", None)
         if close is not None:
             close()
-    end = read_end()
+    try:
+        end = read_end()
+    except BaseException:
+        copy.abandon()
+        raise
     cut = getattr(samples, "cut_short", "")
     end_time, outcome, reason = end if end is not None else (
         last, "interrupted", cut or "the trace has no end line")
     sink.finish(end_time, outcome, reason)
+    copy.finish(end_time, outcome, reason)
     assert sink.result is not None
     # The end line was written by `rei run` from its summary's outcome; read back as is.
     base = RunSummary(RESULTS_VERSION, header.mission, header.world, header.seed, controller,
@@ -141,19 +183,109 @@ def judge_stream(header: StreamHeader, samples: Iterator[Sample],
                       {**fault_measurements(header.faults, seen.timeline()),
                        **(measurements() if measurements is not None else {})})
     summary = merge_summary(base, sink.result)
+    problems = [p.text() for p in getattr(samples, "problems", ())]  # a bag's bad data
+    if problems:
+        summary = _doubted(summary, problems)
     write_summary(summary, out_dir)
     return summary
+
+
+class _TraceCopy:
+    """The judged stream copied into a trace.jsonl, as far as the trace's rules take it: a
+    sample they refuse (a bag's NaN pose) ends the copy, never the judgement."""
+
+    def __init__(self, writer: TraceWriter | None) -> None:
+        self.writer = writer
+
+    def _do(self, write: Callable[[TraceWriter], None]) -> None:
+        from rei.runtime.collector.trace import TraceError  # noqa: PLC0415
+
+        if self.writer is None:
+            return
+        try:
+            write(self.writer)
+        except TraceError:
+            self.abandon()
+
+    def start(self, header: StreamHeader) -> None:
+        self._do(lambda w: w.start(header))
+
+    def feed(self, sample: Sample) -> None:
+        self._do(lambda w: w.feed(sample))
+
+    def finish(self, end_time: float, outcome: str, reason: str) -> None:
+        self._do(lambda w: w.finish(end_time, outcome, reason))
+
+    def abandon(self) -> None:
+        if self.writer is not None:
+            self.writer.abandon()
+        self.writer = None
+
+
+def _doubted(summary: RunSummary, problems: list[str]) -> RunSummary:
+    """Every verdict that passed becomes inconclusive: the data it rests on has gaps,
+    stamps going backwards, non-finite values or bad scans (the recording's problems)."""
+    first = problems[0]
+    more = f" (and {len(problems) - 1} more problem(s), listed in measurements)" \
+        if len(problems) > 1 else ""
+    verdicts = tuple(replace(v, status="inconclusive",
+                             reason=f"the recording's data cannot support a pass: {first}"
+                                    f"{more}; {v.reason}")
+                     if v.status == "pass" else v for v in summary.verdicts)
+    return replace(summary, verdicts=verdicts,
+                   measurements={**summary.measurements, "recording_problems": problems[:100],
+                                 "recording_problem_count": len(problems)})
+
+
+def replay_bag(bag: Path, mission_path: Path, vepl: Path | None, out_dir: Path,
+               functions: str | None = None, topic_map: Path | None = None) -> RunSummary:
+    """Judge the ROS 2 recording ``bag`` (MCAP file or rosbag2 folder) as a run of
+    ``mission_path`` into ``out_dir``; the summary (also written as summary.json)."""
+    from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
+    from rei.runtime.collector import TraceWriter, load_monitor_config  # noqa: PLC0415
+    from rei.runtime.collector.needs import check_needs  # noqa: PLC0415
+    from rei.runtime.monitor import generate_automata  # noqa: PLC0415
+    from rei.runtime.monitor.functions import load_functions  # noqa: PLC0415
+    from rei.runtime.recording.bag import BagSamples, BagWorld, load_topic_map  # noqa: PLC0415
+    from rei.runtime.run import generate_world, stream_header  # noqa: PLC0415
+    from rei.runtime.world import load_manifest  # noqa: PLC0415
+
+    out_dir = Path(out_dir)
+    automata = generate_automata(vepl, out_dir / "automata", replace=True)
+    user = load_functions(functions, vepl)
+    mapping = load_topic_map(topic_map) if topic_map is not None else None
+    world_dir = out_dir / "world"
+    mission = generate_world(mission_path, world_dir, replace=True)
+    manifest = load_manifest(world_dir)
+    header = stream_header(manifest, load_monitor_config(world_dir), mission, 0)
+    check_needs(load_vepl(vepl), header.data, f"the mission '{mission.name}' to collect",
+                "name that data in the mission's monitor block, or drop the query")
+    world = BagWorld(header, mission.tasks(),
+                     tuple((b.x, b.y, b.yaw) for b in manifest.observed))
+    samples = BagSamples(bag, world, mapping)
+    (out_dir / "trace.jsonl").unlink(missing_ok=True)
+    return judge_stream(header, samples, samples.end, vepl, out_dir, user, automata,
+                        f"the mission '{mission.name}'",
+                        trace=TraceWriter(out_dir / "trace.jsonl"))
 
 
 def run(args: argparse.Namespace) -> int:
     from rei.runtime.monitor.errors import MonitorError  # noqa: PLC0415
 
+    if args.topic_map is not None and args.mission is None:
+        print("rei replay: error: --map: expected --mission too (a mapping renames a ROS 2 "
+              "recording's topics and frames), found --map alone", file=sys.stderr)
+        return EXIT_BAD_INPUT
     try:
-        summary = replay(args.trace, args.vepl, args.output, args.functions)
+        if args.mission is not None:
+            summary = replay_bag(args.trace, args.mission, args.vepl, args.output,
+                                 args.functions, args.topic_map)
+        else:
+            summary = replay(args.trace, args.vepl, args.output, args.functions)
     except MonitorError as exc:
         print(f"rei replay: error: {printable_lines(str(exc))}", file=sys.stderr)
         return EXIT_RUN_ERROR
-    page = write_page(args.output, args.trace)
+    page = write_page(args.output, args.trace if args.mission is None else None)
     # the one pass rule of `rei run`; a recorded run error stays an error
     return print_results(summary, args.output, page=page, quiet=args.quiet,
                          verbose=args.verbose)

@@ -12,11 +12,15 @@ rei report out/campaign --no-html    # tables and junit.xml only (for CI)
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    from rei.runtime.commands.campaign import EXIT_STATUS_HELP  # noqa: PLC0415
+
     parser = sub.add_parser(
         "report", help="rebuild report.html and junit.xml of a campaign folder",
         description="Rebuild the results tables, report.html and junit.xml of a campaign folder "
-                    "written by `rei campaign`. Exit status 0 when every recorded run passed, "
-                    "1 otherwise, 2 when DIR is not a campaign folder.")
+                    "written by `rei campaign`, and judge it again as `rei campaign` does "
+                    "(each mission against the pass rate its last session required). "
+                    + EXIT_STATUS_HELP.replace("2 bad input", "2 DIR is not a campaign folder")
+                    + " A folder with planned runs not yet recorded exits 1 (incomplete).")
     parser.add_argument("folder", type=Path, metavar="DIR", help="the -o folder of a campaign")
     parser.add_argument("--no-html", action="store_true", help="only the tables and junit.xml")
     parser.set_defaults(func=run)

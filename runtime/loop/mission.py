@@ -50,7 +50,7 @@ class MissionRun:
     def __init__(self, spec: Mission, board: Board, robot: GoalClient, probe: Probe | None,
                  say: Callable[[str], None]) -> None:
         self.spec, self.board, self.robot, self.probe, self.say = spec, board, robot, probe, say
-        self.executor = MissionExecutor(spec.mission.tasks())
+        self.executor = MissionExecutor(spec.mission.tasks(), spec.mission.settle)
         self.path_length = 0.0
         self.timed_out = False
         self._last = spec.start_pose
@@ -77,6 +77,11 @@ class MissionRun:
     def deadline(self, clock: Clock) -> None:
         """The last tick: the time (or duration) limit ends the mission."""
         if clock.stopped:
+            return
+        if self.executor.settling and self.spec.end_cause == "abandoned":
+            # The tasks are done; the time limit only cuts the settle period short.
+            self._publish(clock.now, self.executor.end_settled(clock.now), *self._nav())
+            clock.stop("mission finished")
             return
         self.abandon(clock.now, self.spec.end_reason, self.spec.end_cause)
         self.timed_out = True

@@ -6,7 +6,10 @@ timeout (the goal is then cancelled), and when the controller claims success but
 truth puts the robot outside the goal's position tolerance or, for a goal with a heading,
 turned farther from it than the heading tolerance. Every failure carries a human-readable
 reason and a machine-readable cause (messages.FAILURE_CAUSES). Cycles repeat the goal
-sequence. This module must never import pybullet or judge anything but task outcomes.
+sequence. After the last task the mission goes on for its settle period (``settle`` seconds,
+the .mission's ``settle``) before it ends: the robot is watched standing where it ended its
+last task, so a navigator that never stops or drifts off after success is seen doing it. This
+module must never import pybullet or judge anything but task outcomes.
 """
 
 from __future__ import annotations
@@ -42,13 +45,28 @@ class TaskResult:
 
 
 class MissionExecutor:
-    def __init__(self, tasks: tuple[ConcreteGoal, ...]) -> None:
+    def __init__(self, tasks: tuple[ConcreteGoal, ...], settle: float = 0.0) -> None:
         self.tasks = tasks
+        self.settle = settle
         self.results: list[TaskResult] = []
         self.begun = False
         self.finished = False
         self._current: int | None = None
         self._start = 0.0
+        self._settle_from: float | None = None
+
+    @property
+    def settling(self) -> bool:
+        """Every task has ended and the settle period runs."""
+        return self._settle_from is not None and not self.finished
+
+    def end_settled(self, time: float) -> list[MissionEvent]:
+        """End the mission in its settle period (the time limit came first): the tasks are
+        done, so this is an ordinary end, not an abandonment."""
+        if not self.settling:
+            return []
+        self.finished = True
+        return [MissionEvent("end", time)]
 
     @property
     def current_task(self) -> str | None:
@@ -89,8 +107,11 @@ class MissionExecutor:
                                          goal.timeout))
                 events.append(MissionEvent("task_start", time, goal.name, next_index))
             else:
-                self.finished = True
-                events.append(MissionEvent("end", time))
+                if self._settle_from is None:
+                    self._settle_from = time
+                if time - self._settle_from >= self.settle - 1e-9:
+                    self.finished = True
+                    events.append(MissionEvent("end", time))
         return events
 
     def _begin(self, time: float) -> list[MissionEvent]:

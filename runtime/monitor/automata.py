@@ -105,6 +105,25 @@ class QueryInputs:
     """Signed angular velocity (rad/s, ground truth; positive: turning left)."""
     yaw: float = 0.0
     """Ground-truth heading (rad, counter-clockwise from +x)."""
+    own_speed: float = 0.0
+    """The speed the robot answers for (m/s): ``speed``, except while a contact it did not
+    drive into pushes it beyond its command; then capped at its commanded speed."""
+    own_turn_rate: float = 0.0
+    own_yaw_rate: float = 0.0
+    """Likewise |angular velocity| and signed angular velocity (rad/s)."""
+    settle_travel: float = 0.0
+    """Metres the robot's own motion covered since its last task ended, while no task runs
+    (the mission's settle period); 0 while a task runs and once the mission ended."""
+    path_ratio: float = 0.0
+    time_ratio: float = 0.0
+    """Of the last task that succeeded, until the next one starts (0: none, or not judged):
+    path driven / shortest collision-free path over the floors, and time taken / that path
+    at the allowed speed (rei.runtime.monitor.efficiency)."""
+    goal_spin: float = 0.0
+    """Radians the robot turned in place near the goal in the last task that succeeded."""
+    pushed: float = 0.0
+    """1 while the robot moves beyond its command because of a contact it did not drive
+    into (a shove), else 0."""
     speed_limit: float = math.inf
     """The tighter of the drive's and the mission's linear limits (m/s)."""
     turn_limit: float = math.inf

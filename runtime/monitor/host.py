@@ -250,6 +250,12 @@ class AutomataHost:
             "min_distance_to_human_moving": None if math.isinf(m.min_distance_to_human_moving)
             else m.min_distance_to_human_moving,
             "path_length": m.path_length,
+            "pushed": {"seconds": m.pushed_time, "top_speed": m.pushed_top_speed},
+            "settle_travel": m.idle_travel,
+            "efficiency": [{"task": name, "shortest": None if math.isinf(e.shortest)
+                            else e.shortest, "path_ratio": e.path_ratio,
+                            "time_ratio": e.time_ratio, "goal_spin": e.spin}
+                           for name, e in m.efficiency],
             "time_to_goal": goals,
             "samples": self.samples,
             "sample_problems": dict(self.problems.counts),

@@ -6,8 +6,10 @@ environment: the floor the robot and every observed object stands on, through th
 inverse mapping (the floor centres in the stream header, thesis 5.1), the floors of the
 mission's goals and which floors are neighbours. Robot description: odometry, laser minimum,
 laser clearance (from the latest scan, rei.runtime.monitor.laser), navigation state, mission
-and task states. Also the sample hygiene: non-finite, out-of-order, duplicated and missing
-samples are counted, never modelled. This module must never import the simulator.
+and task states, and the robot's own motion apart from motion it was given (``PushTracker``:
+a body that walks into a standing robot shoves it, and requirements on driven motion must not
+blame the robot for that speed). Also the sample hygiene: non-finite, out-of-order, duplicated
+and missing samples are counted, never modelled. This module must never import the simulator.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ from rei.lang.vepl.linker import NAMED_STATES
 from rei.lang.vepl.model import MISSION_STATES, TASK_FAILURES, TASK_STATES
 from rei.runtime.messages import MissionEvent, Sample, StreamHeader
 from rei.runtime.monitor.automata import QueryInputs
+from rei.runtime.monitor.efficiency import FloorGraph, TaskEfficiency, TaskProgress, judge_task
 from rei.runtime.monitor.geometry import FootprintSet
 from rei.runtime.monitor.laser import BeamEdges, clearance
 
@@ -40,6 +43,16 @@ APPROACH_LOOKAHEAD = 0.05
 """s: the commanded motion is projected this far ahead to see whether it closes in."""
 MOVING = 0.05
 """m/s: above this ground-truth speed the robot counts as moving (personal space)."""
+PUSH_CONTACT = 0.02
+"""m: a footprint distance below this (or a physical contact) is a contact for the push
+attribution (the default .vepl's eps_collision)."""
+PUSH_APPROACH = 0.01
+"""m/s: a contact while the robot's own command closes in faster than this is the robot's
+doing (the default .vepl's v_contact), so it never starts a push."""
+PUSH_SLACK = 0.02
+"""m/s: the robot moves beyond its command when its speed exceeds the command by more."""
+PUSH_TURN_SLACK = 0.05
+"""rad/s: likewise for turning (the default .vepl's turn_tolerance)."""
 FLOOR_MARGIN = 1e-5
 """m: a robot this far inside the tile it stood on at the last sample is still on it (the
 floors of a grid are 1e-6 m from it at most, so no other tile can claim the point)."""
@@ -62,6 +75,48 @@ class SampleProblems:
 
     def within(self, start: float, end: float) -> bool:
         return any(start <= t <= end for t in self.times)
+
+
+@dataclass(frozen=True)
+class OwnMotion:
+    """The robot's driven motion it answers for, and whether it was being pushed."""
+
+    speed: float
+    yaw_rate: float
+    pushed: bool
+
+
+@dataclass
+class PushTracker:
+    """Tells motion the robot commanded from motion a contact it did not drive into gave it.
+
+    A push starts at a contact (physical, or footprints within ``PUSH_CONTACT``) while the
+    robot's own command does not close in on anything it touches (every ``approach`` at most
+    ``PUSH_APPROACH``): a person walking into a standing robot, a cart rolling into it. It
+    lasts while the contact does, and after it while the robot still moves beyond its
+    command (the shove's momentum); a contact the robot drives into ends it. While pushed, the
+    robot's own speed is its ground-truth speed capped at its commanded speed, and its own
+    turn rate the ground truth clamped between 0 and its commanded turn rate: a shoved robot
+    answers for what it commanded, never for more, and never for less. Outside a push, its
+    own motion is the ground truth.
+    """
+
+    active: bool = False
+
+    def update(self, speed: float, yaw_rate: float, cmd: tuple[float, float],
+               contact: np.ndarray, approach: np.ndarray) -> OwnMotion:
+        v = abs(cmd[0])
+        low, high = min(0.0, cmd[1]), max(0.0, cmd[1])
+        own_yaw = min(max(yaw_rate, low), high)
+        beyond = speed > v + PUSH_SLACK or abs(yaw_rate - own_yaw) > PUSH_TURN_SLACK
+        if contact.any():
+            self.active = not bool((approach[contact] > PUSH_APPROACH).any())
+        elif not beyond:
+            self.active = False
+        pushed = self.active and beyond
+        if not pushed:
+            return OwnMotion(speed, yaw_rate, False)
+        return OwnMotion(min(speed, v), own_yaw, True)
 
 
 @dataclass
@@ -124,6 +179,23 @@ class RuntimeModel:
         self.min_distance_to_human_moving = math.inf
         """Personal space: the closest the robot came to a person while it was moving."""
         self._last_xy: tuple[float, float] | None = None
+        self.push = PushTracker()
+        self.pushed_time = 0.0
+        """Simulated seconds the robot was moved beyond its command by a contact it did not
+        drive into (a measurement: the shove is recorded, not blamed)."""
+        self.pushed_top_speed = 0.0
+        self._last_time: float | None = None
+        self._task: TaskProgress | None = None
+        self._graph: FloorGraph | None = None
+        self._graph_built = False
+        self.efficiency: list[tuple[str, TaskEfficiency]] = []
+        """(task, figures) of every task that succeeded, in order."""
+        self._judged = TaskEfficiency(0.0, 0.0, 0.0, 0.0)
+        """The figures of the last task that succeeded, until the next task starts."""
+        self.idle_travel = 0.0
+        """Metres of the robot's own motion since its last task ended while no task runs (the
+        settle period after the last goal); 0 while a task runs."""
+        self._idle = False
         self.task_failures = np.zeros(0, dtype=np.int64)
         roles = [o.role for o in header.objects]
         self.humans = float(roles.count("human"))
@@ -190,11 +262,26 @@ class RuntimeModel:
             touched = np.asarray(s.contacts, dtype=np.intp)
             distance[touched] = np.minimum(distance[touched], 0.0)
         speed = math.hypot(s.robot_twist[0], s.robot_twist[1])
+        own = self.push.update(speed, s.robot_twist[2], s.belief.cmd, distance < PUSH_CONTACT,
+                               approach)
+        dt = max(0.0, s.time - self._last_time) if self._last_time is not None else 0.0
+        if own.pushed:
+            self.pushed_time += dt
+            self.pushed_top_speed = max(self.pushed_top_speed, speed)
+        if self._idle and self.mission_state == MISSION_CODE["running"]:
+            self.idle_travel += own.speed * dt
+        self._last_time = s.time
         if self._any_human:
             self._nearest_human(s, distance, speed > MOVING)
+        step = 0.0
         if self._last_xy is not None:
-            self.path_length += math.hypot(x - self._last_xy[0], y - self._last_xy[1])
+            step = math.hypot(x - self._last_xy[0], y - self._last_xy[1])
+            self.path_length += step
         self._last_xy = (x, y)
+        if not self._graph_built:
+            self._graph, self._graph_built = self._floor_graph(s), True
+        if self._task is not None:
+            self._task.observe((x, y), step, own.speed, own.yaw_rate, dt)
         scan = s.belief.scan
         if scan is not None:
             self.laser_clearance = clearance(scan, self.beam_edges.of(scan))
@@ -207,6 +294,11 @@ class RuntimeModel:
             approach=approach, task_failure=self.task_failures,
             cmd_speed=abs(s.belief.cmd[0]), cmd_turn=abs(s.belief.cmd[1]),
             turn_rate=abs(s.robot_twist[2]), yaw_rate=s.robot_twist[2], yaw=s.robot_pose[2],
+            own_speed=own.speed, own_turn_rate=abs(own.yaw_rate), own_yaw_rate=own.yaw_rate,
+            pushed=1.0 if own.pushed else 0.0,
+            settle_travel=self.idle_travel if self._idle else 0.0,
+            path_ratio=self._judged.path_ratio, time_ratio=self._judged.time_ratio,
+            goal_spin=self._judged.spin,
             # the scenario's facts, constant through the run
             speed_limit=self.speed_limit, turn_limit=self.turn_limit, humans=self.humans,
             dynamic_objects=self.dynamic_objects, cycles=self.cycles,
@@ -262,9 +354,13 @@ class RuntimeModel:
         elif e.kind == "end":
             self.mission_state = MISSION_CODE["ended"]
             self.mission_ended = e.time
+            self._idle = False
         else:
             key = str(e.index) if e.index is not None else (e.task or "")
             record = next((t for t in self.tasks if t.key == key), None)
+            self._idle = e.kind != "task_start"
+            self.idle_travel = 0.0
+            self._task_event(e)
             if e.kind == "task_start":
                 if record is None:
                     record = TaskRecord(key, e.task or key, e.index, e.time)
@@ -289,7 +385,43 @@ class RuntimeModel:
                     record.reason = e.reason
                     self.task_failures[self.tasks.index(record)] = FAILURE_CODE[record.cause]
         return replace(w, task_state=self.task_codes, mission_state=self.mission_state,
-                       task_failure=self.task_failures)
+                       task_failure=self.task_failures,
+                       settle_travel=self.idle_travel if self._idle else 0.0,
+                       path_ratio=self._judged.path_ratio, time_ratio=self._judged.time_ratio,
+                       goal_spin=self._judged.spin)
+
+    def _task_event(self, e: MissionEvent) -> None:
+        """Start gathering a task's progress, or judge how well a task that succeeded went."""
+        self._judged = TaskEfficiency(0.0, 0.0, 0.0, 0.0)
+        if e.kind == "task_start":
+            facts = self.header.mission_facts
+            goal = facts.goals[e.index % len(facts.goals)] \
+                if facts is not None and facts.goals and e.index is not None else None
+            xy = self._last_xy if self._last_xy is not None else (math.nan, math.nan)
+            self._task = TaskProgress(xy, e.time, goal)
+            return
+        task, self._task = self._task, None
+        if e.kind != "task_success" or task is None or task.goal is None:
+            return  # a failed task is MISSION_GOALS_REACHED's; efficiency judges successes
+        shortest = math.inf
+        if self._graph is not None:
+            here = self.floors.of(np.array([task.start_xy], dtype=float))[0]
+            there = self.floors.of(np.array([(task.goal.x, task.goal.y)], dtype=float))[0]
+            shortest = self._graph.distance(int(here), int(there))
+        self._judged = judge_task(task, e.time, shortest, self.speed_limit)
+        self.efficiency.append((task.goal.name, self._judged))
+
+    def _floor_graph(self, s: Sample) -> FloorGraph | None:
+        """The floors as a graph, tiles under a static object's centre blocked (from the
+        first sample's poses: static objects stay put); None when the floors are off-grid."""
+        if not self.floors.on_grid or not len(self.floor_names):
+            return None
+        blocked = np.zeros(len(self.floor_names), dtype=bool)
+        static = [i for i, o in enumerate(self.header.objects) if o.role == "static"]
+        if static:
+            under = self.floors.of(np.asarray(s.poses, dtype=float)[static, :2])
+            blocked[under[under >= 0]] = True
+        return FloorGraph(self.floors.cells, self.floors.grid, self.floors.centres, blocked)
 
     def _own_task_arrays(self) -> None:
         """Copy the task arrays before changing them in place: the inputs handed out
@@ -410,6 +542,10 @@ def interpolate(a: QueryInputs, b: QueryInputs, f: float) -> QueryInputs:
                    speed=a.speed + f * (b.speed - a.speed),
                    turn_rate=a.turn_rate + f * (b.turn_rate - a.turn_rate),
                    yaw_rate=a.yaw_rate + f * (b.yaw_rate - a.yaw_rate),
+                   own_speed=a.own_speed + f * (b.own_speed - a.own_speed),
+                   own_turn_rate=a.own_turn_rate + f * (b.own_turn_rate - a.own_turn_rate),
+                   own_yaw_rate=a.own_yaw_rate + f * (b.own_yaw_rate - a.own_yaw_rate),
+                   settle_travel=a.settle_travel + f * (b.settle_travel - a.settle_travel),
                    time=a.time + f * (b.time - a.time),
                    odom_error=a.odom_error + f * (b.odom_error - a.odom_error))
 

@@ -34,6 +34,8 @@ from rei.runtime.collector.trace import (
 )
 from rei.runtime.messages import Sample, StreamHeader
 from rei.runtime.recording.errors import RecordingError
+from rei.runtime.recording.evidence import EvidenceAudit, EvidenceError
+from rei.runtime.recording.ros import trace_line
 from rei.runtime.recording.writer import TRACE_TOPIC
 
 MAGIC = b"\x89MCAP0\r\n"
@@ -86,6 +88,7 @@ class RecordedSamples(Iterator[Sample]):
             self._tracked, validate_crcs=True, emit_chunks=True,  # type: ignore[arg-type]
             record_size_limit=size).records)
         self._channel: int | None = None
+        self._cdr = True
         self._topics: list[str] = []
         self._decoder: TraceDecoder | None = None
         self._messages = 0
@@ -175,19 +178,33 @@ class RecordedSamples(Iterator[Sample]):
             if isinstance(record, Channel):
                 self._topics.append(record.topic)
                 if record.topic == TRACE_TOPIC and self._channel is None:
-                    if record.message_encoding != "json":
+                    if record.message_encoding not in ("cdr", "json"):
                         self._close()
                         raise RecordingError(
                             f"{self.path}: channel {TRACE_TOPIC}: expected the message "
-                            f"encoding 'json' (REI's trace), found "
+                            f"encoding 'cdr' (REI's trace lines as std_msgs/msg/String; "
+                            f"'json' in older recordings), found "
                             f"{record.message_encoding!r}")
                     self._channel = record.id
+                    self._cdr = record.message_encoding == "cdr"
             elif isinstance(record, bytes):  # a /rei/trace message of a chunk
                 self._messages += 1
-                return record
+                return self._line(record)
             elif isinstance(record, Message) and record.channel_id == self._channel:
                 self._messages += 1  # a message outside chunks (other writers)
-                return record.data
+                return self._line(record.data)
+
+    def _line(self, data: bytes) -> bytes:
+        """The trace line a /rei/trace message carries."""
+        if not self._cdr:
+            return data
+        line = trace_line(data)
+        if line is None:
+            self._close()
+            raise RecordingError(f"{self._where()}: expected a CDR std_msgs/msg/String "
+                                 f"holding a trace line, found {len(data)} byte(s) starting "
+                                 f"{data[:12]!r}")
+        return line
 
     def _where(self) -> str:
         return f"{self.path}: {TRACE_TOPIC} message {self._messages}"
@@ -204,7 +221,8 @@ class RecordedSamples(Iterator[Sample]):
             topics = ", ".join(sorted(set(self._topics))) or "none"
             raise RecordingError(f"{self.path}: expected a {TRACE_TOPIC} channel carrying the "
                                  f"REI trace (recorded by `rei run --record`), found the "
-                                 f"topics: {topics}")
+                                 f"topics: {topics} (a ROS 2 recording REI did not make is "
+                                 f"judged with --mission M.mission)")
         try:
             self._decoder = TraceDecoder(data, self._where())
         except TraceError:
@@ -268,17 +286,69 @@ def _start(data: bytes) -> str:
     return f"a file starting with {data!r}"
 
 
-def read_stream(path: str | Path
+class AuditedSamples(Iterator[Sample]):
+    """A stream's samples passed through an ``EvidenceAudit``: the k-th sample record
+    (0-based) is located as ``where(k + 2)`` (the trace's line, the recording's /rei/trace
+    message: the header is 1). ``end()`` checks the end record as well."""
+
+    def __init__(self, header: StreamHeader, samples: Iterator[Sample],
+                 read_end: Callable[[], End | None], where: Callable[[int], str]) -> None:
+        self.audit = EvidenceAudit(header)
+        self._samples = samples
+        self._read_end = read_end
+        self._where = where
+        self._count = 0
+
+    def __next__(self) -> Sample:
+        sample = next(self._samples)
+        try:
+            self.audit.sample(sample, self._where(self._count + 2))
+        except EvidenceError:
+            self.close()
+            raise
+        self._count += 1
+        return sample
+
+    def close(self) -> None:
+        close = getattr(self._samples, "close", None)
+        if close is not None:
+            close()
+
+    @property
+    def cut_short(self) -> str:
+        return str(getattr(self._samples, "cut_short", ""))
+
+    def end(self) -> End | None:
+        end = self._read_end()
+        if end is not None:
+            self.audit.end(end, self._where(self._count + 2))
+        return end
+
+
+def read_stream(path: str | Path, audit: bool = True
                 ) -> tuple[StreamHeader, Iterator[Sample], Callable[[], End | None]]:
     """The header, the samples and a function giving the end record (None when there is
     none; call it after the samples) of a trace (trace.jsonl) or an MCAP recording (a file
-    named .mcap, or starting with MCAP's magic bytes)."""
+    named .mcap, or starting with MCAP's magic bytes).
+
+    With ``audit`` (the default: whatever judges the stream wants it), the samples and the
+    end record are checked against the stream's own evidence (``EvidenceAudit``): a claim
+    the ground truth contradicts is an ``EvidenceError`` located at its line or message."""
     path = Path(path)
     if path.suffix == ".mcap" or is_recording(path):
         header, samples = read_recording(path)
-        return header, samples, lambda: samples.end
-    header, trace = read_trace(path)
-    return header, trace, lambda: read_trace_end(path)
+        stream: Iterator[Sample] = samples
+        read_end: Callable[[], End | None] = lambda: samples.end  # noqa: E731
+        where = f"{path}: {TRACE_TOPIC} message {{}}"
+    else:
+        header, stream = read_trace(path)
+        read_end = lambda: read_trace_end(path)  # noqa: E731
+        where = f"{path}:{{}}"
+    if not audit:
+        return header, stream, read_end
+    audited = AuditedSamples(header, stream, read_end, where.format)
+    return header, audited, audited.end
 
 
-__all__ = ["MAGIC", "RecordedSamples", "is_recording", "read_recording", "read_stream"]
+__all__ = ["MAGIC", "AuditedSamples", "RecordedSamples", "is_recording", "read_recording",
+           "read_stream"]

@@ -1,4 +1,11 @@
-"""The ROS 2 views of the sample stream: messages of the standard ROS 2 types, CDR-encoded.
+"""REI's one ROS 2 mapping: topics, frames, message types, and conversions both ways.
+
+REI -> ROS (``RosViews``): the sample stream as messages of the standard ROS 2 types,
+CDR-encoded, for recordings (and for the bus's ROS 2 profile and the Foxglove view, which
+use these names read-only). ROS -> REI (``pose_of``, ``scan_of``, ``odometry_of``,
+``command_of``, ``seconds``, ``NAV2_STATUS``): decoded ROS 2 messages (rosbags' or any
+object with the same fields) back into REI's values, for judging ROS 2 recordings REI did
+not make (``rei.runtime.recording.bag``).
 
 Built with rosbags' type store of ROS 2 Humble (no ROS installation needed); each topic's
 schema is the type's ``ros2msg`` definition with its dependencies, as `ros2 bag` records
@@ -24,7 +31,14 @@ import numpy as np
 from rosbags.typesys import Stores, get_typestore
 
 from rei.catalogue import Box, Cylinder, Footprint, Polygon
-from rei.runtime.messages import MissionEvent, ObservedObject, Sample, StreamHeader
+from rei.runtime.messages import (
+    LaserScan,
+    MissionEvent,
+    NavState,
+    ObservedObject,
+    Sample,
+    StreamHeader,
+)
 
 STORE = Stores.ROS2_HUMBLE
 
@@ -35,6 +49,14 @@ TF = "tf2_msgs/msg/TFMessage"
 MARKERS = "visualization_msgs/msg/MarkerArray"
 TEXT = "std_msgs/msg/String"
 
+NAV2_ACTION = "/navigate_to_pose/_action"
+"""Nav2's navigate_to_pose action as ROS 2 topics: ``/status`` (action_msgs/msg/
+GoalStatusArray) and ``/feedback`` (its FeedbackMessage), recorded with
+``--include-hidden-topics``."""
+NAV2_STATUS_TOPIC = f"{NAV2_ACTION}/status"
+GOAL_STATUS = "action_msgs/msg/GoalStatusArray"
+CLOCK = "rosgraph_msgs/msg/Clock"
+
 TOPICS: dict[str, str] = {
     "/scan": SCAN,
     "/odom": ODOMETRY,
@@ -44,8 +66,25 @@ TOPICS: dict[str, str] = {
     "/world/markers": MARKERS,
     "/rei/events": TEXT,
     "/rei/signals": TEXT,
+    NAV2_STATUS_TOPIC: GOAL_STATUS,
 }
 """Every ROS 2 topic of a recording and its message type."""
+
+ROBOT_TOPICS: dict[str, str] = {
+    "/tf": TF,
+    "/tf_static": TF,
+    "/odom": ODOMETRY,
+    "/scan": SCAN,
+    "/cmd_vel": TWIST,
+    "/clock": CLOCK,
+    NAV2_STATUS_TOPIC: GOAL_STATUS,
+}
+"""The topics REI reads from a ROS 2 robot's recording (a Gazebo run or a real robot) and
+their types: ground truth on /tf, the robot's belief on /odom, /scan and /cmd_vel, the time
+on /clock (else the stamps), mission progress from Nav2's action status when present."""
+
+BELIEF_TOPICS: dict[str, str] = {"odometry": "/odom", "laser": "/scan", "nav_state": "/cmd_vel"}
+"""The topic carrying each kind of collected belief data (``messages.BELIEF_DATA``)."""
 
 LATCHED = ("/tf_static", "/world/markers")
 """Topics written once at the start: recorded with a transient-local QoS, as ROS latches."""
@@ -133,7 +172,7 @@ class RosViews:
         s = sample.belief.scan
         if s is None:
             return None
-        ranges = np.asarray(s.ranges, dtype=np.float32)
+        ranges = ros_ranges(s)
         angle_max = s.angle_min + s.angle_increment * (len(ranges) - 1)
         return self._cdr(self._scan(
             self._stamp(sample.time, laser_frame(header)), s.angle_min, angle_max,
@@ -213,6 +252,17 @@ class RosViews:
             mesh_file=t["visualization_msgs/msg/MeshFile"]("", np.zeros(0, dtype=np.uint8)),
             mesh_use_embedded_materials=False)
 
+    def goal_status(self, index: int, accepted: float, state: NavState) -> bytes:
+        """Nav2's navigate_to_pose status as the robot reports the running task ``index``
+        (accepted at ``accepted``, simulated seconds): the claim the judge checks."""
+        t = self.store.types
+        ns = stamp_ns(accepted)
+        info = t["action_msgs/msg/GoalInfo"](
+            t["unique_identifier_msgs/msg/UUID"](goal_uuid(index)),
+            self._time(ns // 1_000_000_000, ns % 1_000_000_000))
+        status = t["action_msgs/msg/GoalStatus"](info, GOAL_STATUS_CODE[state])
+        return self._cdr(t[GOAL_STATUS]([status]), GOAL_STATUS)
+
     def text(self, payload: dict[str, Any]) -> bytes:
         return self._cdr(self._string(json.dumps(payload, separators=(",", ":"),
                                                  allow_nan=False, ensure_ascii=False)), TEXT)
@@ -233,6 +283,124 @@ def _shape(fp: Footprint, tile: float, height: float
     return "cube", (tile, tile, height), []
 
 
+def ros_ranges(scan: LaserScan) -> np.ndarray:
+    """A scan's ranges as ``LaserScan.ranges`` holds them: float32, and a beam without a
+    return (REI: ``range_max``, its laser clips there) as +inf, as REP 117 asks."""
+    ranges = np.asarray(scan.ranges, dtype=np.float32)
+    return np.where(ranges >= np.float32(scan.range_max), np.float32(np.inf), ranges)
+
+
+_CDR_LE = b"\x00\x01\x00\x00"
+"""CDR's encapsulation header: plain CDR, little-endian (what rosbags and ROS 2 write)."""
+
+
+def trace_cdr(line: str) -> bytes:
+    """A trace line as a CDR ``std_msgs/msg/String`` (bytes as rosbags serialises them:
+    the header, the length with its NUL, the UTF-8 text, the NUL)."""
+    data = line.encode("utf-8")
+    return _CDR_LE + (len(data) + 1).to_bytes(4, "little") + data + b"\x00"
+
+
+def trace_line(cdr: bytes) -> bytes | None:
+    """The UTF-8 text of a CDR ``std_msgs/msg/String`` (``trace_cdr``'s inverse), or None
+    when the bytes are not one."""
+    if len(cdr) < 9 or cdr[:4] != _CDR_LE:
+        return None
+    size = int.from_bytes(cdr[4:8], "little")
+    if size < 1 or 8 + size > len(cdr) or cdr[7 + size] != 0 or len(cdr) - 8 - size > 3:
+        return None
+    return cdr[8:7 + size]
+
+
 def stamp_ns(time: float) -> int:
     """Simulated seconds as the recording's nanoseconds (the message log time)."""
     return int(round(time * 1e9))
+
+
+GOAL_STATUS_CODE: dict[NavState, int] = {
+    NavState.PENDING: 1,  # STATUS_ACCEPTED
+    NavState.ACTIVE: 2,  # STATUS_EXECUTING
+    NavState.SUCCEEDED: 4,
+    NavState.PREEMPTED: 5,  # STATUS_CANCELED
+    NavState.ABORTED: 6,
+}
+"""REI's navigation states as action_msgs/msg/GoalStatus codes (IDLE has none: no goal)."""
+
+
+def goal_uuid(index: int) -> np.ndarray:
+    """The goal id of the mission's task ``index`` (deterministic: the same run records
+    the same bytes): the index, big-endian, in the last bytes of 16."""
+    return np.frombuffer((index + 1).to_bytes(16, "big"), dtype=np.uint8).copy()
+
+
+# ---- ROS -> REI ------------------------------------------------------------------------------
+
+NAV2_STATUS: dict[int, NavState] = {
+    0: NavState.PENDING,  # STATUS_UNKNOWN
+    1: NavState.PENDING,  # STATUS_ACCEPTED
+    2: NavState.ACTIVE,  # STATUS_EXECUTING
+    3: NavState.ACTIVE,  # STATUS_CANCELING
+    4: NavState.SUCCEEDED,  # STATUS_SUCCEEDED
+    5: NavState.PREEMPTED,  # STATUS_CANCELED
+    6: NavState.ABORTED,  # STATUS_ABORTED
+}
+"""action_msgs/msg/GoalStatus codes as the navigation states of REI's mission executor."""
+
+
+def seconds(stamp: Any) -> float:
+    """A builtin_interfaces/msg/Time as seconds."""
+    return float(stamp.sec) + float(stamp.nanosec) * 1e-9
+
+
+def yaw_of(q: Any) -> float:
+    """The rotation about z of a quaternion (x, y, z, w), in (-pi, pi]: a planar robot's
+    heading (roll and pitch are ignored)."""
+    x, y, z, w = float(q.x), float(q.y), float(q.z), float(q.w)
+    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+def pose_of(transform: Any) -> tuple[float, float, float]:
+    """(x, y, yaw) of a geometry_msgs/msg/Transform or Pose (translation or position)."""
+    t = getattr(transform, "translation", None) or transform.position
+    q = getattr(transform, "rotation", None) or transform.orientation
+    return float(t.x), float(t.y), yaw_of(q)
+
+
+def odometry_of(message: Any) -> tuple[tuple[float, float, float], tuple[float, float]]:
+    """((x, y, yaw), (linear, angular)) of a nav_msgs/msg/Odometry: REI's odometry belief."""
+    twist = message.twist.twist
+    return pose_of(message.pose.pose), (float(twist.linear.x), float(twist.angular.z))
+
+
+def command_of(message: Any) -> tuple[float, float]:
+    """(linear, angular) of a geometry_msgs/msg/Twist (or a TwistStamped's twist)."""
+    twist = getattr(message, "twist", message)
+    return float(twist.linear.x), float(twist.angular.z)
+
+
+def scan_of(message: Any) -> LaserScan:
+    """A sensor_msgs/msg/LaserScan as REI's scan: ranges as float64, a beam without a return
+    (+inf, REP 117) at range_max as REI's laser reports it; NaN (an erroneous reading) and
+    -inf stay, for the monitor to refuse."""
+    ranges = np.asarray(message.ranges, dtype=np.float64)
+    range_max = float(message.range_max)
+    ranges = np.where(np.isposinf(ranges), range_max, ranges)
+    return LaserScan(float(message.angle_min), float(message.angle_increment),
+                     float(message.range_min), range_max, ranges)
+
+
+def scan_geometry_problem(message: Any) -> str:
+    """Why a sensor_msgs/msg/LaserScan's header does not describe its own ranges (the
+    angles must step from angle_min to angle_max by angle_increment, one range per
+    step), or ''."""
+    n = len(message.ranges)
+    low, high, inc = (float(message.angle_min), float(message.angle_max),
+                      float(message.angle_increment))
+    if not all(map(math.isfinite, (low, high, inc))) or inc == 0.0:
+        return (f"finite angles and a non-zero angle_increment, found angle_min {low!r}, "
+                f"angle_max {high!r}, angle_increment {inc!r}")
+    steps = (high - low) / inc + 1.0
+    if n == 0 or abs(steps - n) > 0.5 + 1e-3 * n:
+        return (f"{round(steps)} ranges (angle_min {low:.7g} to angle_max {high:.7g} in steps "
+                f"of {inc:.7g}), found {n}")
+    return ""

@@ -2,7 +2,9 @@
 
 One channel per topic (see ``rei.runtime.recording.ros.TOPICS``) with its ``ros2msg`` schema
 and CDR messages, plus ``/rei/trace``: the exact JSON-lines trace (header record first, one
-record per sample, then the end record; message encoding ``json``), encoded by the trace's
+record per sample, then the end record; each line a ``std_msgs/msg/String``, so every ROS 2
+bag reader opens and copies the whole file: rosbags' ``Reader``/``AnyReader`` and
+``rosbags-convert`` among them), encoded by the trace's
 own ``TraceEncoder`` and so checked by the same rules. Messages are stamped with the
 simulated time (nanoseconds from the start of the run); nothing depends on the wall clock,
 so the same run gives the same bytes.
@@ -27,18 +29,22 @@ from mcap.writer import CompressionType, Writer
 from rei.generators.output import open_output
 from rei.runtime.collector.trace import TraceEncoder, TraceError, TraceWriter
 from rei.runtime.evaluator.signal_log import SignalRow
-from rei.runtime.messages import Sample, StreamHeader
+from rei.runtime.messages import NavState, Sample, StreamHeader
 from rei.runtime.recording.errors import RecordingError
-from rei.runtime.recording.ros import LATCHED, TOPICS, RosViews, stamp_ns
+from rei.runtime.recording.ros import (
+    LATCHED,
+    NAV2_STATUS_TOPIC,
+    TEXT,
+    TOPICS,
+    RosViews,
+    stamp_ns,
+    trace_cdr,
+)
 
 RECORDING = "recording.mcap"
 """The recording's name in a run's output folder."""
 
 TRACE_TOPIC = "/rei/trace"
-TRACE_SCHEMA = "rei/TraceRecord"
-TRACE_SCHEMA_TEXT = (b'{"title":"rei/TraceRecord","description":"One record of the REI trace '
-                     b'(docs/recording.md): the header, a sample, or the end record.",'
-                     b'"type":"object"}')
 PROFILE = "ros2"
 
 CHUNK_BYTES = 64 * 1024
@@ -85,6 +91,9 @@ class McapRecorder:
         self._signals_seen = 0
         self._scan_time = 0.0
         self._poses: np.ndarray | None = None
+        self._task: tuple[int, float] | None = None
+        """(index, start time) of the latest task started."""
+        self._status: tuple[int, NavState] | None = None
 
     # ---- the sink ---------------------------------------------------------------------------
 
@@ -121,9 +130,12 @@ class McapRecorder:
         writer = Writer(self._file, chunk_size=2**62, compression=CompressionType.ZSTD)
         writer.start(profile=PROFILE)
         self._writer = writer
-        trace_schema = writer.register_schema(TRACE_SCHEMA, "jsonschema", TRACE_SCHEMA_TEXT)
-        self._channels[TRACE_TOPIC] = writer.register_channel(TRACE_TOPIC, "json", trace_schema)
+        # The trace's lines travel as std_msgs/msg/String (CDR), like /rei/events: every ROS 2
+        # tool reads the channel (rosbags knows no 'jsonschema' schema encoding and refused
+        # the whole file over a JSON channel; rosbags-convert cannot copy a schemaless one).
         schemas: dict[str, int] = {}
+        schemas[TEXT] = writer.register_schema(TEXT, "ros2msg", self._views.schema(TEXT))
+        self._channels[TRACE_TOPIC] = writer.register_channel(TRACE_TOPIC, "cdr", schemas[TEXT])
         for topic, msgtype in TOPICS.items():
             if msgtype not in schemas:
                 schemas[msgtype] = writer.register_schema(msgtype, "ros2msg",
@@ -132,7 +144,7 @@ class McapRecorder:
             self._channels[topic] = writer.register_channel(topic, "cdr", schemas[msgtype],
                                                             metadata)
         self._sequence = dict.fromkeys(self._channels.values(), 0)
-        self._add(TRACE_TOPIC, 0.0, record.encode("utf-8"))
+        self._add(TRACE_TOPIC, 0.0, trace_cdr(record))
         self._add("/tf_static", 0.0, self._views.laser_mount(header, 0.0))
         self._add("/world/markers", 0.0, self._views.markers(header, 0.0))
 
@@ -142,7 +154,7 @@ class McapRecorder:
         record = self._written(f'{{"seq":{sample.seq},', f"sample {sample.seq}") \
             if self.trace is not None else self._encode(self._encoder.sample, sample)
         t = sample.time
-        self._add(TRACE_TOPIC, t, record.encode("utf-8"))
+        self._add(TRACE_TOPIC, t, trace_cdr(record))
         views = self._views
         self._add("/tf", t, views.transforms(sample, header, self._moved(sample)))
         data = header.data
@@ -155,6 +167,11 @@ class McapRecorder:
         if "nav_state" in data:
             self._add("/cmd_vel", t, views.command(sample))
         for event in sample.events:
+            if event.kind == "task_start" and event.index is not None:
+                self._task = (event.index, event.time)
+        if "nav_state" in data:
+            self._goal_status(sample)
+        for event in sample.events:
             self._add("/rei/events", event.time, views.event(event))
         self._record_signals()
 
@@ -164,7 +181,7 @@ class McapRecorder:
         record = self._written('{"end":', "the end record") if self.trace is not None \
             else self._encode(self._encoder.end, end_time, outcome, reason)
         self._record_signals()
-        self._add(TRACE_TOPIC, end_time, record.encode("utf-8"))
+        self._add(TRACE_TOPIC, end_time, trace_cdr(record))
         try:
             self._writer.finish()  # type: ignore[no-untyped-call]
             self._file.flush()
@@ -190,6 +207,35 @@ class McapRecorder:
             rows = np.nonzero((new != old).any(axis=1))[0].tolist()
         self._poses = new.copy()
         return rows
+
+    def _goal_status(self, sample: Sample) -> None:
+        """Nav2's action status as a Nav2 stack publishes it, on every change: the running
+        task's goal accepted, executing, and ended as the robot claimed (SUCCEEDED, also for
+        a claim the ground truth refused, ABORTED, CANCELED). A task ended by its timeout or
+        the mission's end gets no status: nothing the robot said ended it."""
+        claims = {"position": NavState.SUCCEEDED, "heading": NavState.SUCCEEDED,
+                  "aborted": NavState.ABORTED, "preempted": NavState.PREEMPTED}
+        for event in sample.events:
+            if event.index is None:
+                continue
+            if event.kind == "task_start":
+                self._task = (event.index, event.time)
+                self._publish_status(event.index, NavState.PENDING, event.time)
+            elif event.kind == "task_success":
+                self._publish_status(event.index, NavState.SUCCEEDED, event.time)
+            elif event.kind == "task_fail" and event.cause in claims:
+                self._publish_status(event.index, claims[event.cause], event.time)
+        state = sample.belief.nav_state
+        if self._task is not None and sample.belief.task is not None and \
+                state in (NavState.PENDING, NavState.ACTIVE):
+            self._publish_status(self._task[0], state, sample.time)
+
+    def _publish_status(self, index: int, state: NavState, time: float) -> None:
+        if self._task is None or (index, state) == self._status:
+            return
+        self._status = (index, state)
+        self._add(NAV2_STATUS_TOPIC, time,
+                  self._views.goal_status(index, self._task[1], state))
 
     def _record_signals(self) -> None:
         if self.signals is None:

@@ -21,6 +21,7 @@ import jinja2
 
 from rei.runtime.campaign.stats import (
     by_mission,
+    campaign_outcome,
     campaign_passed,
     classify_pairs,
     mission_verdicts,
@@ -146,6 +147,8 @@ def render_html(data: CampaignData, rerun: dict[str, str]) -> str:
         folder=data.root.name, css=css,
         planned=len(data.plan.runs), recorded=len(records), passed=verdicts["pass"],
         campaign_pass=campaign_passed(judged.values()) and len(records) == len(data.plan.runs),
+        campaign_status=campaign_outcome(records, judged.values(),
+                                         planned=len(data.plan.runs)).status,
         required=required, mission_counts=Counter(v.verdict for v in judged.values()),
         counts={"fail": verdicts["fail"], "inconclusive": verdicts["inconclusive"],
                 "error": verdicts["error"] + verdicts["interrupted"]},

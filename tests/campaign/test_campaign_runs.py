@@ -164,7 +164,8 @@ def test_crashed_and_hung_runs_are_recorded_and_the_campaign_goes_on(tmp_path: P
     good = str(EXAMPLES / "simple_wall" / "simple_wall.mission")
     crashed = _campaign(tmp_path, tmp_path / "crash", good, "--repeat", "2", "--duration", "2",
                         "--controller", "bad_controllers:Segfaulting")
-    assert crashed.returncode == 1, crashed.stderr
+    assert crashed.returncode == 3, crashed.stderr  # a run error is exit 3, not a failure
+    assert "verdict: ERROR" in crashed.stdout and "2 run(s) errored" in crashed.stdout
     records = CampaignStore.read(tmp_path / "crash")[2]
     # `rei run` supervises its simulation: the crash is the run's error, with its summary
     assert [r.status for r in records] == ["ran", "ran"]
@@ -174,7 +175,7 @@ def test_crashed_and_hung_runs_are_recorded_and_the_campaign_goes_on(tmp_path: P
     # A watchdog far shorter than the run: it is killed and recorded as hung.
     hung = _campaign(tmp_path, tmp_path / "hung", good, "--duration", "100", "--timeout", "2",
                      "--controller", "bad_controllers:Crawling")
-    assert hung.returncode == 1, hung.stderr
+    assert hung.returncode == 3, hung.stderr
     (record,) = CampaignStore.read(tmp_path / "hung")[2]
     assert record.status == "hung" and "watchdog" in record.message
     junit = etree.parse(str(tmp_path / "hung" / "junit.xml")).getroot()
@@ -184,7 +185,7 @@ def test_crashed_and_hung_runs_are_recorded_and_the_campaign_goes_on(tmp_path: P
     broken.parent.mkdir()
     broken.write_text('mission broken in "nowhere.room" {\n goal a at x timeout 5\n}\n')
     mixed = _campaign(tmp_path, tmp_path / "mixed", str(broken), good, "--duration", "2")
-    assert mixed.returncode == 1, mixed.stderr
+    assert mixed.returncode == 3, mixed.stderr
     by_id = {r.spec.run_id: r for r in CampaignStore.read(tmp_path / "mixed")[2]}
     assert by_id["broken.r00"].status == "crashed"
     assert "exit status 2, no summary.json" in by_id["broken.r00"].message

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import pytest
 
-from rei.lang.cli_support import EXIT_FAILED
+from rei.lang.cli_support import EXIT_RUN_ERROR
 from rei.runtime.campaign import CampaignStore, LocalEngine, plan_campaign, run_campaign
 from rei.runtime.campaign.execute import execute_run
 from rei.runtime.commands.campaign import finish
@@ -139,7 +139,7 @@ def test_a_child_dies_with_the_thread_that_started_it() -> None:
 # -- the campaign ----------------------------------------------------------------------
 
 
-def test_crashed_runs_complete_the_campaign_which_exits_1_not_130(tmp_path: Path) -> None:
+def test_crashed_runs_complete_the_campaign_which_exits_3_not_130(tmp_path: Path) -> None:
     plan = plan_campaign([EXAMPLES / "simple_wall", EXAMPLES / "small_dense"], duration=2.0)
     root = tmp_path / "campaign"
     engine = LocalEngine(2, runner=KILLS_ITSELF)
@@ -147,7 +147,7 @@ def test_crashed_runs_complete_the_campaign_which_exits_1_not_130(tmp_path: Path
         result = run_campaign(plan, root, engine, {}, stream=io.StringIO())
         assert result.complete
         assert result.ran_now == (2 if session == 0 else 0)
-        assert finish(root, no_report=True) == EXIT_FAILED
+        assert finish(root, no_report=True) == EXIT_RUN_ERROR  # crashed runs: run errors
     records = CampaignStore.read(root)[2]
     assert [r.status for r in records] == ["crashed", "crashed"]
     assert all(r.verdict == "error" for r in records)
@@ -230,7 +230,7 @@ def test_a_run_killed_by_sigkill_is_recorded_crashed_once_and_rerun_is_not_130(
     victim = min(victims)
     os.kill(victim, signal.SIGKILL)  # by the test, not by the campaign
     _, err = campaign.communicate(timeout=SAFETY_LIMIT)
-    assert campaign.returncode == EXIT_FAILED, err
+    assert campaign.returncode == EXIT_RUN_ERROR, err  # the crashed run is a run error
     records = CampaignStore.read(out)[2]
     assert len(records) == 2
     crashed = [r for r in records if r.status == "crashed"]
@@ -238,7 +238,7 @@ def test_a_run_killed_by_sigkill_is_recorded_crashed_once_and_rerun_is_not_130(
     assert crashed[0].message.startswith("killed by signal 9 (SIGKILL; out of memory?)")
     rerun = subprocess.run(argv, env=env, capture_output=True, text=True,
                            timeout=SAFETY_LIMIT)
-    assert rerun.returncode == EXIT_FAILED, rerun.stderr
+    assert rerun.returncode == EXIT_RUN_ERROR, rerun.stderr
     assert "2 of 2 runs already recorded" in rerun.stderr
     assert len(CampaignStore.read(out)[2]) == 2
 

@@ -3,6 +3,7 @@ required pass rate."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -20,7 +21,7 @@ from rei.runtime.campaign import (
 from rei.runtime.campaign.stats import by_group, by_mission, judge_mission
 from rei.runtime.campaign.store import required_pass_rate
 from rei.runtime.cli import main
-from tests.campaign.records import EXAMPLES, write_campaign
+from tests.campaign.records import EXAMPLES, example_plan, write_campaign
 
 
 @pytest.mark.parametrize(("k", "n", "low", "high"), [
@@ -124,15 +125,22 @@ def test_mission_verdicts_of_a_campaign_and_the_rate_it_required(tmp_path: Path)
 
 def test_the_exit_status_follows_the_mission_verdicts(tmp_path: Path,
                                                       capsys: pytest.CaptureFixture[str]) -> None:
-    from rei.lang.cli_support import EXIT_FAILED, EXIT_OK
+    from rei.lang.cli_support import EXIT_FAILED, EXIT_OK, EXIT_RUN_ERROR
     from rei.runtime.commands.campaign import finish
 
-    write_campaign(tmp_path)
-    assert finish(tmp_path, no_report=True) == EXIT_FAILED  # default: every run must pass
+    plan = example_plan()
+    # Without small_dense (whose first repeat crashes): the verdicts alone decide.
+    write_campaign(tmp_path / "ran", replace(plan, runs=tuple(
+        r for r in plan.runs if not r.run_id.startswith("small_dense"))))
+    assert finish(tmp_path / "ran", no_report=True) == EXIT_FAILED  # every run must pass
     assert "FAIL   medium_sparse: 0/3 passed" in capsys.readouterr().err
-    assert finish(tmp_path, no_report=True, pass_rate=0.5) == EXIT_FAILED  # flaky ones
+    assert finish(tmp_path / "ran", no_report=True, pass_rate=0.5) == EXIT_FAILED  # flaky
     assert "FLAKY  navigation: 2/3 passed" in capsys.readouterr().err
-    assert finish(tmp_path, no_report=True, pass_rate=0.0) == EXIT_OK
+    assert finish(tmp_path / "ran", no_report=True, pass_rate=0.0) == EXIT_OK
+    # A crashed run is a run error whatever the pass rate: nothing may hide it.
+    write_campaign(tmp_path / "crash", plan)
+    assert finish(tmp_path / "crash", no_report=True, pass_rate=0.0) == EXIT_RUN_ERROR
+    assert "verdict: ERROR; 4 of 4 missions passed; 1 run(s) errored" in capsys.readouterr().out
 
 
 @pytest.mark.parametrize("value", ["1.5", "-0.1", "nan", "ninety"])

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import re
+from pathlib import Path
 
 import pytest
 from lxml import etree
@@ -37,8 +38,9 @@ def test_controllers_are_rei_runs_built_in_ones() -> None:
 
 def test_a_mission_gets_run_json_with_its_sources(request_for: RequestFor) -> None:
     files = files_of(request_for(EXAMPLES / "navigation" / "navigation.mission"))
-    assert sorted(files) == ["rei_test.launch.xml", "run.json", "sources/navigation.mission",
-                             "sources/navigation.room", "world.sdf"]
+    assert sorted(files) == ["rei_bag_map.toml", "rei_test.launch.xml", "run.json",
+                             "sources/navigation.mission", "sources/navigation.room",
+                             "world.sdf"]
     assert files["sources/navigation.room"] == (
         EXAMPLES / "navigation" / "navigation.room").read_bytes()
     run = json.loads(files["run.json"])
@@ -77,7 +79,8 @@ def test_sources_keep_their_relative_layout(write: Write, request_for: RequestFo
 
 def test_a_room_gets_no_run_json_and_refuses_run_options(request_for: RequestFor) -> None:
     room = EXAMPLES / "navigation" / "navigation.room"
-    assert sorted(files_of(request_for(room))) == ["rei_test.launch.xml", "world.sdf"]
+    assert sorted(files_of(request_for(room))) == ["rei_bag_map.toml", "rei_test.launch.xml",
+                                                   "world.sdf"]
     with pytest.raises(GenerationError, match="option seed: expected a .mission file"):
         TARGET.generate(request_for(room, seed="3"))
 
@@ -136,3 +139,37 @@ def test_bad_options_are_reported_by_name(
     request = request_for(EXAMPLES / "navigation" / "navigation.mission", **{key: value})
     with pytest.raises(GenerationError, match=message):
         TARGET.generate(request)
+
+
+def test_the_launch_file_records_exactly_what_rei_replay_reads(request_for: RequestFor,
+                                                              tmp_path: Path) -> None:
+    """Issue 24.4: `ros2 bag record` (MCAP) of the topics rei.runtime.recording.bag reads,
+    the ground truth bridged from Gazebo's poses, and the --map file that reads the bag."""
+    from rei.generators.targets.launch import GROUND_TRUTH, RECORDED_TOPICS  # noqa: PLC0415
+    from rei.runtime.recording.bag import load_topic_map  # noqa: PLC0415
+    from rei.runtime.recording.ros import ROBOT_TOPICS  # noqa: PLC0415
+
+    files = files_of(request_for(EXAMPLES / "navigation" / "navigation.mission"))
+    launch = etree.fromstring(files["rei_test.launch.xml"])
+    commands = [e.get("cmd", "") for e in launch.iter("executable")]
+    assert len(commands) == 1
+    words = commands[0].split()
+    assert words[:3] == ["ros2", "bag", "record"]
+    assert words[words.index("--storage") + 1] == "mcap"
+    assert "--include-hidden-topics" in words and "--use-sim-time" in words
+    recorded = [w for w in words if w.startswith("/")]
+    assert recorded == list(RECORDED_TOPICS)
+    mapping_file = tmp_path / "rei_bag_map.toml"
+    mapping_file.write_bytes(files["rei_bag_map.toml"])
+    mapping = load_topic_map(mapping_file)
+    # every topic REI reads, under the name it is recorded by
+    # /tf itself is recorded too: the stack's own frames, for people looking at the bag
+    assert {mapping.topic(t) for t in ROBOT_TOPICS} | {"/tf"} == set(RECORDED_TOPICS)
+    assert mapping.topic("/tf") == GROUND_TRUTH and mapping.frame("map") == "navigation"
+    bridges = [n for n in launch.iter("node") if n.get("name") == "rei_ground_truth"]
+    assert bridges and bridges[0].get("args") == \
+        "/world/navigation/dynamic_pose/info@tf2_msgs/msg/TFMessage[gz.msgs.Pose_V"
+    remap = bridges[0].find("remap")
+    assert remap is not None and remap.get("to") == GROUND_TRUTH
+    world = etree.fromstring(files["world.sdf"])
+    assert next(world.iter("world")).get("name") == "navigation"

@@ -82,10 +82,10 @@ def test_junit_has_a_suite_per_mission_and_a_case_per_requirement(campaign: Path
     assert (root.get("tests"), root.get("failures"), root.get("errors")) == ("23", "4", "1")
 
 
-def test_report_command_rebuilds_everything_and_fails_on_failures(campaign: Path) -> None:
+def test_report_command_rebuilds_everything_and_exits_3_on_a_run_error(campaign: Path) -> None:
     for name in ("results.csv", "results.parquet"):
         (campaign / name).unlink()
-    assert main(["report", str(campaign)]) == 1
+    assert main(["report", str(campaign)]) == 3  # small_dense's first run crashed
     for name in ("results.csv", "results.parquet", "junit.xml", "report.html"):
         assert (campaign / name).stat().st_size > 0
 

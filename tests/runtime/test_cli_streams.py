@@ -123,7 +123,7 @@ def test_campaign_quiet_prints_only_its_verdict_line(tmp_path: Path) -> None:
                str(out), "--duration", "1", "--workers", "1", "--quiet")
     assert done.returncode == 1, done.stderr  # cut short: not a pass
     assert done.stdout.splitlines() == [
-        f"verdict: FAIL; 0 of 1 missions passed; report: {out / 'report.html'}"]
+        f"verdict: INCONCLUSIVE; 0 of 1 missions passed; report: {out / 'report.html'}"]
     assert done.stderr == ""
 
 

@@ -29,7 +29,15 @@ from bench.defects.mission import (
 )
 from bench.defects.perception import BlindSector, IgnoresHumans
 from bench.defects.planning import FootprintTooSmall
-from bench.defects.timing import LATENCY, ControlLatency, StaleScans
+from bench.defects.timing import (
+    DROPOUT_LENGTH,
+    LATENCY,
+    SCAN_DELAY,
+    CommandDropout,
+    ControlLatency,
+    DelayedScans,
+    StaleScans,
+)
 from rei.runtime.messages import LaserScan, NavState
 from rei.runtime.robot import (
     ControllerContext,
@@ -169,6 +177,32 @@ def test_control_latency_delays_every_command_by_half_a_second() -> None:
     assert reference[0].linear > 0.0
     assert all(c == VelocityCommand(0.0, 0.0) for c in delayed[:lag])
     assert delayed[lag:] == reference[:len(reference) - lag]
+
+
+def test_command_dropout_holds_the_last_delivered_command_through_each_outage() -> None:
+    reference = drive(started(ReferenceNavigator()), 20)
+    dropped = drive(started(CommandDropout()), 20)
+    outage = round(DROPOUT_LENGTH / 0.1)
+    # the first outage is at the start: nothing delivered yet, the base stands
+    assert all(c == VelocityCommand(0.0, 0.0) for c in dropped[:outage])
+    assert dropped[outage:20] == reference[outage:20]  # delivered until the next outage
+    wall = {math.radians(a): 0.3 / math.cos(math.radians(a)) for a in range(-40, 41, 4)}
+    nav = started(CommandDropout())
+    drive(nav, 20)
+    # an obstacle appears right at the next outage (t = 2.0 s): it keeps driving on
+    held = drive(nav, 3, hits=wall, t0=2.0)
+    assert all(c == held[0] and c.linear > 0.0 for c in held)
+
+
+def test_delayed_scans_acts_on_a_scan_taken_0_6_s_ago() -> None:
+    wall = {math.radians(a): 0.3 / math.cos(math.radians(a)) for a in range(-40, 41, 4)}
+    late = round(SCAN_DELAY / 0.1)
+    for nav, expect_forward in ((ReferenceNavigator(), False), (DelayedScans(), True)):
+        started(nav)
+        drive(nav, late)
+        # the wall is there now; the delayed navigator still sees the empty room of 0.6 s ago
+        cmd = drive(nav, 1, hits=wall, t0=0.1 * late)[0]
+        assert (cmd.linear > 0.0) == expect_forward, (nav.name, cmd)
 
 
 # -- control -------------------------------------------------------------------------------

@@ -112,3 +112,26 @@ def test_a_robot_in_the_wrong_place_fails_by_position_whatever_its_heading() -> 
     executor.tick(0.0, client, (0.0, 0.0, 0.0))
     [fail, _end] = executor.tick(0.1, client, (0.0, 0.0, 0.0))
     assert fail.cause == "position" and fail.reason.startswith("outside tolerance")
+
+
+def test_the_mission_ends_a_settle_period_after_its_last_task() -> None:
+    client = ScriptedClient(["ok"])
+    executor = MissionExecutor((_goal("a", 0.0),), settle=3.0)
+    ends = {}
+    time = 0.0
+    while not executor.finished and time < 30:
+        for e in executor.tick(time, client, (0.0, 0.0, 0.0)):
+            ends[e.kind] = e.time
+        assert executor.settling == (not executor.finished and "task_success" in ends)
+        time = round(time + 0.1, 1)
+    # the client succeeds at once; the executor sees it at its next tick
+    assert ends["task_success"] == 0.1 and ends["end"] == pytest.approx(3.1)
+    # a time limit in the settle period ends the mission as usual, failing nothing
+    cut = MissionExecutor((_goal("a", 0.0),), settle=3.0)
+    scripted = ScriptedClient(["ok"])
+    cut.tick(0.0, scripted, (0.0, 0.0, 0.0))
+    cut.tick(0.1, scripted, (0.0, 0.0, 0.0))
+    assert cut.settling
+    (end,) = cut.end_settled(1.0)
+    assert (end.kind, end.time, end.reason) == ("end", 1.0, "") and cut.finished
+    assert MissionExecutor((_goal("a", 0.0),)).end_settled(1.0) == []  # not settling: nothing

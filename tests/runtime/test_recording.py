@@ -9,6 +9,7 @@ import math
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -107,7 +108,10 @@ def test_ros_channels_decode_with_rosbags_and_match_the_trace(tmp_path: Path) ->
     assert len(scans) == len(with_scan) == 2
     for msg, s in zip(scans, with_scan, strict=True):
         assert s.belief.scan is not None
-        np.testing.assert_array_equal(msg.ranges, s.belief.scan.ranges.astype(np.float32))
+        ranges = s.belief.scan.ranges.astype(np.float32)
+        # REP 117: a beam without a return (REI's range_max) is +inf
+        no_return = ranges >= np.float32(s.belief.scan.range_max)
+        np.testing.assert_array_equal(msg.ranges, np.where(no_return, np.inf, ranges))
         assert msg.angle_min == pytest.approx(s.belief.scan.angle_min, abs=1e-6)
         assert msg.angle_increment == pytest.approx(s.belief.scan.angle_increment, abs=1e-6)
         assert msg.header.frame_id == "bot/laser"
@@ -164,8 +168,63 @@ def test_trace_channel_carries_the_exact_trace_lines(tmp_path: Path) -> None:
     _record(tmp_path / "recording.mcap", header, samples)
     write(tmp_path / "trace.jsonl", header, samples, 0.4, "completed", "")
     lines = (tmp_path / "trace.jsonl").read_bytes().splitlines()
-    carried = [d for _, d, _ in _messages(tmp_path / "recording.mcap")[TRACE_TOPIC]]
+    carried = [STORE.deserialize_cdr(d, "std_msgs/msg/String").data.encode("utf-8")
+               for _, d, _ in _messages(tmp_path / "recording.mcap")[TRACE_TOPIC]]
     assert carried == lines
+
+
+def test_rosbags_own_readers_and_converter_read_every_channel(tmp_path: Path) -> None:
+    """Issue 24.1: rosbags' Reader and AnyReader open REI's recording and decode every
+    message of every channel (the trace too), and rosbags-convert copies all of it into a
+    rosbag2 folder (sqlite3 and mcap storage), which reads back with the same messages."""
+    from rosbags.highlevel import AnyReader  # noqa: PLC0415
+    from rosbags.rosbag2 import Reader  # noqa: PLC0415
+
+    header, samples = _long_samples(30)
+    path = tmp_path / "recording.mcap"
+    _record(path, header, samples, 3.0)
+    write(tmp_path / "trace.jsonl", header, samples, 3.0, "completed", "")
+    with Reader(path) as reader:
+        counts = {c.topic: c.msgcount for c in reader.connections if c.msgcount}
+    assert counts[TRACE_TOPIC] == len(samples) + 2 and counts["/tf"] == len(samples)
+
+    def decoded(source: Path) -> dict[str, list[Any]]:
+        out: dict[str, list[Any]] = {}
+        with AnyReader([source]) as reader:
+            for connection, _, raw in reader.messages():
+                out.setdefault(connection.topic, []).append(
+                    reader.deserialize(raw, connection.msgtype))
+        return out
+
+    mine = decoded(path)
+    assert {t: len(m) for t, m in mine.items()} == counts
+    lines = (tmp_path / "trace.jsonl").read_text(encoding="utf-8").splitlines()
+    assert [m.data for m in mine[TRACE_TOPIC]] == lines
+    for storage in ("sqlite3", "mcap"):
+        target = tmp_path / f"converted-{storage}"
+        done = subprocess.run([str(Path(sys.executable).parent / "rosbags-convert"), "--src",
+                               str(path), "--dst", str(target), "--dst-storage", storage],
+                              capture_output=True, text=True, check=False)
+        assert done.returncode == 0 and "ERROR" not in done.stdout + done.stderr, done
+        again = decoded(target)
+        assert {t: len(m) for t, m in again.items()} == counts
+        assert [m.data for m in again[TRACE_TOPIC]] == lines
+
+
+def test_a_trace_message_that_is_not_a_cdr_string_is_a_located_error(tmp_path: Path) -> None:
+    from mcap.writer import Writer  # noqa: PLC0415
+
+    path = tmp_path / "forged.mcap"
+    with path.open("wb") as handle:
+        writer = Writer(handle)
+        writer.start()
+        schema = writer.register_schema("std_msgs/msg/String", "ros2msg", b"string data")
+        channel = writer.register_channel(TRACE_TOPIC, "cdr", schema)
+        writer.add_message(channel, 0, b"\x00\x01\x00\x00\xff\xff\x00\x00{", 0)
+        writer.finish()
+    with pytest.raises(RecordingError, match=r"forged\.mcap: /rei/trace message 1: expected "
+                                             r"a CDR std_msgs/msg/String"):
+        read_recording(path)
 
 
 def test_read_recording_equals_read_trace(tmp_path: Path) -> None:
@@ -183,8 +242,13 @@ def test_read_recording_equals_read_trace(tmp_path: Path) -> None:
     for x, y in zip(a, b, strict=True):
         assert ea.sample(x) == eb.sample(y)
     assert from_mcap.end == (0.4, "completed", "") and from_mcap.cut_short == ""
-    _, stream, end = read_stream(tmp_path / "recording.mcap")
+    _, stream, end = read_stream(tmp_path / "recording.mcap", audit=False)
     assert len(list(stream)) == len(samples) and end() == (0.4, "completed", "")
+    # This made-up stream's task is not its mission's goal: judged, it is refused (located).
+    _, stream, end = read_stream(tmp_path / "recording.mcap")
+    with pytest.raises(TraceError, match=r"recording.mcap: /rei/trace message 2: events\[0\]: "
+                                         r"expected the task_start of task 'start'"):
+        list(stream)
 
 
 def test_same_stream_gives_identical_bytes(tmp_path: Path) -> None:

@@ -531,7 +531,8 @@ def _mutate(lines: list[bytes], data: st.DataObject) -> list[bytes]:
     """One corruption of the kinds the issue lists."""
     kind = data.draw(st.sampled_from(["value", "delete", "unknown_field", "second_end",
                                       "end_early", "truncate", "time_back", "bad_index",
-                                      "bad_kind", "junk", "swap", "byte", "digit"]),
+                                      "bad_kind", "junk", "swap", "byte", "digit",
+                                      "drop_event", "event_kind", "outcome", "scan_geometry"]),
                      label="kind")
     pick = st.integers(0, len(lines) - 1)
     samples = [i for i, line in enumerate(lines)
@@ -579,6 +580,38 @@ def _mutate(lines: list[bytes], data: st.DataObject) -> list[bytes]:
         else:
             obj["events"].append(_event(data.draw(st.sampled_from(["bogus", "", "Begin"])),
                                         0.0))
+        lines[i] = json.dumps(obj).encode()
+    elif kind in ("drop_event", "event_kind") and samples:
+        # claims edited (issue 24.5): a mission event deleted, or its kind rewritten
+        with_events = [i for i in samples if _json(lines[i]).get("events")]
+        if not with_events:
+            return lines
+        i = data.draw(st.sampled_from(with_events), label="sample")
+        obj = _json(lines[i])
+        k = data.draw(st.integers(0, len(obj["events"]) - 1), label="event")
+        if kind == "drop_event":
+            del obj["events"][k]
+        else:
+            obj["events"][k]["kind"] = data.draw(st.sampled_from(
+                ["task_success", "task_fail", "task_start"]), label="new kind")
+            obj["events"][k]["cause"] = "position" \
+                if obj["events"][k]["kind"] == "task_fail" else ""
+        lines[i] = json.dumps(obj).encode()
+    elif kind == "outcome":
+        end = _json(lines[-1])
+        if isinstance(end, dict) and "outcome" in end:
+            end["outcome"] = data.draw(st.sampled_from(["completed", "failed", "timeout"]))
+            lines[-1] = json.dumps(end).encode()
+    elif kind == "scan_geometry" and samples:
+        scanned = [i for i in samples if isinstance(_json(lines[i]).get("belief"), dict)
+                   and isinstance(_json(lines[i])["belief"].get("scan"), dict)]
+        if not scanned:
+            return lines
+        i = data.draw(st.sampled_from(scanned), label="sample")
+        obj = _json(lines[i])
+        obj["belief"]["scan"].update(data.draw(st.sampled_from(
+            [{"angle_increment": 0.0}, {"ranges": [1.0, 1.0, 1.0]}, {"angle_min": 0.0},
+             {"angle_increment": 0.5}])))
         lines[i] = json.dumps(obj).encode()
     elif kind == "junk":
         lines.insert(data.draw(st.integers(0, len(lines)), label="at"),

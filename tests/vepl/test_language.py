@@ -48,7 +48,8 @@ def test_default_specification_has_table_3_and_the_5_1_2_requirements() -> None:
         "GEOM_CLOSE_LASER_CORRECT", "GEOM_COLLISION_LASER_CORRECT", "MISSION_SIMPLE",
         "MISSION_SEQUENCE", "MISSION_SEQUENCE_CYCLE", "MISSION_WITH_HUMAN_TRAJECTORY",
         "MISSION_GOALS_REACHED", "GOAL_HEADING", "SPEED_LIMIT", "HUMAN_SLOW_ZONE",
-        "NO_ROBOT_COLLISION", "SMOOTH_MOTION"]
+        "NO_ROBOT_COLLISION", "EFFICIENT_PATH", "TIME_TO_GOAL", "NO_SPIN_AT_GOAL", "SETTLE",
+        "SMOOTH_MOTION"]
     assert spec.parameters["N_COLLISION"] == 1
     by_name = {r.name: r for r in spec.requirements}
     human = by_name["MISSION_WITH_HUMAN_TRAJECTORY"]

@@ -1,0 +1,199 @@
+"""Efficiency requirements (EFFICIENT_PATH, TIME_TO_GOAL, NO_SPIN_AT_GOAL): each task that
+succeeded is judged against the shortest collision-free path over the floors — its path and
+its time at the allowed speed — and by how much the robot turned in place near the goal.
+
+The shortest path and the ratios are tested on their own; then, in the real simulator, the
+reference navigator passes all three in an open room and three navigators each fail one: one
+that takes a detour, one that crawls, one that oscillates in place before reporting success.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rei.runtime.messages import GoalFacts
+from rei.runtime.monitor.efficiency import FloorGraph, TaskProgress, judge_task
+from rei.runtime.monitor.model import FloorMap
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def _graph(rows: list[str], blocked: str = "") -> tuple[FloorGraph, FloorMap, dict[str, int]]:
+    """Floors of a character grid ('.' floor, '#' wall, letters: named floors; names in
+    ``blocked`` carry a static object)."""
+    centres, names = [], {}
+    for r, row in enumerate(rows):
+        for c, ch in enumerate(row):
+            if ch != "#":
+                names[ch] = len(centres)
+                centres.append((float(c), float(-r)))
+    floors = FloorMap(np.array(centres), 1.0)
+    mask = np.zeros(len(centres), dtype=bool)
+    for name in blocked:
+        mask[names[name]] = True
+    return FloorGraph(floors.cells, floors.grid, floors.centres, mask), floors, names
+
+
+def test_the_shortest_path_goes_round_walls_and_objects_and_never_cuts_corners() -> None:
+    graph, _, n = _graph(["a.b",
+                          ".#.",
+                          "c.d"])
+    assert graph.distance(n["a"], n["b"]) == pytest.approx(2.0)
+    assert graph.distance(n["a"], n["d"]) == pytest.approx(4.0)  # no diagonal past the wall
+    open_graph, _, m = _graph(["a..",
+                               "...",
+                               "..d"])
+    assert open_graph.distance(m["a"], m["d"]) == pytest.approx(2 * math.sqrt(2))
+    blocked, _, k = _graph(["a.x.b"], blocked="x")
+    assert blocked.distance(k["a"], k["b"]) == math.inf
+
+
+def test_a_task_is_judged_against_the_shortest_path_less_its_tolerance() -> None:
+    goal = GoalFacts("g", 4.0, 0.0, None, 0.25, 0.26, 60.0)
+    task = TaskProgress((0.0, 0.0), 10.0, goal, travelled=7.5)
+    judged = judge_task(task, 10.0 + 30.0, 4.0, 0.25)
+    assert judged.shortest == pytest.approx(3.75)
+    assert judged.path_ratio == pytest.approx(2.0)
+    assert judged.time_ratio == pytest.approx(2.0)  # 30 s against 3.75 m at 0.25 m/s
+    near = judge_task(TaskProgress((0.0, 0.0), 0.0, goal), 5.0, 0.6, 0.25)
+    assert near.path_ratio == near.time_ratio == 0.0  # too near to judge
+
+
+def test_turning_in_place_counts_only_near_the_goal() -> None:
+    goal = GoalFacts("g", 4.0, 0.0, None, 0.25, 0.26, 60.0)
+    task = TaskProgress((0.0, 0.0), 0.0, goal)
+    task.observe((0.0, 0.0), 0.0, 0.0, 1.0, 1.0)  # far from the goal: the start's turn
+    task.observe((3.9, 0.0), 0.0, 0.0, -1.0, 1.0)  # in place near the goal
+    task.observe((3.9, 0.0), 0.0, 0.2, 1.0, 1.0)  # driving: no turn in place
+    assert task.spin == pytest.approx(1.0)
+
+
+ROOM = """room hall {
+    grid g {
+        legend {
+            "S" = floor start
+            "G" = floor goal
+        }
+        "#########"
+        "#.......#"
+        "#S.....G#"
+        "#.......#"
+        "#########"
+    }
+    robot r : turtlebot3_waffle on start heading 0
+}
+"""
+MISSION = """mission across in "hall.room" {
+    goal here at start tolerance 0.25 timeout 10
+    goal there at goal tolerance 0.25 timeout 120
+}
+"""
+NAVIGATORS = """
+import math
+
+from rei.runtime.messages import NavState
+from rei.runtime.robot.protocol import GoalFeedback, NavGoal, VelocityCommand
+from rei.runtime.robot.reference import ReferenceNavigator
+
+
+class Detour(ReferenceNavigator):
+    \"\"\"For goals more than 1 m away: drives two thirds of the way, back to where it got the
+    goal, then to the goal (a behaviour tree that restarts its navigation subtree once).\"\"\"
+
+    def send_goal(self, goal):
+        self._real, self._legs = goal, None
+        super().send_goal(goal)
+
+    def feedback(self):
+        if getattr(self, "_legs", None):
+            return GoalFeedback(NavState.ACTIVE, self._real.name, None, "detour")
+        return super().feedback()
+
+    def step(self, observation):
+        x, y, _ = observation.odom_pose
+        goal = getattr(self, "_real", None)
+        if goal is not None and self._legs is None:
+            self._legs = []
+            if math.hypot(goal.x - x, goal.y - y) > 1.0:
+                self._legs = [NavGoal("detour", x + 2 * (goal.x - x) / 3,
+                                      y + 2 * (goal.y - y) / 3, None, 0.3, goal.timeout),
+                              NavGoal("back", x, y, None, 0.3, goal.timeout)]
+                super().send_goal(self._legs[0])
+        elif self._legs and super().feedback().state == NavState.SUCCEEDED:
+            self._legs.pop(0)
+            super().send_goal(self._legs[0] if self._legs else goal)
+        return super().step(observation)
+
+
+class Crawls(ReferenceNavigator):
+    \"\"\"The reference at a fifth of its speed (a velocity smoother's limit set 5x too low).\"\"\"
+
+    def step(self, observation):
+        cmd = super().step(observation)
+        return VelocityCommand(cmd.linear / 5, cmd.angular)
+
+
+class OscillatesAtGoal(ReferenceNavigator):
+    \"\"\"Turns back and forth in place for 10 s near each goal more than 1 m from where it
+    got it, before it goes on and reports success.\"\"\"
+
+    def send_goal(self, goal):
+        self._from, self._since = None, None
+        super().send_goal(goal)
+
+    def step(self, observation):
+        x, y, _ = observation.odom_pose
+        goal = self._tracker.goal
+        if goal is not None and self._tracker.running:
+            if self._from is None:
+                self._from = (x, y)
+            far = math.hypot(goal.x - self._from[0], goal.y - self._from[1]) > 1.0
+            if far and math.hypot(goal.x - x, goal.y - y) <= 0.3:
+                self._since = self._since if self._since is not None else observation.time
+                if observation.time - self._since < 10.0:
+                    super().step(observation)  # keeps its goal state; the command is replaced
+                    phase = int(observation.time - self._since) % 2
+                    return VelocityCommand(0.0, 0.8 if phase else -0.8)
+        return super().step(observation)
+"""
+
+
+def _run(tmp: Path, controller: str) -> dict[str, str]:
+    tmp.mkdir(parents=True)
+    (tmp / "hall.room").write_text(ROOM)
+    (tmp / "across.mission").write_text(MISSION)
+    (tmp / "navs.py").write_text(NAVIGATORS)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(tmp), str(REPO)])}
+    done = subprocess.run([sys.executable, "-m", "rei.runtime.cli", "run",
+                           str(tmp / "across.mission"), "-o", str(tmp / "out"), "--controller",
+                           controller, "--no-variation", "-q"],
+                          capture_output=True, text=True, env=env, timeout=600, check=False)
+    summary = json.loads((tmp / "out" / "summary.json").read_text())
+    assert summary["outcome"] == "completed", done.stderr
+    return {v["requirement"]: v["status"] for v in summary["verdicts"]}
+
+
+EFFICIENCY = ("EFFICIENT_PATH", "TIME_TO_GOAL", "NO_SPIN_AT_GOAL")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("controller", "fails"), [
+    ("reference", None),
+    ("navs:Detour", "EFFICIENT_PATH"),
+    ("navs:Crawls", "TIME_TO_GOAL"),
+    ("navs:OscillatesAtGoal", "NO_SPIN_AT_GOAL"),
+])
+def test_each_efficiency_requirement_fails_its_navigator_and_the_reference_passes(
+        tmp_path: Path, controller: str, fails: str | None) -> None:
+    status = _run(tmp_path / "run", controller)
+    assert status["MISSION_GOALS_REACHED"] == "pass"  # every one reaches its goals
+    assert {r: status[r] for r in EFFICIENCY} == {
+        r: ("fail" if r == fails else "pass") for r in EFFICIENCY}
