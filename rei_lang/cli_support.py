@@ -2,8 +2,9 @@
 
 Sub-commands are modules in a commands package, each with ``register(subparsers)`` that
 adds its parser and sets ``func``; they are found at start-up, so a stage adds a command
-without editing a central list. Exit status: 0 ok, 1 a test verdict failed, 2 bad input,
-3 a run error, 130 interrupted.
+without editing a central list. A module's ``HELP_EXAMPLES`` text (command lines, one per line,
+each with a comment) ends its command's --help. Exit status: 0 ok, 1 a test verdict failed,
+2 bad input, 3 a run error, 130 interrupted.
 """
 
 from __future__ import annotations
@@ -11,7 +12,9 @@ from __future__ import annotations
 import argparse
 import importlib
 import pkgutil
+import re
 import sys
+import textwrap
 from collections.abc import Callable, Sequence
 
 from rei.lang.errors import LanguageError, ReiError, printable_lines
@@ -23,9 +26,47 @@ EXIT_RUN_ERROR = 3
 EXIT_INTERRUPTED = 130
 
 
+class ReiHelpFormatter(argparse.HelpFormatter):
+    """Paragraphs of a description or epilog are wrapped to the terminal; a block with
+    indented lines (a list of targets, examples) is kept as written."""
+
+    def _fill_text(self, text: str, width: int, indent: str) -> str:
+        blocks = re.split(r"\n\s*\n", text.strip("\n"))
+        out = []
+        for block in blocks:
+            lines = block.split("\n")
+            if any(line[:1].isspace() for line in lines):
+                out.append("\n".join(_hanging(indent + line, width) for line in lines))
+            else:
+                out.append(textwrap.fill(" ".join(line.strip() for line in lines), width,
+                                         initial_indent=indent, subsequent_indent=indent))
+        return "\n\n".join(out)
+
+
+_DEFINITION = re.compile(r"^(\s+\S+\s{2,})(\S.*)$")
+
+
+def _hanging(line: str, width: int) -> str:
+    """A long line of a list of names and what they are ("  gazebo     an SDF world..."):
+    its text wrapped under itself; any other line as written."""
+    match = _DEFINITION.match(line)
+    if len(line) <= width or match is None:
+        return line
+    head = match.group(1)
+    return textwrap.fill(match.group(2), width, initial_indent=head,
+                         subsequent_indent=" " * len(head))
+
+
+def examples_epilog(examples: str, epilog: str | None) -> str:
+    """A command's epilog with its examples after it."""
+    lines = "\n".join("  " + line if line.strip() else "" for line in
+                      textwrap.dedent(examples).strip("\n").split("\n"))
+    return (epilog.rstrip("\n") + "\n\n" if epilog else "") + "examples:\n" + lines
+
+
 def build_parser(prog: str, description: str, package: str) -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog=prog, description=description,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+                                     formatter_class=ReiHelpFormatter)
     from rei.lang import __version__  # noqa: PLC0415  (kept out of import time of rei.lang)
 
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
@@ -37,7 +78,14 @@ def build_parser(prog: str, description: str, package: str) -> argparse.Argument
         register: Callable[[argparse._SubParsersAction[argparse.ArgumentParser]], None] | None
         register = getattr(module, "register", None)
         if register is not None:
+            before = set(sub.choices)
             register(sub)
+            examples = getattr(module, "HELP_EXAMPLES", None)
+            for name in set(sub.choices) - before:
+                command = sub.choices[name]
+                command.formatter_class = ReiHelpFormatter
+                if isinstance(examples, str):
+                    command.epilog = examples_epilog(examples, command.epilog)
     return parser
 
 

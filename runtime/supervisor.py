@@ -92,6 +92,11 @@ class RunRequest:
     """Also write recording.mcap (``--record``)."""
     faults: tuple[str, ...] = ()
     """Fault entries of ``--fault`` (as written: the child parses them again)."""
+    bus: str | None = None
+    """The endpoint of `rei bus` the robot under test answers on (``--bus``)."""
+    bus_credentials: str | None = None
+    bus_wait: float = 30.0
+    wait_monitor: bool = False
 
     def to_json(self) -> str:
         return json.dumps(asdict(self), allow_nan=False)

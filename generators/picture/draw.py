@@ -24,6 +24,8 @@ from rei.lang.room.spline import CatmullRom, walked_path
 WALL_EDGE = "#3a3a40"
 FLOOR_EDGE = "#b8b4a8"
 TRAJECTORY = "#d9480f"
+TRAJECTORY_TEXT = "#8f3507"
+"""The trajectory's orange, dark enough for 4.5:1 contrast on white."""
 ROBOT = "#1c7ed6"
 GOAL = "#2b8a3e"
 CURVE_STEP = 0.05
@@ -80,10 +82,11 @@ def _draw_trajectory(ax: Axes, obj: ConcreteObject, compact: bool) -> None:
         last = len(obj.trajectory.points) - (1 if obj.trajectory.loop else 0)
         for point in obj.trajectory.points[:last]:
             # Below-right of the vertex, outside a human's footprint standing on it.
-            ax.annotate(f"{point.t:.4g}s", (point.x, point.y), xytext=(7, -13),
-                        textcoords="offset points", fontsize=6, color=TRAJECTORY, zorder=9,
-                        bbox={"boxstyle": "round,pad=0.1", "fc": "white", "ec": "none",
-                              "alpha": 0.7})
+            # Dark text on an opaque white box: readable on any floor colour (issue 27).
+            ax.annotate(f"{point.t:.4g}s", (point.x, point.y), xytext=(7, -15),
+                        textcoords="offset points", fontsize=9, color=TRAJECTORY_TEXT,
+                        zorder=9, bbox={"boxstyle": "round,pad=0.15", "fc": "white",
+                                        "ec": TRAJECTORY, "lw": 0.6, "alpha": 0.92})
 
 
 def draw_world(ax: Axes, world: ConcreteWorld, mission: ConcreteMission | None = None, *,
@@ -99,7 +102,7 @@ def draw_world(ax: Axes, world: ConcreteWorld, mission: ConcreteMission | None =
         ax.add_patch(Rectangle((block.x - half, block.y - half), tile, tile,
                                facecolor=block.type.colour, edgecolor=WALL_EDGE, linewidth=0.6,
                                hatch=None if compact else "///", zorder=2))
-    label_size = 6.5
+    label_size = 9.0
     for obj in world.objects:
         style = {"facecolor": obj.type.colour, "edgecolor": "black", "linewidth": 0.6,
                  "zorder": 6 if obj.role == "human" else 4}
@@ -132,7 +135,7 @@ def draw_world(ax: Axes, world: ConcreteWorld, mission: ConcreteMission | None =
     else:
         ax.set_xlabel("x [m]")
         ax.set_ylabel("y [m]")
-        ax.tick_params(labelsize=7)
+        ax.tick_params(labelsize=9)
         _legend(ax, world, mission)
 
 
@@ -180,5 +183,5 @@ def _legend(ax: Axes, world: ConcreteWorld, mission: ConcreteMission | None) -> 
         handles.append(Line2D([], [], color=GOAL, marker="o", linestyle=":", markersize=7,
                               label=f"goals in order (x{mission.cycles} cycles)"
                               if mission.cycles > 1 else "goals in order"))
-    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7,
+    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=9,
               frameon=False)

@@ -15,6 +15,7 @@ import csv
 import io
 import random
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -118,8 +119,10 @@ def rows_of(request: SuiteRequest) -> tuple[SuiteDesign, list[tuple[int, RoomPar
     return design, out
 
 
-def generate(request: SuiteRequest, out_dir: Path, times: StageTimes | None = None) -> Suite:
-    """Build and check every pair in memory; GenerationError when a room cannot be built."""
+def generate(request: SuiteRequest, out_dir: Path, times: StageTimes | None = None,
+             progress: Callable[[int, int], None] | None = None) -> Suite:
+    """Build and check every pair in memory; GenerationError when a room cannot be built.
+    ``progress(done, total)`` is called after each pair (a display; it changes nothing)."""
     times = times if times is not None else StageTimes()
     design, rows = rows_of(request)
     facts = CatalogueFacts.of(default_catalogue())
@@ -160,6 +163,8 @@ def generate(request: SuiteRequest, out_dir: Path, times: StageTimes | None = No
                 continue
             pairs.append(GeneratedPair(index + 1, name, room_file, mission_file, rtext, mtext,
                                        params, plan, row_index + 1, attempt + 1, rejected))
+            if progress is not None:
+                progress(len(pairs), len(rows))
             break
         else:
             levels = " ".join(f"{k}={v}" for k, v in params.levels)

@@ -11,6 +11,12 @@ from rei.lang.cli_support import EXIT_BAD_INPUT, EXIT_OK
 from rei.lang.errors import Diagnostic
 from rei.lang.workspace import Workspace, known_suffixes
 
+HELP_EXAMPLES = """\
+rei-gen check examples/navigation/navigation.room examples/navigation/navigation.mission
+rei-gen check examples/                      # every .room, .mission and .vepl below
+rei-gen check --format json my_room.room     # for tools: one JSON object per problem
+"""
+
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser = sub.add_parser(

@@ -24,6 +24,13 @@ def _targets_help() -> str:
     return "targets:\n" + "\n".join(lines) + "\n  all        every target that accepts the file"
 
 
+HELP_EXAMPLES = """\
+rei-gen generate examples/navigation/navigation.mission -t gazebo -o out/gazebo
+rei-gen generate examples/navigation/navigation.mission -t all -o out/all
+rei-gen generate examples/navigation/human_safety.vepl -t rx -o out/automata
+"""
+
+
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser = sub.add_parser(
         "generate",

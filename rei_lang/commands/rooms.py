@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import Any
 
 from rei.lang.cli_support import EXIT_OK
 
@@ -32,6 +33,13 @@ OVERRIDES = (
                  "cart crosses at a right angle), gap (a furniture gap narrower than the "
                  "robot on the direct line)"),
 )
+
+
+HELP_EXAMPLES = """\
+rei-gen rooms -o suite --count 20 --seed 1              # 20 rooms and missions
+rei-gen rooms -o dense --preset small --objects 10%,25% --humans 0,1
+rei-gen rooms --describe examples/navigation/navigation.mission
+"""
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -72,7 +80,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     for name, text in OVERRIDES:
         parser.add_argument(f"--{name.replace('_', '-')}", default=None, metavar="LEVELS",
                             help=text)
-    parser.add_argument("--quiet", action="store_true", help="do not print the coverage report")
+    parser.add_argument("-q", "--quiet", action="store_true",
+                        help="no progress display and no coverage report; only the final "
+                             "line (on stderr)")
     parser.set_defaults(func=run)
 
 
@@ -105,7 +115,8 @@ def run(args: argparse.Namespace) -> int:
     request = SuiteRequest(space=space, strategy=args.strategy, count=args.count,
                            seed=args.seed, max_grid=args.max_grid, design=args.design,
                            prefix=args.prefix, version=__version__)
-    suite = generate(request, args.output)
+    with RoomsProgress(enabled=not args.quiet and sys.stderr.isatty()) as progress:
+        suite = generate(request, args.output, progress=progress.update)
     report = coverage_report(suite)
     write_suite(suite, args.output, report)
     if not args.quiet:
@@ -113,6 +124,44 @@ def run(args: argparse.Namespace) -> int:
     print(f"{len(suite.pairs)} room(s) and mission(s) written to {args.output} "
           f"(index.csv, coverage.txt)", file=sys.stderr)
     return EXIT_OK
+
+
+class RoomsProgress:
+    """The progress display of a long generation on a terminal: a bar of rooms built of how
+    many, and the time left (rich, on stderr). Off the terminal (a log, a pipe) it shows
+    nothing, so logs and the generated files stay the same."""
+
+    def __init__(self, enabled: bool) -> None:
+        self.enabled = enabled
+        self.display: Any = None
+        self.task: Any = None
+
+    def update(self, done: int, total: int) -> None:
+        if not self.enabled:
+            return
+        if self.display is None:
+            from rich.console import Console  # noqa: PLC0415  (only on a terminal)
+            from rich.progress import (  # noqa: PLC0415
+                BarColumn,
+                MofNCompleteColumn,
+                Progress,
+                TextColumn,
+                TimeRemainingColumn,
+            )
+
+            self.display = Progress(TextColumn("rooms"), BarColumn(), MofNCompleteColumn(),
+                                    TextColumn("left"), TimeRemainingColumn(),
+                                    console=Console(file=sys.stderr), transient=True)
+            self.display.start()
+            self.task = self.display.add_task("rooms", total=total)
+        self.display.update(self.task, completed=done)
+
+    def __enter__(self) -> RoomsProgress:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self.display is not None:
+            self.display.stop()
 
 
 def describe_missions(paths: list[Path]) -> int:

@@ -7,6 +7,10 @@ import argparse
 from rei.lang.cli_support import EXIT_OK
 from rei.lang.rules import RULES
 
+HELP_EXAMPLES = """\
+rei-gen rules | grep GRID      # the rules about grids
+"""
+
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser = sub.add_parser("rules", help="list the rules `rei-gen check` enforces",

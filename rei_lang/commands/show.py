@@ -14,6 +14,11 @@ from pathlib import Path
 
 from rei.lang.cli_support import EXIT_OK
 
+HELP_EXAMPLES = """\
+rei-gen show examples/navigation/navigation.mission --output nav.png
+rei-gen show suite/index.csv --output suite.png       # every room of a suite on one sheet
+"""
+
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser = sub.add_parser(

@@ -133,11 +133,13 @@ def judge_mission(rate: SuccessRate, required: float) -> MissionVerdict:
         return MissionVerdict(rate, required, "fail", f"{where}: interval below")
     if rate.passed == rate.runs:
         return MissionVerdict(rate, required, "pass",
-                              f"{where}: every run passed, interval straddles")
+                              f"{where}: every run passed (the interval is wide only because "
+                              f"the runs are few)")
     if rate.passed == 0:
         return MissionVerdict(rate, required, "fail", f"{where}: no run passed")
     return MissionVerdict(rate, required, "flaky",
-                          f"{where}: interval straddles and runs disagree; repeat more")
+                          f"{where}: the runs disagree and the interval includes the "
+                          f"required rate; repeat more")
 
 
 def mission_verdicts(records: Iterable[RunRecord], required: float = DEFAULT_PASS_RATE,

@@ -847,6 +847,19 @@ class TraceDecoder:
         self._rules = _StreamRules(len(self.header.objects), self.header.data,
                                    tuple(n for n, _ in self.header.faults))
 
+    def resume_at(self, seq: int, poses: np.ndarray, twists: np.ndarray) -> None:
+        """Accept the sample numbered ``seq`` next, on top of every object's pose and twist
+        at that sample (a keyframe): a reader that missed the samples before it (a monitor
+        on a bus) goes on. Rows are changes, so after a gap only a keyframe makes the next
+        line readable."""
+        if poses.shape != self._rules.poses.shape or twists.shape != self._rules.twists.shape:
+            raise TraceError(f"a keyframe of {len(self._rules.poses)} rows expected, found "
+                             f"{len(poses)} and {len(twists)}")
+        self._rules.seq = seq
+        self._rules.poses[:], self._rules.twists[:] = poses, twists
+        if self._rules.time is None:  # not the first sample of the stream: rows are changes
+            self._rules.time = 0.0
+
     def line(self, raw: bytes, where: str) -> Sample | tuple[float, str, str]:
         """The sample of a line, or (end time, outcome, reason) of the end line."""
         data = _load(raw, where)

@@ -63,7 +63,21 @@ def _rate(text: str) -> float:
     return value
 
 
+HELP_EXAMPLES = """\
+rei campaign examples/ -o out/campaign --repeat 3 --workers 2
+rei campaign examples/navigation/navigation.mission -o out/nav5 --repeat 5 --pass-rate 0.8
+rei campaign suite/index.csv -o out/suite --controller my_nav:Navigator -v
+rei campaign examples/ -o out/campaign --repeat 3   # again: resumes, runs only what is missing
+"""
+
+
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    from rei.runtime.commands.run import (  # noqa: PLC0415
+        CAMPAIGN_VERBOSE_HELP,
+        CONTROLLER_HELP,
+        add_verbosity,
+    )
+
     parser = sub.add_parser(
         "campaign",
         help="run many missions (repeated, in parallel, resumable) and report on them",
@@ -86,7 +100,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.add_argument("--seed", type=int, default=0, metavar="S",
                         help="campaign seed the run seeds derive from (default 0)")
     parser.add_argument("--controller", default=None, metavar="NAME",
-                        help="controller passed to `rei run` (default: its default)")
+                        help=CONTROLLER_HELP + "; passed to every `rei run` (default "
+                             "reference)")
     parser.add_argument("--controller-version", default=None, metavar="TEXT",
                         help="version of the controller, for the provenance (default: the "
                              "version of its installed package and/or the git revision of "
@@ -128,9 +143,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                         type=fault_argument, help="passed to `rei run`: " + FAULT_OPTION_HELP)
     parser.add_argument("--no-report", action="store_true",
                         help="skip report.html (tables and junit.xml are still written)")
-    from rei.runtime.commands.run import add_verbosity  # noqa: PLC0415
-
-    add_verbosity(parser)  # -q: the final verdict line alone; -v: every failed run's rerun
+    add_verbosity(parser, CAMPAIGN_VERBOSE_HELP)  # -q: the final verdict line alone
     parser.set_defaults(func=run)
 
 

@@ -25,7 +25,19 @@ from rei.runtime.commands.campaign import EXIT_STATUS_HELP, positive_int
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
 
+HELP_EXAMPLES = """\
+rei demo -o out/demo                                   # a small suite, run and reported
+rei demo -o out/demo-mine --controller my_nav:Navigator --count 4 --repeat 2
+"""
+
+
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    from rei.runtime.commands.run import (  # noqa: PLC0415
+        CAMPAIGN_VERBOSE_HELP,
+        CONTROLLER_HELP,
+        add_verbosity,
+    )
+
     parser = sub.add_parser(
         "demo", help="generate a small suite, run a campaign on it and write its report",
         description="Generate a small suite of rooms and missions with `rei-gen rooms`, run "
@@ -50,14 +62,12 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.add_argument("--workers", type=positive_int, default=None, metavar="N",
                         help="runs at once (default: number of CPUs)")
     parser.add_argument("--controller", default=None, metavar="NAME",
-                        help="robot under test, passed to every `rei run`: a built-in name or "
-                             "module:Class of your own navigator (default: the reference one)")
+                        help=CONTROLLER_HELP + "; passed to every `rei run` (default "
+                             "reference)")
     parser.add_argument("--vepl", type=Path, default=None, metavar="FILE",
                         help="monitoring specification passed to every `rei run` (default: "
                              "REI's default.vepl)")
-    from rei.runtime.commands.run import add_verbosity  # noqa: PLC0415
-
-    add_verbosity(parser)  # as `rei campaign`: -q the final lines alone, -v failed runs' reruns
+    add_verbosity(parser, CAMPAIGN_VERBOSE_HELP)  # as `rei campaign`
     parser.set_defaults(func=run)
 
 

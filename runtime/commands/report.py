@@ -5,6 +5,11 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+HELP_EXAMPLES = """\
+rei report out/campaign              # tables, report.html and junit.xml again
+rei report out/campaign --no-html    # tables and junit.xml only (for CI)
+"""
+
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     from rei.runtime.commands.campaign import EXIT_STATUS_HELP  # noqa: PLC0415

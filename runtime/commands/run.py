@@ -59,16 +59,38 @@ RECORDING = "recording.mcap"
 """Written with --record (rei.runtime.recording.RECORDING)."""
 
 
-def add_verbosity(parser: argparse.ArgumentParser) -> None:
-    """--quiet and --verbose, with the same meaning for rei run, replay, campaign and demo:
-    results on stdout, progress and diagnostics on stderr."""
+CONTROLLER_HELP = (
+    "robot under test: reference (REI's navigator), teleop:SCRIPT (a scripted drive; "
+    "SCRIPT is forward_backward, straight ahead and back, which plain teleop also "
+    "means, or circle, circles one way then the other), or module:Class of your own "
+    "navigator")
+"""Kept true to rei.runtime.robot.teleop.SCRIPTS by tests/test_help.py (importing the
+robot package for every `rei` command line would cost 0.2 s)."""
+QUIET_HELP = "no progress; print only the final verdict line (on stdout)"
+RUN_VERBOSE_HELP = ("more detail: every requirement with its reason, passed ones too, and the "
+                    "mission's events as they happen (on stderr)")
+REPLAY_VERBOSE_HELP = "more detail: every requirement with its reason, passed ones too"
+CAMPAIGN_VERBOSE_HELP = ("more detail: each failed run with the command that reruns it "
+                         "(on stderr)")
+
+
+def add_verbosity(parser: argparse.ArgumentParser, verbose_help: str = RUN_VERBOSE_HELP,
+                  quiet_help: str = QUIET_HELP) -> None:
+    """-q/--quiet and -v/--verbose for rei run, replay, campaign and demo: results on stdout,
+    progress and diagnostics on stderr; each command says what -v adds for it."""
     group = parser.add_mutually_exclusive_group()
-    group.add_argument("-q", "--quiet", action="store_true",
-                       help="no progress; print only the final verdict line (on stdout)")
-    group.add_argument("-v", "--verbose", action="store_true",
-                       help="more detail: every requirement with its reason, passed ones "
-                            "too (rei run also shows the mission's events as they happen, "
-                            "on stderr)")
+    group.add_argument("-q", "--quiet", action="store_true", help=quiet_help)
+    group.add_argument("-v", "--verbose", action="store_true", help=verbose_help)
+
+
+HELP_EXAMPLES = """\
+rei run examples/simple_wall/simple_wall.mission -o out/wall        # REI's navigator
+rei run examples/simple_wall/simple_wall.mission -o out/teleop --controller teleop:circle
+rei run examples/navigation/navigation.mission -o out/nav --seed 3 \\
+    --vepl examples/navigation/human_safety.vepl                        # your requirements
+rei run examples/navigation/navigation.mission -o out/mine --controller my_nav:Navigator
+rei run examples/navigation/navigation.mission -o out/rec --record -q  # + recording.mcap
+"""
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -82,7 +104,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                     "simulation runs in a supervised child process: a controller that kills "
                     "it, ends it or hangs it ends the run as an error, with a summary saying "
                     "so. Results go to stdout, progress and diagnostics to stderr. Exit "
-                    "status: 0 every requirement passed, 1 one failed or was inconclusive, "
+                    "status: 0 every requirement passed, 1 one failed or was inconclusive "
+                    "(or the .vepl declares no requirement: verdict UNJUDGED, never a pass), "
                     "2 invalid input, 3 a run error, 130 interrupted.")
     parser.add_argument("mission", type=Path, nargs="?", default=None, metavar="MISSION",
                         help="the .mission file (optional with --config)")
@@ -90,8 +113,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                         help="output folder (created if missing; required without --config)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the run (default 0)")
     parser.add_argument("--controller", default="reference", metavar="NAME",
-                        help="robot under test: reference, teleop, teleop:SCRIPT (a scripted "
-                             "drive), or module:Class of your own navigator (default reference)")
+                        help=CONTROLLER_HELP + " (default reference)")
     parser.add_argument("--duration", type=float, default=None, metavar="S",
                         help="stop after S simulated seconds (default: the mission's time limit)")
     parser.add_argument("--watchdog", type=float, default=5.0, metavar="S",
@@ -130,6 +152,22 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.add_argument("--fault", action="append", default=None, metavar="ENTRY",
                         type=fault_argument, help=FAULT_OPTION_HELP + "; added to the "
                         "mission's own fault section")
+    bus = parser.add_argument_group(
+        "distributed run (docs/bus.md)",
+        "With --bus the robot under test is the controller `rei robot` runs on the bus (not "
+        "--controller), called in lock-step: the simulation waits for each command at most "
+        "--watchdog seconds, and a robot gone silent ends the run as an error (exit 3). The "
+        "trace is published on the bus for `rei monitor` as it is written.")
+    bus.add_argument("--bus", default=None, metavar="URL",
+                     help="the endpoint `rei bus` printed (tcp/HOST:PORT)")
+    bus.add_argument("--credentials", type=Path, default=None, metavar="DIR",
+                     help="the bus's credentials folder (default: $REI_BUS_CREDENTIALS)")
+    bus.add_argument("--bus-wait", type=float, default=30.0, metavar="S",
+                     help="wall seconds to wait for the robot (and with --wait-for-monitor, "
+                          "a monitor) to join before the run begins (default 30)")
+    bus.add_argument("--wait-for-monitor", action="store_true",
+                     help="begin only when a monitor (`rei monitor`) reads the trace, so it "
+                          "sees every sample")
     add_verbosity(parser)
     defer_defaults(parser)
     parser.set_defaults(func=run)
@@ -189,13 +227,19 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
              vepl: Path | None = None, monitor: bool = True, laser_noise: float | None = None,
              variation: bool = True, probe: RunProbe | None = None,
              echo: IO[str] | None = None, functions: str | None = None,
-             recording: bool = False, faults: Sequence[FaultDefinition] = ()
+             recording: bool = False, faults: Sequence[FaultDefinition] = (),
+             bus: str | None = None, bus_credentials: Path | None = None,
+             bus_wait: float = 30.0, wait_monitor: bool = False
              ) -> tuple[RunSummary, RunRecord]:
     """Everything `rei run` does, in this process: generate, run, monitor with the .vepl's
     automata (the default specification unless ``vepl``; none when ``monitor`` is False),
     write outputs. Extra ``sinks`` see the same stream as the trace and the monitor; ``probe``
     hears the loop's progress; ``echo`` gets run.log's lines as they are written; ``recording``
     also writes recording.mcap (``rei.runtime.recording``), with the monitor's signals.
+    With ``bus`` (an endpoint of `rei bus`) the robot under test is the one answering on the
+    bus (`rei robot`, awaited at most ``bus_wait`` seconds, like a monitor with
+    ``wait_monitor``) and the trace is published there as it is written
+    (``rei.runtime.bus.run``; closing the robot leaves the bus).
 
     The controller runs in this process: a controller that ends or stalls the process ends
     the caller too. `rei run` supervises it instead (``rei.runtime.supervisor.supervise``).
@@ -245,11 +289,20 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
                           _fault_periods(config, monitor_config.rate, manifest.laser.rate),
                           (-manifest.laser.fov / 2, manifest.laser.fov / manifest.laser.beams,
                            manifest.laser.beams))
-    robot = make_controller(controller)
+    bus_sinks: list[SampleSink] = []
+    if bus is None:
+        robot: Any = make_controller(controller)
+    else:
+        from rei.runtime.bus.run import open_run_bus  # noqa: PLC0415
+
+        robot = open_run_bus(bus, bus_credentials, watchdog, bus_wait, wait_monitor, world_dir)
+        controller = f"bus:{robot.name}"
     for stale in (out_dir / SUMMARY, out_dir / TRACE, out_dir / EVENTS, out_dir / PAGE,
                   out_dir / RECORDING):
         stale.unlink(missing_ok=True)
     trace_writer = TraceWriter(out_dir / TRACE)
+    if bus is not None:  # right after the trace writer: it publishes the line just written
+        bus_sinks.append(robot.publisher(trace_writer))
     recorder: list[SampleSink] = []
     if recording:
         from rei.runtime.recording import McapRecorder  # noqa: PLC0415
@@ -284,7 +337,7 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
         for fault in injected:
             log(f"fault {fault.name}: {fault.text()}")
         record = run_mission(mission, manifest, monitor_config, robot,
-                             [trace_writer,
+                             [trace_writer, *bus_sinks,
                               *([monitor_sink] if monitor_sink is not None else []), *recorder,
                               *sinks],
                              config,
@@ -311,7 +364,10 @@ def execute_request(request: RunRequest, probe: RunProbe) -> tuple[int, dict[str
         variation=request.variation, probe=probe,
         echo=sys.stderr if request.echo_events else None, functions=request.functions,
         recording=request.record,
-        faults=tuple(parse_fault_option(text) for text in request.faults))
+        faults=tuple(parse_fault_option(text) for text in request.faults),
+        bus=request.bus, bus_credentials=Path(request.bus_credentials)
+        if request.bus_credentials is not None else None, bus_wait=request.bus_wait,
+        wait_monitor=request.wait_monitor)
     page = write_page(Path(request.output)) if request.monitor else None
     written = (Path(request.output) / SUMMARY).read_bytes()
     return exit_code(summary, request.monitor), {
@@ -328,6 +384,13 @@ def run(args: argparse.Namespace) -> int:
     out: Path = args.output
     check_options(args.mission, args.duration, args.watchdog, args.physics_rate,
                   args.odom_drift, args.laser_noise, args.seed)
+    if args.bus is not None:
+        from rei.runtime.bus.client import parse_endpoint  # noqa: PLC0415
+
+        parse_endpoint(args.bus)
+        if not (math.isfinite(args.bus_wait) and args.bus_wait > 0):
+            raise RunError(f"--bus-wait: expected a positive number of seconds, found "
+                           f"{args.bus_wait}")
     _make_folder(out)
     # Outputs of an earlier run into the same folder go now: a run that dies must not leave
     # them beside its own error summary.
@@ -341,7 +404,9 @@ def run(args: argparse.Namespace) -> int:
         str(args.vepl) if args.vepl is not None else None, not args.no_monitor,
         not args.no_variation, progress=not args.quiet and sys.stderr.isatty(),
         echo_events=args.verbose, functions=args.functions, record=args.record,
-        faults=tuple(f.text() for f in args.fault or ()))
+        faults=tuple(f.text() for f in args.fault or ()), bus=args.bus,
+        bus_credentials=os.path.abspath(args.credentials) if args.credentials else None,
+        bus_wait=args.bus_wait, wait_monitor=args.wait_for_monitor)
     ended = supervise(request)
     summary = _read_summary(out) if ended.status != 2 else None
     if summary is None:
@@ -420,6 +485,10 @@ def final_line(summary: RunSummary, out_dir: Path, monitored: bool = True) -> st
     if not monitored:
         return (f"verdict: NOT JUDGED (--no-monitor: judge the trace with `rei replay`); "
                 f"outputs in {out_dir}")
+    if verdict == "unjudged":  # monitored, yet no requirement: nothing could pass
+        return (f"verdict: UNJUDGED (the .vepl declares no requirement, so the run cannot "
+                f"pass: add a `requirement` to it, or leave out --vepl for REI's default "
+                f"ones); total utility {summary.total_utility:g}; outputs in {out_dir}")
     return (f"verdict: {verdict.upper()}; total utility {summary.total_utility:g}; outputs "
             f"in {out_dir}")
 

@@ -135,8 +135,11 @@ class AutomataHost:
                 self.last_seq, self.last_time = s.seq, s.time
                 self._mission_events(s, self.prev_inputs)
             return
-        if self.last_seq is not None and s.seq > self.last_seq + 1:
-            self.problems.add("missing", s.time, s.seq - self.last_seq - 1)
+        # samples are numbered from 0: a first sample numbered n > 0 (a monitor that joined
+        # late) follows n missing ones
+        previous = -1 if self.last_seq is None else self.last_seq
+        if s.seq > previous + 1:
+            self.problems.add("missing", s.time, s.seq - previous - 1)
         self.last_seq, self.last_time = s.seq, s.time
         if self.first_time is None:
             self.first_time = s.time

@@ -15,6 +15,12 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 SVG_SALT = "rei-report"
+TEXT_PT = 9.0
+"""Ticks, labels, legends and annotations: 12 px at the plots' drawn size, which the pages
+only ever enlarge (at least 11 px on screen, issue 27)."""
+TITLE_PT = 11.0
+PLOT_WIDTH = 7.0
+"""inches (672 px at 96 dpi): fits the text column of an 800 px wide window unscaled."""
 
 
 def new_figure(width: float, height: float) -> Figure:
@@ -32,7 +38,9 @@ def inline_svg(fig: Figure) -> str:
     return text[text.index("<svg"):]
 
 
-def png_data_uri(fig: Figure, dpi: int = 80) -> str:
+def png_data_uri(fig: Figure, dpi: int = 96) -> str:
+    """PNG at 96 dpi: 9 pt text is 12 px in the image, which pages never shrink below
+    11 px."""
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=dpi, metadata={"Software": None})
     return "data:image/png;base64," + base64.b64encode(buffer.getvalue()).decode("ascii")

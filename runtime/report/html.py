@@ -38,6 +38,7 @@ from rei.runtime.report.tables import (
     signal_counts,
     success_table,
 )
+from rei.runtime.report.templating import environment
 
 MAX_MAPS = 40
 """Failed runs drawn from above (each ~40 kB of PNG); the rest are listed without a map."""
@@ -57,13 +58,32 @@ def _number(value: object) -> str:
     return str(value)
 
 
+def _setting(value: object) -> str:
+    """A provenance value as a reader would write it: the engine ``{"engine": "local",
+    "workers": 2}`` as "local (workers 2)", a list joined, a number as ``_number``."""
+    if isinstance(value, dict):
+        name = value.get("engine", value.get("name"))
+        rest = ", ".join(f"{k} {_setting(v)}" for k, v in value.items()
+                         if k not in ("engine", "name"))
+        if name is not None and rest:
+            return f"{name} ({rest})"
+        return str(name) if name is not None else (rest or "–")
+    if isinstance(value, (list, tuple)):
+        return ", ".join(_setting(v) for v in value) or "–"
+    return _number(value)
+
+
+ROTATE_AFTER = 4
+"""Requirements in the matrix beyond which their headers stand rotated (one narrow column
+each) instead of wrapping at underscores."""
+
+
 def _environment() -> jinja2.Environment:
-    env = jinja2.Environment(
-        loader=jinja2.PackageLoader("rei.runtime.report", "templates"),
-        autoescape=jinja2.select_autoescape(["html", "j2"], default=True),
-        undefined=jinja2.StrictUndefined, trim_blocks=True, lstrip_blocks=True)
+    env = environment()
     env.filters["num"] = _number
+    env.filters["setting"] = _setting
     env.filters["pct"] = lambda v: f"{100 * v:.0f} %"
+    env.globals["ROTATE_AFTER"] = ROTATE_AFTER
     return env
 
 

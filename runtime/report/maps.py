@@ -17,7 +17,7 @@ import numpy as np
 from rei.catalogue import ObjectType, Tile, default_catalogue
 from rei.catalogue.model import Kind
 from rei.runtime.report.data import Paths, SignalEvent
-from rei.runtime.report.figures import new_figure
+from rei.runtime.report.figures import TEXT_PT, new_figure
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -77,7 +77,7 @@ def draw_paths(ax: Axes, paths: Paths, events: list[SignalEvent]) -> None:
     robot = paths.robot
     ax.plot(robot[:, 1], robot[:, 2], color=ROBOT_PATH, linewidth=1.6, label="robot path")
     draw_signals(ax, robot, events)
-    ax.legend(fontsize=6, loc="upper right")
+    ax.legend(fontsize=TEXT_PT, loc="upper right")
 
 
 def _object_type(body: BodySpec) -> ObjectType:

@@ -10,33 +10,57 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Literal
 
 import numpy as np
 
 from rei.runtime.campaign.stats import by_mission, wilson_interval
 from rei.runtime.campaign.store import RunRecord
 from rei.runtime.report.data import CampaignData, SignalEvent, read_events, read_paths
-from rei.runtime.report.figures import inline_svg, new_figure, png_data_uri
+from rei.runtime.report.figures import (
+    PLOT_WIDTH,
+    TEXT_PT,
+    TITLE_PT,
+    inline_svg,
+    new_figure,
+    png_data_uri,
+)
 from rei.runtime.report.maps import draw_paths, map_figure
 from rei.runtime.report.tables import SIGNAL_ORDER
 
 MAX_LEGEND = 12
 
 
+REPEAT_STYLES: tuple[Literal["-", "--", ":", "-."], ...] = ("-", "--", ":", "-.")
+"""Line styles that tell a mission's repeats apart (with a lighter shade per repeat)."""
+
+
+def _shade(colour: str, repeat: int) -> tuple[float, float, float]:
+    """The mission's colour, mixed with a little more white for each later repeat."""
+    from matplotlib.colors import to_rgb  # noqa: PLC0415
+
+    mix = min(0.45, 0.18 * (repeat % len(REPEAT_STYLES)))
+    r, g, b = to_rgb(colour)
+    return (r + (1 - r) * mix, g + (1 - g) * mix, b + (1 - b) * mix)
+
+
 def utility_over_time(data: CampaignData) -> str | None:
-    """Running total utility against simulation time, one line per run, a colour per mission."""
-    lines: list[tuple[str, list[SignalEvent]]] = []
-    line_passed: list[bool] = []
+    """Running total utility against simulation time, one line per run: a colour per
+    mission, and a line style and shade per repeat, so two repeats of one room never look
+    like one line."""
+    from matplotlib.lines import Line2D  # noqa: PLC0415
+
+    lines: list[tuple[str, int, bool, list[SignalEvent]]] = []
     for record in data.records:
         events = read_events(data.run_dir(record))
         if events:
-            lines.append((by_mission(record), events))
-            line_passed.append(record.passed)
+            lines.append((by_mission(record), record.spec.repeat, record.passed, events))
     if not lines:
         return None
-    fig = new_figure(9, 4.2)
+    fig = new_figure(PLOT_WIDTH, 4.2)
     ax = fig.add_subplot()
-    missions = sorted({m for m, _ in lines})
+    missions = sorted({m for m, _, _, _ in lines})
+    repeats = sorted({r for _, r, _, _ in lines})
     # A colour per mission only while a legend of them fits and no colour repeats; beyond
     # that a line's colour says whether its run passed.
     by_verdict = len(missions) > MAX_LEGEND
@@ -44,22 +68,30 @@ def utility_over_time(data: CampaignData) -> str | None:
     labelled: set[str] = set()
     # Hundreds of runs as vector paths make a page of megabytes: raster the lines then.
     raster = len(lines) > 100
-    for (mission, events), passed in zip(lines, line_passed, strict=True):
+    for mission, repeat, passed, events in lines:
         t = [0.0] + [e.time for e in events]
         u = [0.0] + [e.total for e in events]
         key = ("passed" if passed else "did not pass") if by_verdict else mission
         label = key if key not in labelled else None
         labelled.add(key)
-        colour = ("#2b8a3e" if passed else "#c92a2a") if by_verdict else colours[mission]
-        ax.step(t, u, where="post", color=colour, alpha=0.75 if not raster else 0.3,
-                linewidth=1.2, label=label, rasterized=raster)
+        base = ("#2b8a3e" if passed else "#c92a2a") if by_verdict else colours[mission]
+        ax.step(t, u, where="post", color=_shade(base, repeat) if not by_verdict else base,
+                linestyle=REPEAT_STYLES[repeat % len(REPEAT_STYLES)] if not by_verdict else "-",
+                alpha=0.85 if not raster else 0.3, linewidth=1.4, label=label,
+                rasterized=raster)
     ax.axhline(0, color="#888", linewidth=0.6)
-    ax.set_xlabel("simulation time [s]")
-    ax.set_ylabel("total utility")
-    ax.set_title("Utility over time (one line per run)")
-    if missions:
-        ax.legend(fontsize=7, ncols=2 if not by_verdict else 1, loc="best",
-                  title=f"{len(missions)} missions" if by_verdict else None)
+    ax.set_xlabel("simulation time [s]", fontsize=TEXT_PT)
+    ax.set_ylabel("total utility", fontsize=TEXT_PT)
+    ax.tick_params(labelsize=TEXT_PT)
+    ax.set_title("Utility over time (one line per run)", fontsize=TITLE_PT)
+    handles, _ = ax.get_legend_handles_labels()
+    if not by_verdict and len(repeats) > 1:
+        handles += [Line2D([], [], color="#495057",
+                           linestyle=REPEAT_STYLES[r % len(REPEAT_STYLES)],
+                           label=f"repeat {r + 1}") for r in repeats[:len(REPEAT_STYLES)]]
+    ax.legend(handles=handles, fontsize=TEXT_PT, loc="upper left", bbox_to_anchor=(1.0, 1.0),
+              frameon=False, title=f"{len(missions)} missions" if by_verdict else None,
+              title_fontsize=TEXT_PT)
     return inline_svg(fig)
 
 
@@ -73,17 +105,18 @@ def signal_distribution(records: Sequence[RunRecord]) -> str | None:
     if not totals:
         return None
     order = [s for s in SIGNAL_ORDER if s in totals] + sorted(set(totals) - set(SIGNAL_ORDER))
-    fig = new_figure(9, 0.9 + 0.32 * len(order))
+    fig = new_figure(PLOT_WIDTH, 0.9 + 0.32 * len(order))
     ax = fig.add_subplot()
     y = np.arange(len(order))
     ax.barh(y, [totals[s] for s in order], color="#4263eb")
-    ax.set_yticks(y, [s.removeprefix("SIG_") for s in order], fontsize=8)
+    ax.set_yticks(y, [s.removeprefix("SIG_") for s in order], fontsize=TEXT_PT)
     ax.invert_yaxis()
     for i, s in enumerate(order):
         ax.annotate(str(totals[s]), (totals[s], i), xytext=(3, 0), textcoords="offset points",
-                    va="center", fontsize=7)
-    ax.set_xlabel("occurrences over all runs")
-    ax.set_title("Distribution of signals")
+                    va="center", fontsize=TEXT_PT)
+    ax.set_xlabel("occurrences over all runs", fontsize=TEXT_PT)
+    ax.tick_params(labelsize=TEXT_PT)
+    ax.set_title("Distribution of signals", fontsize=TITLE_PT)
     return inline_svg(fig)
 
 
@@ -155,10 +188,10 @@ def success_by_descriptor(records: Sequence[RunRecord], bins: int = 4) -> str | 
             highs.append(high - rate)
         ax.errorbar(xs, rates, yerr=[lows, highs], fmt="o-", capsize=3, color="#2b8a3e")
         ax.set_ylim(-0.05, 1.05)
-        ax.set_xlabel(name + (" (quantile bins)" if edges is not None else ""), fontsize=8)
-        ax.set_ylabel("success rate", fontsize=8)
-        ax.tick_params(labelsize=7)
-    fig.suptitle("Success rate by difficulty descriptor (95 % Wilson intervals)", fontsize=10)
+        ax.set_xlabel(name + (" (quantile bins)" if edges is not None else ""), fontsize=TEXT_PT)
+        ax.set_ylabel("success rate", fontsize=TEXT_PT)
+        ax.tick_params(labelsize=TEXT_PT)
+    fig.suptitle("Success rate by difficulty descriptor (95 % Wilson intervals)", fontsize=TITLE_PT)
     return inline_svg(fig)
 
 
@@ -176,10 +209,10 @@ def failure_map(data: CampaignData, record: RunRecord) -> str | None:
     run_dir = data.run_dir(record)
     paths = read_paths(run_dir) if run_dir.is_dir() else None
     events = read_events(run_dir) if run_dir.is_dir() else []
-    fig, ax = map_figure(mission.world, mission, title=record.spec.run_id)
+    fig, ax = map_figure(mission.world, mission, title=record.spec.run_id, size=4.6)
     if paths is not None:
         draw_paths(ax, paths, events)
     else:
         ax.text(0.5, 0.01, "no trace: path not drawn", transform=ax.transAxes, ha="center",
-                fontsize=7, color="#c92a2a")
+                fontsize=TEXT_PT, color="#c92a2a")
     return png_data_uri(fig)

@@ -35,6 +35,7 @@ from rei.runtime.report.run_data import (
     trace_path,
 )
 from rei.runtime.report.run_plots import FailureMark
+from rei.runtime.report.templating import environment
 from rei.runtime.results import RunSummary, judge
 from rei.runtime.world.manifest import WorldManifest
 
@@ -57,10 +58,7 @@ class Plot:
 
 
 def _environment() -> jinja2.Environment:
-    env = jinja2.Environment(
-        loader=jinja2.PackageLoader("rei.runtime.report", "templates"),
-        autoescape=jinja2.select_autoescape(["html", "j2"], default=True),
-        undefined=jinja2.StrictUndefined, trim_blocks=True, lstrip_blocks=True)
+    env = environment()
     env.filters["seconds"] = lambda v: "end of run" if v is None else f"{v:g} s"
     return env
 

@@ -22,21 +22,29 @@ from matplotlib.lines import Line2D
 from rei.runtime.evaluator.signal_log import SignalRow
 from rei.runtime.messages import MissionEvent
 from rei.runtime.report.data import Paths
-from rei.runtime.report.figures import inline_svg, new_figure, png_data_uri
+from rei.runtime.report.figures import (
+    PLOT_WIDTH,
+    TEXT_PT,
+    TITLE_PT,
+    inline_svg,
+    new_figure,
+    png_data_uri,
+)
 from rei.runtime.report.maps import draw_human_paths, map_figure
 from rei.runtime.report.run_data import Series, Thresholds, TraceSeries
 from rei.runtime.report.tables import SIGNAL_ORDER
 
 if TYPE_CHECKING:
+    from matplotlib.artist import Artist
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
     from rei.generators.concrete import ConcreteMission, ConcreteWorld
 
-WIDTH = 11.5
-"""inches at 96 dpi: the page's 1200 px column."""
+WIDTH = PLOT_WIDTH
+"""inches at 96 dpi (figures.PLOT_WIDTH)."""
 FAIL = "#c92a2a"
-PASS = "#2b8a3e"
+PASS = "#237032"
 CLOSE = "#e67700"
 NEUTRAL = "#868e96"
 DISTANCE_AXIS_MIN = 1.5
@@ -81,7 +89,7 @@ def _mark_failures(ax: Axes, failures: Sequence[FailureMark], label: bool, end: 
             right = f.time > 0.75 * end
             ax.annotate(f.requirement, (f.time, 1.0), xycoords=("data", "axes fraction"),
                         xytext=(-3 if right else 3, -4 - 11 * (i % 4)),
-                        textcoords="offset points", fontsize=7, color=FAIL,
+                        textcoords="offset points", fontsize=TEXT_PT, color=FAIL,
                         ha="right" if right else "left", va="top",
                         bbox={"boxstyle": "square,pad=0.1", "fc": "white", "ec": "none",
                               "alpha": 0.8})
@@ -129,12 +137,12 @@ def timeline(events: Sequence[MissionEvent], signals: Sequence[SignalRow], end: 
         text = {"success": "succeeded", "fail": "failed", "open": "not ended"}[status]
         if reason:
             # the whole reason is in the events table below the plot
-            text += f": {reason if len(reason) <= 40 else reason[:37] + '…'}"
+            text += f": {reason if len(reason) <= 28 else reason[:25] + '…'}"
         # near the end of the run the words go left of the bar's end, inside the axes
         inside = finish > 0.6 * end
         ax_tasks.annotate(text, (finish, row), xytext=(-4 if inside else 4, 0),
                           textcoords="offset points", va="center",
-                          ha="right" if inside else "left", fontsize=7, color=colours[status],
+                          ha="right" if inside else "left", fontsize=TEXT_PT, color=colours[status],
                           bbox={"boxstyle": "square,pad=0.1", "fc": "white", "ec": "none",
                                 "alpha": 0.85}).set_in_layout(False)
     for e in events:
@@ -142,11 +150,11 @@ def timeline(events: Sequence[MissionEvent], signals: Sequence[SignalRow], end: 
             ax_tasks.axvline(e.time, color="#212529", linewidth=0.8, linestyle="--")
             ax_tasks.annotate(f"mission {e.kind}", (e.time, 1.0),
                               xycoords=("data", "axes fraction"), xytext=(2, 2),
-                              textcoords="offset points", fontsize=7)
-    ax_tasks.set_yticks(range(len(tasks)), [t[0] for t in tasks], fontsize=7)
+                              textcoords="offset points", fontsize=TEXT_PT)
+    ax_tasks.set_yticks(range(len(tasks)), [t[0] for t in tasks], fontsize=TEXT_PT)
     ax_tasks.set_ylim(task_rows - 0.4, -0.6)
-    ax_tasks.set_ylabel("tasks", fontsize=8)
-    ax_tasks.set_title("Mission events, signals and total utility over time", fontsize=10,
+    ax_tasks.set_ylabel("tasks", fontsize=TEXT_PT)
+    ax_tasks.set_title("Mission events, signals and total utility over time", fontsize=TITLE_PT,
                        pad=14)
     _mark_failures(ax_tasks, failures, False, end)
     lane = {name: i for i, name in enumerate(names)}
@@ -159,33 +167,61 @@ def timeline(events: Sequence[MissionEvent], signals: Sequence[SignalRow], end: 
                                facecolors="none" if positive else None,
                                label="positive utility" if positive else "negative utility")
     ax_signals.set_yticks(range(len(names)), [n.removeprefix("SIG_") for n in names],
-                          fontsize=7)
+                          fontsize=TEXT_PT)
     ax_signals.set_ylim(max(len(names), 1) - 0.5, -0.5)  # no signal: one empty lane
-    ax_signals.set_ylabel("signals", fontsize=8)
+    ax_signals.set_ylabel("signals", fontsize=TEXT_PT)
     ax_signals.grid(axis="y", color="#e9ecef", linewidth=0.6)
     _mark_failures(ax_signals, failures, False, end)
-    if signals:
-        ax_signals.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0),
-                          frameon=False)
     t = [0.0] + [r.time for r in signals] + [end]
     u = [0.0] + [r.total_utility for r in signals]
     u.append(u[-1])
     ax_utility.step(t, u, where="post", color="#4263eb", linewidth=1.4, label="total utility")
     ax_utility.axhline(0, color="#adb5bd", linewidth=0.6)
-    ax_utility.set_ylabel("total utility", fontsize=8)
-    ax_utility.set_xlabel("simulation time [s]", fontsize=8)
+    ax_utility.set_ylabel("total utility", fontsize=TEXT_PT)
+    ax_utility.set_xlabel("simulation time [s]", fontsize=TEXT_PT)
     _mark_failures(ax_utility, failures, True, end)
-    ax_utility.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0), frameon=False)
+    handles = [h for ax in (ax_signals, ax_utility) for h in ax.get_legend_handles_labels()[0]]
+    _legend_below(fig, _unique(handles))
     for ax in (ax_tasks, ax_signals, ax_utility):
-        ax.tick_params(labelsize=7)
+        ax.tick_params(labelsize=TEXT_PT)
         ax.set_xlim(0, max(end, 1e-9) * 1.01)
     for ax in (ax_tasks, ax_signals):
         ax.tick_params(labelbottom=False)
     return _svg(fig, "timeline")
 
 
+def _unique(handles: list[Artist]) -> list[Artist]:
+    """One legend entry per label (every lane marks the same failures)."""
+    seen: dict[str, Artist] = {}
+    for handle in handles:
+        seen.setdefault(str(handle.get_label()), handle)
+    return list(seen.values())
+
+
+def _legend_below(fig: Figure, handles: list[Artist]) -> None:
+    """The legend under the plot, across its width: beside it, it took a third of an
+    800 px page's plot width."""
+    if handles:
+        fig.legend(handles=handles, loc="outside lower center", ncols=min(3, len(handles)),
+                   fontsize=TEXT_PT, frameon=False)
+
+
 def _line(ax: Axes, series: Series, **style: object) -> None:
     ax.plot(series.time, series.value, **style)  # type: ignore[arg-type]
+
+
+def distance_axis(values: Sequence[np.ndarray], close: float) -> tuple[float, float, bool]:
+    """(bottom, top, cut) of the distance axis for the finite values of each line: the top
+    is at most a few CLOSE thresholds (at least DISTANCE_AXIS_MIN) or just above each line's
+    closest approach; ``cut`` when some value lies above the top (drawn on the top edge)."""
+    finite = np.concatenate(values) if len(values) else np.zeros(0)
+    low = min(0.0, float(finite.min())) if len(finite) else 0.0
+    high = float(finite.max()) if len(finite) else close
+    closest = max((float(v.min()) for v in values), default=0.0)
+    cut = max(DISTANCE_AXIS_MIN, 6 * close, 1.3 * closest)
+    is_cut = high > cut
+    top = cut if is_cut else (high * 1.08 if high > 0 else close * 2)
+    return low, max(top, close * 1.3), is_cut
 
 
 def distances(series: TraceSeries, thresholds: Thresholds, failures: Sequence[FailureMark]
@@ -195,37 +231,35 @@ def distances(series: TraceSeries, thresholds: Thresholds, failures: Sequence[Fa
         return None
     fig = new_figure(WIDTH, 3.8)
     ax = fig.add_subplot()
-    if series.obstacle is not None:
-        _line(ax, series.obstacle, color="#1c7ed6", linewidth=1.3,
-              label="nearest obstacle (walls, objects)")
-    if series.human is not None:
-        _line(ax, series.human, color="#e8590c", linewidth=1.3, label="nearest human")
+    # Centimetres matter near the thresholds; metres of clearance across a room would
+    # flatten them to one line, so the axis stops at a few times the CLOSE threshold, or
+    # just above the closest approach of each line, so that every line shows its dips.
+    # Above the cut a line runs along the top edge (never off the chart), and the label
+    # names the value the axis really ends at.
+    values = [v for v in (s.value[np.isfinite(s.value)] for s in (series.obstacle, series.human)
+                          if s is not None) if len(v)]
+    low, top, is_cut = distance_axis(values, thresholds.close)
+    for line, colour, label in ((series.obstacle, "#1c7ed6", "nearest obstacle (walls, objects)"),
+                                (series.human, "#e8590c", "nearest human")):
+        if line is not None:
+            shown = Series(line.time, np.minimum(line.value, top)) if is_cut else line
+            _line(ax, shown, color=colour, linewidth=1.3, label=label)
     ax.axhline(thresholds.close, color=CLOSE, linestyle="--", linewidth=1.1,
                label=f"CLOSE threshold ({thresholds.close:g} m)")
     ax.axhline(thresholds.collision, color=FAIL, linestyle="--", linewidth=1.1,
                label=f"COLLISION threshold ({thresholds.collision:g} m)")
     _mark_failures(ax, failures, True, series.end)
-    # Centimetres matter near the thresholds; metres of clearance across a room would
-    # flatten them to one line, so the axis stops at a few times the CLOSE threshold, or
-    # just above the closest approach of each line, so that every line shows its dips.
-    values = [v for v in (s.value[np.isfinite(s.value)] for s in (series.obstacle, series.human)
-                          if s is not None) if len(v)]
-    finite = np.concatenate(values) if values else np.zeros(0)
-    low = min(0.0, float(finite.min())) if len(finite) else 0.0
-    high = float(finite.max()) if len(finite) else thresholds.close
-    closest = max((float(v.min()) for v in values), default=0.0)
-    cut = max(DISTANCE_AXIS_MIN, 6 * thresholds.close, 1.3 * closest)
-    top = min(high, cut) * 1.08 if high > 0 else thresholds.close * 2
-    ax.set_ylim(low - 0.02 * (top - low), max(top, thresholds.close * 1.3))
-    ax.set_ylabel("footprint distance [m]" + (f"\n(axis cut at {cut:.2g} m)" if high > cut
-                                              else ""), fontsize=8)
-    ax.set_xlabel("simulation time [s]", fontsize=8)
+    ax.set_ylim(low - 0.02 * (top - low), top)
+    ax.set_ylabel("footprint distance [m]" + (f"\n(axis ends at {top:.3g} m: farther\nis drawn "
+                                              f"on the top edge)" if is_cut else ""),
+                  fontsize=TEXT_PT)
+    ax.set_xlabel("simulation time [s]", fontsize=TEXT_PT)
     ax.set_xlim(0, max(series.end, 1e-9) * 1.01)
     ax.set_title("Distance to the nearest obstacle and human (the monitor's geometry)",
-                 fontsize=10)
-    ax.tick_params(labelsize=7)
+                 fontsize=TITLE_PT)
+    ax.tick_params(labelsize=TEXT_PT)
     ax.grid(color="#f1f3f5", linewidth=0.6)
-    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0), frameon=False)
+    _legend_below(fig, ax.get_legend_handles_labels()[0])
     return _svg(fig, "distance")
 
 
@@ -243,18 +277,18 @@ def speed(series: TraceSeries, failures: Sequence[FailureMark]) -> str | None:
         ax.axhline(series.speed_limit, color=FAIL, linestyle="--", linewidth=1.1,
                    label=f"{series.speed_limit_source} ({series.speed_limit:g} m/s)")
     _mark_failures(ax, failures, True, series.end)
-    ax.set_ylabel("speed [m/s]", fontsize=8)
-    ax.set_xlabel("simulation time [s]", fontsize=8)
+    ax.set_ylabel("speed [m/s]", fontsize=TEXT_PT)
+    ax.set_xlabel("simulation time [s]", fontsize=TEXT_PT)
     ax.set_xlim(0, max(series.end, 1e-9) * 1.01)
     fastest = max([float(np.nanmax(series.speed.value))] + (
         [float(np.nanmax(series.commanded.value))] if series.commanded is not None else []) + (
         [series.speed_limit] if series.speed_limit is not None else []))
     # headroom above the limit: a robot driving at the limit must not hide the limit's line
     ax.set_ylim(0, max(fastest, 1e-3) * 1.15)
-    ax.set_title("Speed over time", fontsize=10)
-    ax.tick_params(labelsize=7)
+    ax.set_title("Speed over time", fontsize=TITLE_PT)
+    ax.tick_params(labelsize=TEXT_PT)
     ax.grid(color="#f1f3f5", linewidth=0.6)
-    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0), frameon=False)
+    _legend_below(fig, ax.get_legend_handles_labels()[0])
     return _svg(fig, "speed")
 
 
@@ -262,7 +296,7 @@ def run_map(world: ConcreteWorld, mission: ConcreteMission | None, series: Trace
             failures: Sequence[FailureMark], title: str) -> str:
     """The room from above: the robot's path coloured by time, the humans' paths, where and
     when each requirement failed."""
-    fig, ax = map_figure(world, mission, title=title, compact=False, size=7.0,
+    fig, ax = map_figure(world, mission, title=title, compact=False, size=5.0,
                          margin=(4.2, 1.6))
     world_legend = ax.get_legend()
     draw_human_paths(ax, Paths(series.robot, series.humans))
@@ -276,8 +310,8 @@ def run_map(world: ConcreteWorld, mission: ConcreteMission | None, series: Trace
         path.set_clim(float(robot[0, 0]), float(max(robot[-1, 0], robot[0, 0] + 1e-9)))
         ax.add_collection(path)
         bar = fig.colorbar(path, ax=ax, location="bottom", shrink=0.6, pad=0.02, aspect=40)
-        bar.set_label("simulation time [s]", fontsize=8)
-        bar.ax.tick_params(labelsize=7)
+        bar.set_label("simulation time [s]", fontsize=TEXT_PT)
+        bar.ax.tick_params(labelsize=TEXT_PT)
         ax.plot(robot[-1, 1], robot[-1, 2], marker="s", color="#212529", markersize=6,
                 zorder=9)
         handles.append(Line2D([], [], color="#21918c", linewidth=2.2,
@@ -294,7 +328,7 @@ def run_map(world: ConcreteWorld, mission: ConcreteMission | None, series: Trace
                    zorder=11)
         for i, (f, x, y) in enumerate(zip(failures, xs, ys, strict=True)):
             ax.annotate(f"{f.requirement}\nt = {f.time:g} s", (x, y),
-                        xytext=(10, 14 + 24 * i), textcoords="offset points", fontsize=7,
+                        xytext=(10, 14 + 24 * i), textcoords="offset points", fontsize=TEXT_PT,
                         color=FAIL, zorder=12,
                         bbox={"boxstyle": "round,pad=0.2", "fc": "white", "ec": FAIL,
                               "alpha": 0.9},
@@ -304,6 +338,6 @@ def run_map(world: ConcreteWorld, mission: ConcreteMission | None, series: Trace
     if handles:
         if world_legend is not None:
             ax.add_artist(world_legend)
-        ax.legend(handles=handles, loc="lower left", bbox_to_anchor=(1.01, 0.0), fontsize=7,
+        ax.legend(handles=handles, loc="lower left", bbox_to_anchor=(1.01, 0.0), fontsize=TEXT_PT,
                   frameon=False)
     return png_data_uri(fig, dpi=96)

@@ -88,9 +88,22 @@ def signal_counts(records: Sequence[RunRecord],
 def success_table(rates: Sequence[SuccessRate], label: str) -> Table:
     """Per mission: the rate over its repeats, labelled flaky when the repeats disagree."""
     rows = tuple((r.key, r.runs, r.passed, _pct(r.rate), f"[{_pct(r.low)}, {_pct(r.high)}]",
-                  "repeats disagree" if r.flaky else "") for r in rates)
+                  _repeats(r)) for r in rates)
     return Table(f"Success rate per {label.lower()} (Wilson 95 % interval)",
                  (label, "Runs", "Passed", "Success rate", "95 % interval", "Repeats"), rows)
+
+
+def _repeats(rate: SuccessRate) -> str:
+    """What the repeats of a mission say together (the column is never left empty)."""
+    if rate.runs <= 1:
+        return "one run"
+    if rate.flaky:
+        return "flaky"  # the template marks exactly this word
+    if rate.passed == rate.runs:
+        return "all passed"
+    if rate.passed == 0:
+        return "none passed"
+    return "disagree"
 
 
 def _pct(value: float) -> str:

@@ -51,7 +51,7 @@ import sys
 import tempfile
 import time
 import weakref
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import replace
 from typing import IO, Any, BinaryIO, TypeVar
 
@@ -150,7 +150,154 @@ def feedback_of(answer: Any) -> GoalFeedback:
     return GoalFeedback(state, goal, distance, message)
 
 
-class HostedController:
+class RemoteController:
+    """The simulation's side of the robot contract, whatever carries it: the ``Controller``
+    protocol, plus ``close``.
+
+    One request per call, one JSON answer line back (two after ``step`` and ``send_goal``:
+    the feedback follows, ``FEEDBACK_AFTER``), every answer checked by the same rules
+    (``decode_answer``, the keys each request may answer, ``checked_command``,
+    ``checked_feedback``). A subclass carries the bytes: ``HostedController`` over the pipes
+    of a child process, ``rei.runtime.bus.robot.BusController`` over the bus. Calls wait at
+    most ``timeout`` wall seconds (None: as long as it takes); every failure is a
+    ``ControllerFault`` with the reason a run reports, and stops the controller for good.
+    """
+
+    timeout: float | None
+    spec: str
+    _broken: str | None
+    _feedback: GoalFeedback | None
+    _pending: bool
+    _scan: LaserScan | None
+
+    def _loaded(self) -> None:
+        """Await whatever the first call must wait for (nothing here)."""
+
+    def close(self) -> None:
+        raise NotImplementedError
+
+    def _request(self, op: str, args: tuple[Any, ...]) -> bytes:
+        raise NotImplementedError
+
+    def _send(self, data: bytes, deadline: float | None) -> bool:
+        """Send a request; False when it is not taken before the deadline."""
+        raise NotImplementedError
+
+    def _receive(self, what: str, deadline: float | None) -> bytes:
+        """The next answer line (without its newline), or a ControllerFault."""
+        raise NotImplementedError
+
+    # -- the protocol -----------------------------------------------------------------------
+
+    def reset(self, context: ControllerContext) -> None:
+        self._call("reset", "reset", context)
+
+    def send_goal(self, goal: NavGoal) -> None:
+        self._call("send_goal", "send_goal", goal)
+
+    def cancel_goal(self) -> None:
+        self._call("cancel_goal", "cancel_goal")
+
+    def feedback(self) -> GoalFeedback:
+        """The feedback the host sent after the last step or goal, else asked for; kept
+        until the next call that can change the controller's state."""
+        if self._broken is not None:
+            raise ControllerFault(self._broken)
+        if self._feedback is None:
+            if self._pending:
+                self._pending = False
+                answer = self._answer("feedback", "feedback", self._deadline())
+            else:
+                answer = self._call("feedback", "feedback")
+            self._feedback = self._checked("feedback", feedback_of, checked_feedback, answer)
+        return self._feedback
+
+    def step(self, observation: Observation) -> VelocityCommand:
+        scan = observation.scan
+        if scan is not None and scan is self._scan:  # the host has it: not sent again
+            request: tuple[Any, ...] = (replace(observation, scan=None), True)
+        else:
+            request, self._scan = (observation, False), scan
+        return self._checked("step", command_of, checked_command,
+                             self._call("step", "step", *request))
+
+    # -- messages ---------------------------------------------------------------------------
+
+    def _checked(self, what: str, decode: Callable[[Any], Any],
+                 check: Callable[[Any], Answer], answer: dict[str, Any]) -> Answer:
+        """The value of an answer to ``what`` (step or feedback), decoded and checked."""
+        if "violation" in answer:
+            reason = answer["violation"]
+            non_finite = False
+            if isinstance(reason, list) and len(reason) == 2:
+                reason, non_finite = reason
+            raise self._fault(_violated(what, _text(reason), non_finite is True))
+        try:
+            value = decode(answer.get("ok"))
+            return check(value)
+        except ContractViolation as problem:
+            raise self._fault(_violated(what, str(problem), problem.non_finite)) from None
+        except ValueError as exc:
+            raise self._fault(f"controller {what}() answered nonsense: {exc}") from None
+
+    def _fault(self, reason: str) -> ControllerFault:
+        self._broken = reason
+        self.close()
+        return ControllerFault(reason)
+
+    def _deadline(self) -> float | None:
+        return None if self.timeout is None else time.monotonic() + self.timeout
+
+    def _call(self, what: str, op: str, *args: Any) -> dict[str, Any]:
+        if self._broken is not None:
+            raise ControllerFault(self._broken)
+        self._loaded()
+        if op != "feedback":  # the controller's state may change: its feedback with it
+            self._feedback = None
+        try:
+            if self._pending:  # a feedback nobody asked for: dropped, unless it hangs
+                self._pending = False
+                self._receive("feedback", self._deadline())
+            deadline = self._deadline()
+            if not self._send(self._request(op, args), deadline):
+                raise self._fault(self._late(what))
+        except KeyboardInterrupt:  # the user's Ctrl-C, in this process: its answer is lost
+            self._fault(f"controller {what}() was interrupted by the user")
+            raise
+        answer = self._answer(what, op, deadline)
+        self._pending = op in FEEDBACK_AFTER and "ok" in answer
+        return answer
+
+    def _answer(self, what: str, op: str, deadline: float | None) -> dict[str, Any]:
+        """The answer to the request sent last, checked for its framing and keys."""
+        try:
+            line = self._receive(what, deadline)
+        except KeyboardInterrupt:  # the user's Ctrl-C, in this process: its answer is lost
+            self._fault(f"controller {what}() was interrupted by the user")
+            raise
+        try:
+            answer = decode_answer(line)
+        except ValueError as exc:
+            raise self._fault(f"controller {what}() answered nonsense: {exc}") from None
+        if "raised" in answer:
+            raise self._fault(_text(answer["raised"]))
+        key = next(iter(answer))  # decode_answer: exactly one
+        allowed = _ANSWERS.get(op, ("ok",))
+        if key not in allowed:
+            raise self._fault(f"controller {what}() answered nonsense: expected one of "
+                              f"{', '.join(allowed)}, found {key[:40]!r}")
+        if allowed == ("ok",) and answer["ok"] is not None:
+            raise self._fault(f"controller {what}() answered nonsense: expected no value")
+        return answer
+
+    def _late(self, what: str) -> str:
+        return f"controller {what}() did not return within the watchdog's {self.timeout:g} s"
+
+    def _remaining(self, deadline: float | None) -> float | None:
+        return None if deadline is None else max(0.0, deadline - time.monotonic())
+
+
+class HostedController(RemoteController):
     """A controller running in its own process; the ``Controller`` protocol, plus ``close``.
 
     Calls wait at most ``timeout`` wall seconds (None: as long as it takes); every failure
@@ -241,123 +388,13 @@ class HostedController:
         """The host's process id (and its process group's)."""
         return self._process.pid
 
-    # -- the protocol -----------------------------------------------------------------------
-
-    def reset(self, context: ControllerContext) -> None:
-        self._call("reset", "reset", context)
-
-    def send_goal(self, goal: NavGoal) -> None:
-        self._call("send_goal", "send_goal", goal)
-
-    def cancel_goal(self) -> None:
-        self._call("cancel_goal", "cancel_goal")
-
-    def feedback(self) -> GoalFeedback:
-        """The feedback the host sent after the last step or goal, else asked for; kept
-        until the next call that can change the controller's state."""
-        if self._broken is not None:
-            raise ControllerFault(self._broken)
-        if self._feedback is None:
-            if self._pending:
-                self._pending = False
-                answer = self._answer("feedback", "feedback", self._deadline())
-            else:
-                answer = self._call("feedback", "feedback")
-            self._feedback = self._checked("feedback", feedback_of, checked_feedback, answer)
-        return self._feedback
-
-    def step(self, observation: Observation) -> VelocityCommand:
-        scan = observation.scan
-        if scan is not None and scan is self._scan:  # the host has it: not sent again
-            request: tuple[Any, ...] = (replace(observation, scan=None), True)
-        else:
-            request, self._scan = (observation, False), scan
-        return self._checked("step", command_of, checked_command,
-                             self._call("step", "step", *request))
-
     def close(self) -> None:
         """Kill the host's process group and reap it (again: nothing happens)."""
         self._finalizer()
 
-    # -- messages ---------------------------------------------------------------------------
-
-    def _checked(self, what: str, decode: Callable[[Any], Any],
-                 check: Callable[[Any], Answer], answer: dict[str, Any]) -> Answer:
-        """The value of an answer to ``what`` (step or feedback), decoded and checked."""
-        if "violation" in answer:
-            reason = answer["violation"]
-            non_finite = False
-            if isinstance(reason, list) and len(reason) == 2:
-                reason, non_finite = reason
-            raise self._fault(_violated(what, _text(reason), non_finite is True))
-        try:
-            value = decode(answer.get("ok"))
-            return check(value)
-        except ContractViolation as problem:
-            raise self._fault(_violated(what, str(problem), problem.non_finite)) from None
-        except ValueError as exc:
-            raise self._fault(f"controller {what}() answered nonsense: {exc}") from None
-
-    def _fault(self, reason: str) -> ControllerFault:
-        self._broken = reason
-        self.close()
-        return ControllerFault(reason)
-
-    @staticmethod
-    def _request(op: str, args: tuple[Any, ...]) -> bytes:
+    def _request(self, op: str, args: tuple[Any, ...]) -> bytes:
         request = pickle.dumps((op, args), protocol=pickle.HIGHEST_PROTOCOL)
         return _LENGTH.pack(len(request)) + request
-
-    def _deadline(self) -> float | None:
-        return None if self.timeout is None else time.monotonic() + self.timeout
-
-    def _call(self, what: str, op: str, *args: Any) -> dict[str, Any]:
-        if self._broken is not None:
-            raise ControllerFault(self._broken)
-        self._loaded()
-        if op != "feedback":  # the controller's state may change: its feedback with it
-            self._feedback = None
-        try:
-            if self._pending:  # a feedback nobody asked for: dropped, unless it hangs
-                self._pending = False
-                self._receive("feedback", self._deadline())
-            deadline = self._deadline()
-            if not self._send(self._request(op, args), deadline):
-                raise self._fault(self._late(what))
-        except KeyboardInterrupt:  # the user's Ctrl-C, in this process: its answer is lost
-            self._fault(f"controller {what}() was interrupted by the user")
-            raise
-        answer = self._answer(what, op, deadline)
-        self._pending = op in FEEDBACK_AFTER and "ok" in answer
-        return answer
-
-    def _answer(self, what: str, op: str, deadline: float | None) -> dict[str, Any]:
-        """The answer to the request sent last, checked for its framing and keys."""
-        try:
-            line = self._receive(what, deadline)
-        except KeyboardInterrupt:  # the user's Ctrl-C, in this process: its answer is lost
-            self._fault(f"controller {what}() was interrupted by the user")
-            raise
-        try:
-            answer = decode_answer(line)
-        except ValueError as exc:
-            raise self._fault(f"controller {what}() answered nonsense: {exc}") from None
-        if "raised" in answer:
-            raise self._fault(_text(answer["raised"]))
-        key = next(iter(answer))  # decode_answer: exactly one
-        allowed = _ANSWERS.get(op, ("ok",))
-        if key not in allowed:
-            raise self._fault(f"controller {what}() answered nonsense: expected one of "
-                              f"{', '.join(allowed)}, found {key[:40]!r}")
-        if allowed == ("ok",) and answer["ok"] is not None:
-            raise self._fault(f"controller {what}() answered nonsense: expected no value")
-        return answer
-
-    def _late(self, what: str) -> str:
-        return f"controller {what}() did not return within the watchdog's {self.timeout:g} s"
-
-    def _remaining(self, deadline: float | None) -> float | None:
-        return None if deadline is None else max(0.0, deadline - time.monotonic())
 
     def _send(self, data: bytes, deadline: float | None) -> bool:
         """Write the request; False when the host does not take it before the deadline."""
@@ -470,13 +507,53 @@ def _read_exactly(stream: BinaryIO, size: int) -> bytes | None:
     return data
 
 
+class HostSide:
+    """The host's side of the robot contract, whatever carries it: one request in, its
+    answer lines out (JSON, never a pickle), the controller called in this thread. The pipe
+    host (``serve``) and the bus's robot (`rei robot`) both answer with it, so a controller
+    answers the same bytes whichever way it is reached. ``load`` makes the controller for
+    a load request's arguments (RunError: the answer says why)."""
+
+    def __init__(self, load: Callable[..., Any]) -> None:
+        self._load = load
+        self.controller: Any = None
+        self._scan: LaserScan | None = None  # the controller's read-only copy of the last scan
+
+    def answers(self, op: str, args: tuple[Any, ...]) -> Iterator[bytes]:
+        """The answer lines (each without its newline) to the request ``op(*args)``, each
+        as soon as it is known (the feedback after a step's command is computed after the
+        command is sent: a hang there is the feedback's, not the step's)."""
+        if op == "load":
+            try:
+                self.controller = self._load(*args)
+                self._scan = None
+                answer: dict[str, Any] = {"ok": str(getattr(self.controller, "name",
+                                                           args[0] if args else "?"))}
+            except RunError as exc:
+                answer = {"error": str(exc)}
+            yield _line(answer)
+            return
+        if op == "step":  # (observation, whether its scan is the last step's)
+            observation, same = args
+            if not same:
+                self._scan = read_only_scan(observation.scan)
+            args = (replace(observation, scan=self._scan),)
+        answer = _answer_of(op, self.controller, args)
+        yield _line(answer)
+        if op in FEEDBACK_AFTER and "ok" in answer:  # what the next tick asks first
+            yield _line(_answer_of("feedback", self.controller, ()))
+
+
+def _line(answer: dict[str, Any]) -> bytes:
+    return json.dumps(answer, allow_nan=False).encode("ascii")
+
+
 def serve(requests: BinaryIO, answers: BinaryIO) -> None:
     """The host's loop: load the controller, then answer each request until the end of
     the requests (the simulation closed the pipe or was killed)."""
     from rei.runtime.robot.select import load_controller  # noqa: PLC0415
 
-    controller: Any = None
-    scan: LaserScan | None = None  # the controller's read-only copy of the last scan
+    host = HostSide(load_controller)
     while True:
         head = _read_exactly(requests, _LENGTH.size)
         if head is None:
@@ -485,24 +562,8 @@ def serve(requests: BinaryIO, answers: BinaryIO) -> None:
         if body is None:
             return
         op, args = pickle.loads(body)  # noqa: S301  (written by the simulation: trusted)
-        if op == "load":
-            try:
-                controller = load_controller(*args)
-                answer: dict[str, Any] = {"ok": str(getattr(controller, "name", args[0]))}
-            except RunError as exc:
-                answer = {"error": str(exc)}
-        else:
-            if op == "step":  # (observation, whether its scan is the last step's)
-                observation, same = args
-                if not same:
-                    scan = read_only_scan(observation.scan)
-                args = (replace(observation, scan=scan),)
-            answer = _answer_of(op, controller, args)
-        answers.write(json.dumps(answer, allow_nan=False).encode("ascii") + b"\n")
-        answers.flush()
-        if op in FEEDBACK_AFTER and "ok" in answer:  # what the next tick asks first
-            feedback = _answer_of("feedback", controller, ())
-            answers.write(json.dumps(feedback, allow_nan=False).encode("ascii") + b"\n")
+        for line in host.answers(op, args):
+            answers.write(line + b"\n")
             answers.flush()
 
 

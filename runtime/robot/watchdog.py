@@ -72,12 +72,12 @@ class ControllerFault(Exception):
 
 class GuardedController:
     def __init__(self, controller: Controller, timeout: float | None) -> None:
-        from rei.runtime.robot.host import HostedController  # noqa: PLC0415  (it imports us)
+        from rei.runtime.robot.host import RemoteController  # noqa: PLC0415  (it imports us)
 
         self.controller = controller
         self.timeout = timeout
-        self._hosted: HostedController | None = None
-        if isinstance(controller, HostedController):
+        self._hosted: RemoteController | None = None
+        if isinstance(controller, RemoteController):
             self._hosted = controller
             controller.timeout = timeout  # it waits for its own answers
         self._jobs: queue.SimpleQueue[_Job | None] = queue.SimpleQueue()

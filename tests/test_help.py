@@ -1,0 +1,159 @@
+"""Help that tells the truth (issue 27.3): every command's --help ends with examples that its
+own parser accepts, -q stands beside every --quiet, -v says what it adds for that command,
+the controllers named are the ones that exist, descriptions are wrapped; `rei-gen rooms`
+shows its progress on a terminal only; a .vepl without requirements says UNJUDGED clearly."""
+
+from __future__ import annotations
+
+import argparse
+import fcntl
+import os
+import pty
+import re
+import shlex
+import struct
+import subprocess
+import sys
+import termios
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+
+from rei.lang.cli import DESCRIPTION as GEN_DESCRIPTION
+from rei.lang.cli_support import build_parser
+from rei.runtime.cli import DESCRIPTION as RUN_DESCRIPTION
+from rei.runtime.commands.run import CONTROLLER_HELP, exit_code, final_line
+from rei.runtime.robot.teleop import SCRIPTS
+from tests.campaign.records import summary_for
+
+PROGRAMS = {"rei": (RUN_DESCRIPTION, "rei.runtime.commands"),
+            "rei-gen": (GEN_DESCRIPTION, "rei.lang.commands")}
+WITH_EXAMPLES = {"rei": ("run", "replay", "campaign", "demo", "report"),
+                 "rei-gen": ("check", "generate", "rooms", "rules", "show")}
+
+
+def parser_of(program: str) -> argparse.ArgumentParser:
+    description, package = PROGRAMS[program]
+    return build_parser(program, description, package)
+
+
+def commands(parser: argparse.ArgumentParser) -> dict[str, argparse.ArgumentParser]:
+    (sub,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    return dict(sub.choices)
+
+
+def example_lines(help_text: str) -> list[str]:
+    """The command lines under 'examples:' (continuations joined, comments dropped)."""
+    block = help_text.split("\nexamples:\n", 1)[1]
+    lines: list[str] = []
+    pending = ""
+    for raw in block.split("\n"):
+        line = raw.strip()
+        if not line:
+            continue
+        line = pending + line
+        if line.endswith("\\"):
+            pending = line[:-1] + " "
+            continue
+        pending = ""
+        lines.append(line.split("  #")[0].split("|")[0].strip())
+    return lines
+
+
+@pytest.mark.parametrize("program", sorted(PROGRAMS))
+def test_every_command_shows_examples_its_parser_accepts(program: str) -> None:
+    parser = parser_of(program)
+    found = commands(parser)
+    for name in WITH_EXAMPLES[program]:
+        text = found[name].format_help()
+        lines = example_lines(text)
+        assert lines, name
+        for line in lines:
+            argv = shlex.split(line)
+            assert argv[:2] == [program, name], line
+            parser.parse_args(argv[1:])  # SystemExit (exit 2) on a flag or argument it lacks
+
+
+@pytest.mark.parametrize("program", sorted(PROGRAMS))
+def test_every_quiet_has_its_short_form(program: str) -> None:
+    for name, command in commands(parser_of(program)).items():
+        for action in command._actions:
+            if "--quiet" in action.option_strings:
+                assert "-q" in action.option_strings, name
+
+
+def test_verbose_says_what_it_adds_for_each_command() -> None:
+    found = commands(parser_of("rei"))
+
+    def verbose_help(name: str) -> str:
+        (action,) = [a for a in found[name]._actions if "--verbose" in a.option_strings]
+        return str(action.help)
+
+    assert "mission's events" in verbose_help("run")
+    for name in ("replay", "monitor"):  # they judge a trace: no mission runs to show
+        assert "mission's events" not in verbose_help(name)
+    for name in ("campaign", "demo"):
+        assert "reruns it" in verbose_help(name) and "mission's events" not in verbose_help(name)
+
+
+def test_controller_help_lists_every_teleop_script() -> None:
+    for script in SCRIPTS:
+        assert script in CONTROLLER_HELP
+    found = commands(parser_of("rei"))
+    for name in ("run", "campaign", "demo", "robot"):
+        (action,) = [a for a in found[name]._actions if "--controller" in a.option_strings]
+        assert CONTROLLER_HELP in str(action.help)
+
+
+@pytest.mark.parametrize("program", sorted(PROGRAMS))
+def test_help_is_wrapped_to_the_terminal(program: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Descriptions, options and lists (rei-gen generate's targets) fit 80 columns; only the
+    example command lines are kept whole, to be copied."""
+    monkeypatch.setenv("COLUMNS", "80")
+    for name, command in commands(parser_of(program)).items():
+        text = command.format_help().split("\nexamples:\n")[0]
+        long = [line for line in text.split("\n") if len(line) > 80]
+        assert long == [], name
+
+
+def test_a_vepl_without_requirements_is_unjudged_and_says_why() -> None:
+    summary = replace(summary_for("m", "r", 0, True, 10.0), verdicts=())
+    line = final_line(summary, Path("out"))
+    assert line.startswith("verdict: UNJUDGED (the .vepl declares no requirement")
+    assert exit_code(summary) == 1  # never a pass
+    assert exit_code(summary, monitored=False) == 0  # --no-monitor: recorded, judged later
+    assert "NOT JUDGED" in final_line(summary, Path("out"), monitored=False)
+
+
+ROOMS = [sys.executable, "-m", "rei.lang.cli", "rooms", "--count", "6", "--seed", "4",
+         "--preset", "small"]
+
+
+def test_rooms_shows_progress_on_a_terminal_only(tmp_path: Path) -> None:
+    # On a pipe (a CI log): no progress display.
+    piped = subprocess.run([*ROOMS, "-o", str(tmp_path / "piped")], capture_output=True,
+                           text=True, check=True, timeout=600)
+    assert not re.search(r"\d+/6 left", piped.stderr)
+    # On a terminal (a pty of 100 columns): the display, rooms done of the total.
+    main, secondary = pty.openpty()
+    fcntl.ioctl(secondary, termios.TIOCSWINSZ, struct.pack("HHHH", 30, 100, 0, 0))
+    process = subprocess.Popen([*ROOMS, "-o", str(tmp_path / "tty")], stdin=subprocess.DEVNULL,
+                               stdout=subprocess.DEVNULL, stderr=secondary)
+    os.close(secondary)
+    shown = b""
+    while True:
+        try:
+            chunk = os.read(main, 4096)
+        except OSError:  # the other side closed: the program ended
+            break
+        if not chunk:
+            break
+        shown += chunk
+    os.close(main)
+    assert process.wait(timeout=600) == 0
+    text = re.sub(r"\x1b\[[0-9;?]*[a-zA-Z]", "", shown.decode("utf-8", errors="replace"))
+    assert re.search(r"rooms .*\d/6 left", text)
+    # The display changes nothing in the files.
+    for name in ("index.csv", "room_0001.room", "room_0006.mission"):
+        assert (tmp_path / "piped" / name).read_bytes() == (tmp_path / "tty" / name).read_bytes()
