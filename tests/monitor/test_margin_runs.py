@@ -50,6 +50,8 @@ def test_real_runs_margins_agree_with_verdicts(tmp_path: Path,
     crash = _run(tmp_path / "teleop", "teleop")  # drives straight into the east wall
     hit = _check_signs(crash)
     assert hit["NO_ROBOT_COLLISION"] < 0 <= ok["NO_ROBOT_COLLISION"]
+    # teleop never reaches the goal at the wall: a failed goal, no time left
+    assert hit["MISSION_GOALS_REACHED"] == -1.0 < 0 < ok["MISSION_GOALS_REACHED"] <= 1
     # summary.json carries them, and a second run of the same scenario and seed is identical
     again = _run(tmp_path / "again", "reference")
     assert again == good
