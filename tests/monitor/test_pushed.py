@@ -20,8 +20,8 @@ import pytest
 
 from rei.runtime.monitor.model import PushTracker
 from tests.monitor.streams import human
-from tests.runtime.test_humans import ROOM as HUMANS_ROOM
 from tests.monitor.test_default_requirements import Tick, run
+from tests.runtime.test_humans import ROOM as HUMANS_ROOM
 
 REPO = Path(__file__).resolve().parents[2]
 
