@@ -35,6 +35,13 @@ class Verdict:
     reason: str
     objects: tuple[str, ...] = ()
     """What the deciding event involved: objects, humans or tasks (names)."""
+    margin: float | None = None
+    """How far the run was from failing it (rei.runtime.evaluator.margins): negative exactly
+    when it failed; None when the requirement has no natural margin, or for an inconclusive
+    or not-applicable verdict."""
+    margin_unit: str = ""
+    margin_note: str = ""
+    """Why a margin was withheld, when one was worked out but disagreed with the verdict."""
 
 
 @dataclass(frozen=True)

@@ -37,6 +37,7 @@ from rei.generators.output import write_atomic as write_atomic  # re-exported fo
 from rei.runtime.campaign.errors import CampaignError
 from rei.runtime.campaign.execute import RunResult
 from rei.runtime.campaign.plan import CampaignPlan, RunSpec
+from rei.runtime.evaluator.margins import RULES, smallest_margin
 from rei.runtime.results import RunSummary, RunVerdict, failed_verdicts, judge
 
 FORMAT = "rei-campaign"
@@ -370,6 +371,7 @@ def record_row(record: RunRecord) -> dict[str, Any]:
         if summary else "",
         "failure": verdict_reason(record),
         "total_utility": summary.total_utility if summary else None,
+        "smallest_margin": smallest_margin(summary.verdicts) if summary else None,
         "duration": summary.duration if summary else None,
         "wall_time": round(record.wall_time, 3), "exit_code": record.exit_code,
     }
@@ -380,6 +382,10 @@ def record_row(record: RunRecord) -> dict[str, Any]:
             row[f"signal:{name}"] = count
         for verdict in summary.verdicts:
             row[f"req:{verdict.requirement}"] = verdict.status
+            if verdict.requirement in RULES:
+                # the default requirements with a margin: a column each, empty when the run
+                # gave none (not judged, or no natural margin in it), so tables line up
+                row[f"margin:{verdict.requirement}"] = verdict.margin
     return row
 
 

@@ -23,6 +23,7 @@ from reactivex.scheduler import VirtualTimeScheduler
 from reactivex.subject import Subject
 
 from rei.lang.vepl.document import DEFAULT_VEPL
+from rei.runtime.evaluator.margins import MarginTracker
 from rei.runtime.evaluator.signal_log import SignalLog
 from rei.runtime.evaluator.summary import MonitorResult
 from rei.runtime.evaluator.verdicts import RequirementChecker
@@ -85,6 +86,8 @@ class AutomataHost:
         self.checker = RequirementChecker(module.REQUIREMENTS, set(self.domains),
                                           self.model.describe)
         self.watched_queries = sorted(self.checker.watched_queries())
+        self.margin_tracker = MarginTracker(module.REQUIREMENTS, module.PARAMETERS,
+                                     header.mission_facts)
         self._last_holding: tuple[bool, ...] = ()
         for name in sorted(self.checker.watched_events()):
             if name in self.events:
@@ -148,6 +151,7 @@ class AutomataHost:
             self.scheduler.advance_to(s.time)
         w = self.model.observe(s)
         w.functions = self.functions
+        self.margin_tracker.observe(w)
         q = self.module.evaluate_queries(w, self.prev_q)
         if self._changed(q):
             before = self.module.margins(self.prev_inputs)
@@ -155,6 +159,7 @@ class AutomataHost:
             fractions = crossings(before, after)
             for lo, hi in zip(fractions, fractions[1:], strict=False):
                 step = interpolate(self.prev_inputs, w, (lo + hi) / 2)
+                self.margin_tracker.observe(step)  # the queries see the crossings: so do margins
                 self._step(self.module.evaluate_queries(step, self.prev_q), s.time)
             q = self.module.evaluate_queries(w, self.prev_q)
             self._step(q, s.time)
@@ -166,6 +171,13 @@ class AutomataHost:
     def _mission_events(self, s: Sample, w: QueryInputs) -> QueryInputs:
         for event in s.events:
             w = self.model.apply(event, w)
+            self.margin_tracker.observe(w)
+            if event.kind in ("task_success", "task_fail"):
+                key = str(event.index) if event.index is not None else (event.task or "")
+                record = next((t for t in self.model.tasks if t.key == key), None)
+                if record is not None and record.ended is not None:
+                    self.margin_tracker.task_ended(w, record.index, record.ended - record.started,
+                                            event.kind == "task_success", record.cause)
             self._step(self.module.evaluate_queries(w, self.prev_q), s.time)
         return w
 
@@ -233,8 +245,9 @@ class AutomataHost:
             self.scheduler.advance_to(end)  # windows still open at the end close now
         end = end if math.isfinite(end) else 0.0
         finished = outcome in FINISHED
-        verdicts = self.checker.verdicts(end, self.problems, finished,
-                                         f"outcome {outcome}" + (f": {reason}" if reason else ""))
+        verdicts = self.margin_tracker.annotate(self.checker.verdicts(
+            end, self.problems, finished,
+            f"outcome {outcome}" + (f": {reason}" if reason else "")))
         return MonitorResult(self.log.total, self.log.counts(), verdicts,
                              self.measurements(end), end - (self.first_time or 0.0))
 

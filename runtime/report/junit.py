@@ -69,6 +69,11 @@ def junit_xml(records: Sequence[RunRecord], rerun: dict[str, str], name: str = "
                 counts["errors"] += 1
             for verdict in verdicts:
                 case = _case(suite, record, f"{verdict.requirement} [{label}]", share, command)
+                if verdict.margin is not None:
+                    props = case.find("properties")
+                    assert props is not None  # _case always adds it
+                    etree.SubElement(props, "property", name="margin",
+                                     value=f"{verdict.margin:.6g} {verdict.margin_unit}")
                 counts["tests"] += 1
                 text = _verdict_text(verdict)
                 if verdict.status in ("fail", "inconclusive"):
