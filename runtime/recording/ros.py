@@ -158,7 +158,7 @@ class RosViews:
         return self._header(self._time(ns // 1_000_000_000, ns % 1_000_000_000), frame)
 
     def _quat(self, yaw: float) -> Any:
-        return self._quaternion(0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0))
+        return self._quaternion(*yaw_quaternion(yaw))
 
     def _transform_of(self, time: float, parent: str, child: str, x: float, y: float,
                       yaw: float) -> Any:
@@ -336,15 +336,25 @@ def goal_uuid(index: int) -> np.ndarray:
 # ---- ROS -> REI ------------------------------------------------------------------------------
 
 NAV2_STATUS: dict[int, NavState] = {
-    0: NavState.PENDING,  # STATUS_UNKNOWN
-    1: NavState.PENDING,  # STATUS_ACCEPTED
+    1: NavState.PENDING,  # STATUS_ACCEPTED: accepted, awaiting execution
     2: NavState.ACTIVE,  # STATUS_EXECUTING
     3: NavState.ACTIVE,  # STATUS_CANCELING
     4: NavState.SUCCEEDED,  # STATUS_SUCCEEDED
     5: NavState.PREEMPTED,  # STATUS_CANCELED
     6: NavState.ABORTED,  # STATUS_ABORTED
 }
-"""action_msgs/msg/GoalStatus codes as the navigation states of REI's mission executor."""
+"""action_msgs/msg/GoalStatus codes as the navigation states of REI's mission executor.
+STATUS_UNKNOWN (0) has none: action_msgs defines it as a status "not properly set", which
+says nothing about the goal, so each reader decides what such a status leaves (a recording
+keeps the goal pending; the live action client ignores it and aborts a result carrying it)."""
+
+STATUS_UNKNOWN = 0
+"""action_msgs/msg/GoalStatus.STATUS_UNKNOWN: the one code without a navigation state."""
+
+
+def yaw_quaternion(yaw: float) -> tuple[float, float, float, float]:
+    """A heading as a quaternion (x, y, z, w) about z (``yaw_of``'s inverse)."""
+    return (0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0))
 
 
 def seconds(stamp: Any) -> float:
