@@ -416,6 +416,8 @@ class BagSamples(Iterator[Sample]):
         elif topic == NAV2_STATUS_TOPIC:
             for status in message.status_list:
                 key = bytes(np.asarray(status.goal_info.goal_id.uuid, dtype=np.uint8))
+                # STATUS_UNKNOWN (or a code action_msgs does not define) claims nothing:
+                # the goal stays pending, never further on than the robot said
                 self._goals.status(key, seconds(status.goal_info.stamp) - (self._t0 or 0.0),
                                    NAV2_STATUS.get(int(status.status), NavState.PENDING))
 

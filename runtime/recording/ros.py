@@ -158,7 +158,7 @@ class RosViews:
         return self._header(self._time(ns // 1_000_000_000, ns % 1_000_000_000), frame)
 
     def _quat(self, yaw: float) -> Any:
-        return self._quaternion(0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0))
+        return self._quaternion(*yaw_quaternion(yaw))
 
     def _transform_of(self, time: float, parent: str, child: str, x: float, y: float,
                       yaw: float) -> Any:
@@ -263,12 +263,48 @@ class RosViews:
         status = t["action_msgs/msg/GoalStatus"](info, GOAL_STATUS_CODE[state])
         return self._cdr(t[GOAL_STATUS]([status]), GOAL_STATUS)
 
+    def sample(self, sample: Sample, header: StreamHeader, rows: Sequence[int],
+               scan_time: float) -> list[tuple[str, bytes]]:
+        """One sample's ROS 2 messages (topic, CDR), in the order a recording writes them,
+        all stamped with the sample's time: /tf (the robot and the objects of ``rows``),
+        then the belief the stream collects (``header.data``): /odom, /scan when the laser
+        measured, /cmd_vel. Recordings and the live Foxglove view both use it, so the two
+        show a run alike."""
+        messages = [("/tf", self.transforms(sample, header, rows))]
+        data = header.data
+        if "odometry" in data:
+            messages.append(("/odom", self.odometry(sample, header)))
+        if "laser" in data:
+            scan = self.scan(sample, header, scan_time)
+            if scan is not None:
+                messages.append(("/scan", scan))
+        if "nav_state" in data:
+            messages.append(("/cmd_vel", self.command(sample)))
+        return messages
+
     def text(self, payload: dict[str, Any]) -> bytes:
         return self._cdr(self._string(json.dumps(payload, separators=(",", ":"),
                                                  allow_nan=False, ensure_ascii=False)), TEXT)
 
     def event(self, event: MissionEvent) -> bytes:
         return self.text(asdict(event))
+
+
+class MovedBodies:
+    """Which observed objects moved since the previous sample (all of them at the first):
+    /tf carries a static wall once, as the trace does. One per stream."""
+
+    def __init__(self) -> None:
+        self._poses: np.ndarray | None = None
+
+    def rows(self, sample: Sample) -> list[int]:
+        old, new = self._poses, sample.poses
+        if old is None or old.shape != new.shape:
+            rows = list(range(len(new)))
+        else:
+            rows = np.nonzero((new != old).any(axis=1))[0].tolist()
+        self._poses = new.copy()
+        return rows
 
 
 def _shape(fp: Footprint, tile: float, height: float
@@ -336,15 +372,25 @@ def goal_uuid(index: int) -> np.ndarray:
 # ---- ROS -> REI ------------------------------------------------------------------------------
 
 NAV2_STATUS: dict[int, NavState] = {
-    0: NavState.PENDING,  # STATUS_UNKNOWN
-    1: NavState.PENDING,  # STATUS_ACCEPTED
+    1: NavState.PENDING,  # STATUS_ACCEPTED: accepted, awaiting execution
     2: NavState.ACTIVE,  # STATUS_EXECUTING
     3: NavState.ACTIVE,  # STATUS_CANCELING
     4: NavState.SUCCEEDED,  # STATUS_SUCCEEDED
     5: NavState.PREEMPTED,  # STATUS_CANCELED
     6: NavState.ABORTED,  # STATUS_ABORTED
 }
-"""action_msgs/msg/GoalStatus codes as the navigation states of REI's mission executor."""
+"""action_msgs/msg/GoalStatus codes as the navigation states of REI's mission executor.
+STATUS_UNKNOWN (0) has none: action_msgs defines it as a status "not properly set", which
+says nothing about the goal, so each reader decides what such a status leaves (a recording
+keeps the goal pending; the live action client ignores it and aborts a result carrying it)."""
+
+STATUS_UNKNOWN = 0
+"""action_msgs/msg/GoalStatus.STATUS_UNKNOWN: the one code without a navigation state."""
+
+
+def yaw_quaternion(yaw: float) -> tuple[float, float, float, float]:
+    """A heading as a quaternion (x, y, z, w) about z (``yaw_of``'s inverse)."""
+    return (0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0))
 
 
 def seconds(stamp: Any) -> float:

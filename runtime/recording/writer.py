@@ -23,7 +23,6 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import IO
 
-import numpy as np
 from mcap.writer import CompressionType, Writer
 
 from rei.generators.output import open_output
@@ -36,6 +35,7 @@ from rei.runtime.recording.ros import (
     NAV2_STATUS_TOPIC,
     TEXT,
     TOPICS,
+    MovedBodies,
     RosViews,
     stamp_ns,
     trace_cdr,
@@ -90,7 +90,7 @@ class McapRecorder:
         self._pending = 0
         self._signals_seen = 0
         self._scan_time = 0.0
-        self._poses: np.ndarray | None = None
+        self._moved = MovedBodies()
         self._task: tuple[int, float] | None = None
         """(index, start time) of the latest task started."""
         self._status: tuple[int, NavState] | None = None
@@ -156,20 +156,13 @@ class McapRecorder:
         t = sample.time
         self._add(TRACE_TOPIC, t, trace_cdr(record))
         views = self._views
-        self._add("/tf", t, views.transforms(sample, header, self._moved(sample)))
-        data = header.data
-        if "odometry" in data:
-            self._add("/odom", t, views.odometry(sample, header))
-        if "laser" in data:
-            scan = views.scan(sample, header, self._scan_time)
-            if scan is not None:
-                self._add("/scan", t, scan)
-        if "nav_state" in data:
-            self._add("/cmd_vel", t, views.command(sample))
+        for topic, message in views.sample(sample, header, self._moved.rows(sample),
+                                           self._scan_time):
+            self._add(topic, t, message)
         for event in sample.events:
             if event.kind == "task_start" and event.index is not None:
                 self._task = (event.index, event.time)
-        if "nav_state" in data:
+        if "nav_state" in header.data:
             self._goal_status(sample)
         for event in sample.events:
             self._add("/rei/events", event.time, views.event(event))
@@ -195,18 +188,6 @@ class McapRecorder:
             self._writer = None
 
     # ---- helpers ----------------------------------------------------------------------------
-
-    def _moved(self, sample: Sample) -> list[int]:
-        """Objects whose pose changed since the previous sample (all of them first): /tf
-        carries a static wall once, as the trace does."""
-        old = self._poses
-        new = sample.poses
-        if old is None or old.shape != new.shape:
-            rows = list(range(len(new)))
-        else:
-            rows = np.nonzero((new != old).any(axis=1))[0].tolist()
-        self._poses = new.copy()
-        return rows
 
     def _goal_status(self, sample: Sample) -> None:
         """Nav2's action status as a Nav2 stack publishes it, on every change: the running

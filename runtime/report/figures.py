@@ -9,10 +9,14 @@ from __future__ import annotations
 
 import base64
 import io
+from typing import TYPE_CHECKING
 
 import matplotlib
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
 
 SVG_SALT = "rei-report"
 TEXT_PT = 9.0
@@ -27,6 +31,19 @@ def new_figure(width: float, height: float) -> Figure:
     fig = Figure(figsize=(width, height), dpi=96, layout="constrained")
     FigureCanvasAgg(fig)
     return fig
+
+
+def label_axes(ax: Axes, x: str | None = None, y: str | None = None,
+               title: str | None = None, title_pad: float | None = None) -> None:
+    """A plot's axis labels, tick labels and title at the pages' sizes (TEXT_PT, TITLE_PT):
+    every plot of the campaign and run pages labels its axes this one way."""
+    if x is not None:
+        ax.set_xlabel(x, fontsize=TEXT_PT)
+    if y is not None:
+        ax.set_ylabel(y, fontsize=TEXT_PT)
+    ax.tick_params(labelsize=TEXT_PT)
+    if title is not None:
+        ax.set_title(title, fontsize=TITLE_PT, pad=title_pad)
 
 
 def inline_svg(fig: Figure) -> str:

@@ -22,6 +22,7 @@ from rei.runtime.report.figures import (
     TEXT_PT,
     TITLE_PT,
     inline_svg,
+    label_axes,
     new_figure,
     png_data_uri,
 )
@@ -80,10 +81,7 @@ def utility_over_time(data: CampaignData) -> str | None:
                 alpha=0.85 if not raster else 0.3, linewidth=1.4, label=label,
                 rasterized=raster)
     ax.axhline(0, color="#888", linewidth=0.6)
-    ax.set_xlabel("simulation time [s]", fontsize=TEXT_PT)
-    ax.set_ylabel("total utility", fontsize=TEXT_PT)
-    ax.tick_params(labelsize=TEXT_PT)
-    ax.set_title("Utility over time (one line per run)", fontsize=TITLE_PT)
+    label_axes(ax, "simulation time [s]", "total utility", "Utility over time (one line per run)")
     handles, _ = ax.get_legend_handles_labels()
     if not by_verdict and len(repeats) > 1:
         handles += [Line2D([], [], color="#495057",
@@ -114,9 +112,7 @@ def signal_distribution(records: Sequence[RunRecord]) -> str | None:
     for i, s in enumerate(order):
         ax.annotate(str(totals[s]), (totals[s], i), xytext=(3, 0), textcoords="offset points",
                     va="center", fontsize=TEXT_PT)
-    ax.set_xlabel("occurrences over all runs", fontsize=TEXT_PT)
-    ax.tick_params(labelsize=TEXT_PT)
-    ax.set_title("Distribution of signals", fontsize=TITLE_PT)
+    label_axes(ax, "occurrences over all runs", title="Distribution of signals")
     return inline_svg(fig)
 
 
@@ -188,9 +184,7 @@ def success_by_descriptor(records: Sequence[RunRecord], bins: int = 4) -> str | 
             highs.append(high - rate)
         ax.errorbar(xs, rates, yerr=[lows, highs], fmt="o-", capsize=3, color="#2b8a3e")
         ax.set_ylim(-0.05, 1.05)
-        ax.set_xlabel(name + (" (quantile bins)" if edges is not None else ""), fontsize=TEXT_PT)
-        ax.set_ylabel("success rate", fontsize=TEXT_PT)
-        ax.tick_params(labelsize=TEXT_PT)
+        label_axes(ax, name + (" (quantile bins)" if edges is not None else ""), "success rate")
     fig.suptitle("Success rate by difficulty descriptor (95 % Wilson intervals)", fontsize=TITLE_PT)
     return inline_svg(fig)
 

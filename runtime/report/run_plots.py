@@ -25,8 +25,8 @@ from rei.runtime.report.data import Paths
 from rei.runtime.report.figures import (
     PLOT_WIDTH,
     TEXT_PT,
-    TITLE_PT,
     inline_svg,
+    label_axes,
     new_figure,
     png_data_uri,
 )
@@ -153,9 +153,8 @@ def timeline(events: Sequence[MissionEvent], signals: Sequence[SignalRow], end: 
                               textcoords="offset points", fontsize=TEXT_PT)
     ax_tasks.set_yticks(range(len(tasks)), [t[0] for t in tasks], fontsize=TEXT_PT)
     ax_tasks.set_ylim(task_rows - 0.4, -0.6)
-    ax_tasks.set_ylabel("tasks", fontsize=TEXT_PT)
-    ax_tasks.set_title("Mission events, signals and total utility over time", fontsize=TITLE_PT,
-                       pad=14)
+    label_axes(ax_tasks, y="tasks",
+               title="Mission events, signals and total utility over time", title_pad=14)
     _mark_failures(ax_tasks, failures, False, end)
     lane = {name: i for i, name in enumerate(names)}
     for positive in (False, True):
@@ -169,7 +168,7 @@ def timeline(events: Sequence[MissionEvent], signals: Sequence[SignalRow], end: 
     ax_signals.set_yticks(range(len(names)), [n.removeprefix("SIG_") for n in names],
                           fontsize=TEXT_PT)
     ax_signals.set_ylim(max(len(names), 1) - 0.5, -0.5)  # no signal: one empty lane
-    ax_signals.set_ylabel("signals", fontsize=TEXT_PT)
+    label_axes(ax_signals, y="signals")
     ax_signals.grid(axis="y", color="#e9ecef", linewidth=0.6)
     _mark_failures(ax_signals, failures, False, end)
     t = [0.0] + [r.time for r in signals] + [end]
@@ -177,13 +176,11 @@ def timeline(events: Sequence[MissionEvent], signals: Sequence[SignalRow], end: 
     u.append(u[-1])
     ax_utility.step(t, u, where="post", color="#4263eb", linewidth=1.4, label="total utility")
     ax_utility.axhline(0, color="#adb5bd", linewidth=0.6)
-    ax_utility.set_ylabel("total utility", fontsize=TEXT_PT)
-    ax_utility.set_xlabel("simulation time [s]", fontsize=TEXT_PT)
+    label_axes(ax_utility, "simulation time [s]", "total utility")
     _mark_failures(ax_utility, failures, True, end)
     handles = [h for ax in (ax_signals, ax_utility) for h in ax.get_legend_handles_labels()[0]]
     _legend_below(fig, _unique(handles))
     for ax in (ax_tasks, ax_signals, ax_utility):
-        ax.tick_params(labelsize=TEXT_PT)
         ax.set_xlim(0, max(end, 1e-9) * 1.01)
     for ax in (ax_tasks, ax_signals):
         ax.tick_params(labelbottom=False)
@@ -250,14 +247,11 @@ def distances(series: TraceSeries, thresholds: Thresholds, failures: Sequence[Fa
                label=f"COLLISION threshold ({thresholds.collision:g} m)")
     _mark_failures(ax, failures, True, series.end)
     ax.set_ylim(low - 0.02 * (top - low), top)
-    ax.set_ylabel("footprint distance [m]" + (f"\n(axis ends at {top:.3g} m: farther\nis drawn "
-                                              f"on the top edge)" if is_cut else ""),
-                  fontsize=TEXT_PT)
-    ax.set_xlabel("simulation time [s]", fontsize=TEXT_PT)
     ax.set_xlim(0, max(series.end, 1e-9) * 1.01)
-    ax.set_title("Distance to the nearest obstacle and human (the monitor's geometry)",
-                 fontsize=TITLE_PT)
-    ax.tick_params(labelsize=TEXT_PT)
+    label_axes(ax, "simulation time [s]",
+               "footprint distance [m]" + (f"\n(axis ends at {top:.3g} m: farther\nis drawn "
+                                           f"on the top edge)" if is_cut else ""),
+               "Distance to the nearest obstacle and human (the monitor's geometry)")
     ax.grid(color="#f1f3f5", linewidth=0.6)
     _legend_below(fig, ax.get_legend_handles_labels()[0])
     return _svg(fig, "distance")
@@ -277,16 +271,13 @@ def speed(series: TraceSeries, failures: Sequence[FailureMark]) -> str | None:
         ax.axhline(series.speed_limit, color=FAIL, linestyle="--", linewidth=1.1,
                    label=f"{series.speed_limit_source} ({series.speed_limit:g} m/s)")
     _mark_failures(ax, failures, True, series.end)
-    ax.set_ylabel("speed [m/s]", fontsize=TEXT_PT)
-    ax.set_xlabel("simulation time [s]", fontsize=TEXT_PT)
     ax.set_xlim(0, max(series.end, 1e-9) * 1.01)
     fastest = max([float(np.nanmax(series.speed.value))] + (
         [float(np.nanmax(series.commanded.value))] if series.commanded is not None else []) + (
         [series.speed_limit] if series.speed_limit is not None else []))
     # headroom above the limit: a robot driving at the limit must not hide the limit's line
     ax.set_ylim(0, max(fastest, 1e-3) * 1.15)
-    ax.set_title("Speed over time", fontsize=TITLE_PT)
-    ax.tick_params(labelsize=TEXT_PT)
+    label_axes(ax, "simulation time [s]", "speed [m/s]", "Speed over time")
     ax.grid(color="#f1f3f5", linewidth=0.6)
     _legend_below(fig, ax.get_legend_handles_labels()[0])
     return _svg(fig, "speed")

@@ -47,7 +47,17 @@ import numpy as np
 
 from rei.lang.suggest import did_you_mean
 from rei.runtime.messages import NavState
-from rei.runtime.recording.ros import ODOMETRY, SCAN, TF, TOPICS, TWIST, stamp_ns
+from rei.runtime.recording.ros import (
+    ODOMETRY,
+    SCAN,
+    TF,
+    TOPICS,
+    TWIST,
+    command_of,
+    ros_ranges,
+    stamp_ns,
+    yaw_quaternion,
+)
 from rei.runtime.robot.protocol import (
     STOP,
     ControllerContext,
@@ -66,7 +76,7 @@ from rei.runtime.ros2.names import (
     check_namespace,
     check_node_name,
 )
-from rei.runtime.ros2.nav2 import NavigateToPoseClient, yaw_quaternion
+from rei.runtime.ros2.nav2 import NavigateToPoseClient
 from rei.runtime.ros2.node import Publisher, RmwNode, client_config, import_zenoh
 from rei.runtime.ros2.types import CLOCK, POSE_STAMPED
 
@@ -346,7 +356,7 @@ class Ros2Controller:
         return GoalFeedback(NavState.ACTIVE, goal.name, distance)
 
     def _on_cmd(self, message: Any, _: Attachment) -> None:
-        command = VelocityCommand(float(message.linear.x), float(message.angular.z))
+        command = VelocityCommand(*command_of(message))
         if not command.finite:
             # rejected at the edge, and the run ends as an error saying so (a stack that
             # sends NaN now and then must not drive on its last good command to a pass)
@@ -415,8 +425,7 @@ class Ros2Controller:
             stamp = now if observation.scan_time is None else observation.scan_time
             # REP 117: a beam without a return is +inf (REI's laser reports range_max),
             # so a costmap never marks an obstacle where nothing was hit
-            ranges = np.asarray(scan.ranges, dtype=np.float32)
-            ranges = np.where(ranges >= np.float32(scan.range_max), np.float32(np.inf), ranges)
+            ranges = ros_ranges(scan)
             angle_max = scan.angle_min + scan.angle_increment * (len(ranges) - 1)
             self._scan.publish(t[SCAN](
                 self._header(stamp, o.laser_frame), scan.angle_min, angle_max,

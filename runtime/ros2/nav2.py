@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from rei.runtime.messages import NavState
+from rei.runtime.recording.ros import NAV2_STATUS, yaw_quaternion
 from rei.runtime.robot.protocol import GoalFeedback, NavGoal
 from rei.runtime.ros2.attachment import Attachment
 from rei.runtime.ros2.names import DEFAULT_QOS, LATCHED_QOS, Distro, EntityKind
@@ -44,12 +45,6 @@ from rei.runtime.ros2.types import CANCEL_GOAL, GOAL_STATUS_ARRAY, NAVIGATE_TO_P
 ACTION = "navigate_to_pose"
 """Nav2's bt_navigator serves this action name (relative: it lives in the robot's namespace)."""
 
-STATUS_ACCEPTED, STATUS_EXECUTING, STATUS_CANCELING = 1, 2, 3
-STATUS_SUCCEEDED, STATUS_CANCELED, STATUS_ABORTED = 4, 5, 6
-
-_STATES = {STATUS_ACCEPTED: NavState.ACTIVE, STATUS_EXECUTING: NavState.ACTIVE,
-           STATUS_CANCELING: NavState.ACTIVE, STATUS_SUCCEEDED: NavState.SUCCEEDED,
-           STATUS_CANCELED: NavState.PREEMPTED, STATUS_ABORTED: NavState.ABORTED}
 _TERMINAL = frozenset({NavState.SUCCEEDED, NavState.ABORTED, NavState.PREEMPTED})
 
 
@@ -58,8 +53,12 @@ def goal_uuid(seed: int, index: int) -> bytes:
     return hashlib.blake2b(f"rei-goal/{seed}/{index}".encode(), digest_size=16).digest()
 
 
-def yaw_quaternion(yaw: float) -> tuple[float, float, float, float]:
-    return (0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0))
+def _state(code: int) -> NavState | None:
+    """The navigation state a GoalStatus code reports to REI's robot contract (the shared
+    ROS 2 mapping), or None for STATUS_UNKNOWN and undefined codes. A goal the server has
+    accepted is ACTIVE for the mission (as ``_on_accept`` says): the server has it."""
+    state = NAV2_STATUS.get(code)
+    return NavState.ACTIVE if state == NavState.PENDING else state
 
 
 @dataclass
@@ -212,7 +211,7 @@ class NavigateToPoseClient:
                                                         f"get_result failed: {error}"))
 
     def _on_result(self, goal: _Goal, response: Any) -> None:
-        state = _STATES.get(int(response.status))
+        state = _state(int(response.status))
         if state is None or state not in _TERMINAL:
             self._end(goal, NavState.ABORTED, f"get_result answered status {response.status}")
             return
@@ -226,7 +225,7 @@ class NavigateToPoseClient:
             for status in message.status_list:
                 if bytes(status.goal_info.goal_id.uuid) != goal.uuid:
                     continue
-                state = _STATES.get(int(status.status))
+                state = _state(int(status.status))
                 if state is None or goal.state in _TERMINAL:
                     continue
                 if state in _TERMINAL:

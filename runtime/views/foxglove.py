@@ -25,12 +25,10 @@ import threading
 from collections.abc import Callable, Sequence
 from typing import Any
 
-import numpy as np
-
 from rei.runtime.collector.trace import TraceEncoder
 from rei.runtime.evaluator.signal_log import SignalRow
 from rei.runtime.messages import Sample, StreamHeader
-from rei.runtime.recording.ros import MAP, TEXT, TOPICS, RosViews, stamp_ns
+from rei.runtime.recording.ros import MAP, TEXT, TOPICS, MovedBodies, RosViews, stamp_ns
 from rei.runtime.views.frames import WatchError, WatchFrame
 
 HOST = "127.0.0.1"
@@ -81,7 +79,7 @@ class FoxgloveView:
         self._latched: dict[str, bytes] = {}
         self._header: StreamHeader | None = None
         self._last: Sample | None = None
-        self._poses: np.ndarray | None = None
+        self._moved = MovedBodies()
         self._route: list[tuple[float, float, float, float]] = []
 
     # ---- the server --------------------------------------------------------------------------
@@ -165,16 +163,11 @@ class FoxgloveView:
             t = sample.time
             self._server.broadcast_time(stamp_ns(t))
             self._log_json(t, self._encoder.sample(sample))
-            self._log("/tf", t, views.transforms(sample, header, self._moved(sample)))
-            data = header.data
-            if "odometry" in data:
-                self._log("/odom", t, views.odometry(sample, header))
-            if "laser" in data:
-                scan = views.scan(sample, header, 1.0 / header.rate)
-                if scan is not None:
-                    self._log("/scan", t, scan)
-            if "nav_state" in data:
-                self._log("/cmd_vel", t, views.command(sample))
+            # the recording's messages of the sample (``_log`` skips a topic this server
+            # has no channel for)
+            for topic, message in views.sample(sample, header, self._moved.rows(sample),
+                                               1.0 / header.rate):
+                self._log(topic, t, message)
             for event in sample.events:
                 self._log("/rei/events", event.time, views.event(event))
             if self._route_grew(sample):
@@ -218,16 +211,6 @@ class FoxgloveView:
         channel = self._channels.get(TRACE_TOPIC)
         if channel is not None:
             channel.log(line.encode("utf-8"), log_time=stamp_ns(time))
-
-    def _moved(self, sample: Sample) -> list[int]:
-        """Objects whose pose changed since the previous sample (all of them first)."""
-        old, new = self._poses, sample.poses
-        if old is None or old.shape != new.shape:
-            rows = list(range(len(new)))
-        else:
-            rows = np.nonzero((new != old).any(axis=1))[0].tolist()
-        self._poses = new.copy()
-        return rows
 
     def _route_grew(self, sample: Sample) -> bool:
         x, y, yaw = sample.robot_pose

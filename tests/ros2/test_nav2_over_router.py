@@ -367,3 +367,15 @@ def test_a_jazzy_stack_with_independently_computed_hashes_drives_the_mission(
     assert run.returncode == 0, (run.stdout[-2000:], run.stderr[-2000:], summary)
     assert summary["verdict"] == "pass" and node.counts["goals"] == 2
     assert node.counts["bad_attachment"] == 0 and node.counts["scan"] > 5
+
+
+def test_the_action_client_reads_goal_status_codes_through_the_shared_mapping() -> None:
+    # accepted counts as active for the mission (the server has the goal); STATUS_UNKNOWN
+    # ("not properly set") and codes action_msgs does not define report nothing
+    from rei.runtime.ros2.nav2 import _state  # noqa: PLC0415
+
+    status = get_typestore(Stores.ROS2_HUMBLE).types["action_msgs/msg/GoalStatus"]
+    assert [_state(c) for c in range(8)] == [
+        None, NavState.ACTIVE, NavState.ACTIVE, NavState.ACTIVE, NavState.SUCCEEDED,
+        NavState.PREEMPTED, NavState.ABORTED, None]
+    assert status.STATUS_ACCEPTED == 1 and status.STATUS_ABORTED == 6

@@ -18,6 +18,7 @@ from rei.runtime.recording.ros import (
     NAV2_STATUS,
     ODOMETRY,
     SCAN,
+    STATUS_UNKNOWN,
     TF,
     TWIST,
     RosViews,
@@ -96,4 +97,7 @@ def test_a_scan_header_that_does_not_describe_its_ranges_is_named(
 def test_every_nav2_goal_status_has_a_navigation_state() -> None:
     status = STORE.types["action_msgs/msg/GoalStatus"]
     codes = {getattr(status, n) for n in dir(status) if n.startswith("STATUS_")}
-    assert codes == set(NAV2_STATUS)
+    # STATUS_UNKNOWN is a status "not properly set" (action_msgs): it names no state
+    assert status.STATUS_UNKNOWN == STATUS_UNKNOWN == 0
+    assert codes - {STATUS_UNKNOWN} == set(NAV2_STATUS)
+    assert STATUS_UNKNOWN not in NAV2_STATUS
