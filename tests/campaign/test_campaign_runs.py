@@ -17,6 +17,7 @@ import pytest
 from lxml import etree
 
 from rei.runtime.campaign import CampaignStore, plan_campaign
+from rei.runtime.results import judge
 
 from .conftest import require_rei_run
 from .records import EXAMPLES
@@ -285,13 +286,16 @@ def test_demo_passes_a_users_controller_vepl_and_seed_to_every_run(tmp_path: Pat
                            "--workers", "1", "--seed", "4", "--controller", "my_nav:MyNavigator",
                            "--vepl", str(vepl)],
                           capture_output=True, text=True, timeout=SAFETY_LIMIT, env=env)
-    assert done.returncode == 0, done.stderr
+    assert done.returncode in (0, 1), done.stderr
     plan, manifest, records = CampaignStore.read(tmp_path / "demo" / "campaign")
     assert plan.seed == 4
     (record,) = records
+    assert record.summary is not None
+    # The demo exits by the one pass rule: this room's walker comes within the strict .vepl's
+    # personal space (a verdict about the run, not about the demo passing its options on).
+    assert done.returncode == (0 if judge(record.summary) == "pass" else 1), done.stderr
     assert record.spec.controller == "my_nav:MyNavigator"
     assert record.spec.vepl == str(vepl.resolve())
-    assert record.summary is not None
     assert {v.requirement for v in record.summary.verdicts} == {"HUMAN_PERSONAL_SPACE",
                                                                "HUMAN_NO_COLLISION"}
     assert manifest["sessions"][0]["controller"] == "my_nav:MyNavigator"
