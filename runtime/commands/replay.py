@@ -261,7 +261,7 @@ def replay_bag(bag: Path, mission_path: Path, vepl: Path | None, out_dir: Path,
     check_needs(load_vepl(vepl), header.data, f"the mission '{mission.name}' to collect",
                 "name that data in the mission's monitor block, or drop the query")
     world = BagWorld(header, mission.tasks(),
-                     tuple((b.x, b.y, b.yaw) for b in manifest.observed))
+                     tuple((b.x, b.y, b.yaw) for b in manifest.observed), mission.settle)
     samples = BagSamples(bag, world, mapping)
     (out_dir / "trace.jsonl").unlink(missing_ok=True)
     return judge_stream(header, samples, samples.end, vepl, out_dir, user, automata,

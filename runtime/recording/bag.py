@@ -14,7 +14,8 @@ sqlite3; a ROS 1 bag too) with rosbags' ``AnyReader`` and turns its messages int
   succeeds when Nav2's ``navigate_to_pose`` status says SUCCEEDED *and* the ground truth is
   within the goal's tolerances (else it fails, as a false claim), fails on ABORTED,
   CANCELED or its timeout; without Nav2's status topic, a task succeeds when the ground
-  truth is within the goal's tolerances.
+  truth is within the goal's tolerances. After the last task the mission goes on for the
+  .mission's settle period, as a live run does (a time limit reached then ends it as usual).
 
 One sample per period of the mission's sample rate, at the stamp of the robot's ground
 truth; the belief messages that arrive until the next one belong to it. A ``--map`` file
@@ -153,6 +154,9 @@ class BagWorld:
     tasks: tuple[ConcreteGoal, ...]
     poses: tuple[tuple[float, float, float], ...]
     """(x, y, yaw) of each of the header's objects as the room declares it."""
+    settle: float = 0.0
+    """The .mission's settle period: seconds the mission goes on after its last task, as in
+    the live run (``runtime.loop.mission``), so its end (SIG_MISSION_END) comes as late."""
 
 
 class _Evidence:
@@ -268,7 +272,7 @@ class BagSamples(Iterator[Sample]):
         self._rates: dict[str, _Rate] = {}
         self._t0: float | None = None
         self._seq = -1
-        self._executor = MissionExecutor(world.tasks)
+        self._executor = MissionExecutor(world.tasks, world.settle)
         self._goals = _Evidence(NAV2_STATUS_TOPIC in self._connections)
         self._tolerances = {t.name: t.heading_tolerance for t in world.tasks}
         self._time_limit = self.header.mission_facts.time_limit \
@@ -490,7 +494,11 @@ class BagSamples(Iterator[Sample]):
             running = self._executor.current_task
             if running is not None:
                 self._goals.heading_tolerance = self._tolerances.get(running, 0.0)
-            if time >= self._time_limit and not self._executor.finished:
+            if time >= self._time_limit and self._executor.settling:
+                # as the live run: the tasks are done, the time limit only cuts the settle
+                # period short (an ordinary end, no timeout)
+                events = self._executor.end_settled(time)
+            elif time >= self._time_limit and not self._executor.finished:
                 self._timed_out = True
                 self._end_reason = f"mission time limit of {self._time_limit:g} s reached"
                 events = self._executor.abandon(time, self._end_reason, self._robot)

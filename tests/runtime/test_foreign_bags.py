@@ -64,9 +64,9 @@ def test_nav2_says_succeeded_and_the_truth_agrees(tmp_path: Path,
     bag = write_bag(tmp_path / "bag", variant(nav2=True))
     status, err, _ = _judge(bag, tmp_path / "out", capsys)
     assert status == 0, err
-    # Nav2's SUCCEEDED (on arrival at x = 2, t = 8 s) ends the task, not the first pose
+    # Nav2's SUCCEEDED (on arrival at x = 1.8, t = 7.2 s) ends the task, not the first pose
     # within tolerance
-    assert ("8.0", "SIG_MISSION_TASK_SUCCESS") in _events(tmp_path / "out")
+    assert ("7.2", "SIG_MISSION_TASK_SUCCESS") in _events(tmp_path / "out")
 
 
 def test_a_success_claimed_short_of_the_goal_fails(tmp_path: Path,
@@ -221,5 +221,6 @@ def test_ground_truth_faster_than_the_sample_rate_is_sampled_at_it(
     bag = write_bag(tmp_path / "bag", variant(rate=50.0))
     status, err, summary = _judge(bag, tmp_path / "out", capsys)
     assert status == 0, err
-    assert summary["measurements"]["samples"] == 71  # t = 0.0, 0.1, ..., 7.0 (the end)
+    # t = 0.0, 0.1, ..., 10.0 (the end: the last task's success at 7.0, then 3 s settle)
+    assert summary["measurements"]["samples"] == 101
     assert ("7.0", "SIG_MISSION_TASK_SUCCESS") in _events(tmp_path / "out")

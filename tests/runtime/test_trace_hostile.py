@@ -256,7 +256,7 @@ def _drop_line(i: int) -> Callable[[list[Any]], None]:
      r":2: events\[1\].time: expected a finite number >= 0 and <= 0 \(after the previous event "
      r"or sample, by this sample\), found 0.5"),
     (lambda x: x[-2]["events"].append(_event("task_start", x[-2]["time"], "again", 2)),
-     r": events\[2\].kind: expected no event after the mission's 'end' at t=9, found "
+     r": events\[1\].kind: expected no event after the mission's 'end' at t=12, found "
      r"'task_start'"),
     (lambda x: x[1]["events"][1].update(task=None),
      r":2: events\[1\].task: expected a string, found None"),
@@ -291,10 +291,10 @@ def _drop_line(i: int) -> Callable[[list[Any]], None]:
      r": outcome: expected one of 'completed', 'failed', 'timeout', 'error', 'interrupted', "
      r"found 'passed'"),
     (lambda x: x[-1].update(end=8.0),
-     r": end: expected a finite number >= 9 \(the last sample's time\), found 8.0"),
+     r": end: expected a finite number >= 12 \(the last sample's time\), found 8.0"),
     (lambda x: x.insert(5, x[-1]), r":7: expected nothing after the end line \(line 6\)"),
-    (lambda x: x.pop(), r":93: expected the end line .* found the end of the file"),
-    (lambda x: x.append(""), r":94: expected nothing after the end line \(line 93\)"),
+    (lambda x: x.pop(), r":123: expected the end line .* found the end of the file"),
+    (lambda x: x.append(""), r":124: expected nothing after the end line \(line 123\)"),
     (lambda x: x.insert(4, ""), r":5: expected a JSON object, found an empty line"),
     (lambda x: x.insert(2, "{not json"), r":3: expected a JSON object, found '\{not json'"),
     (lambda x: x.insert(2, "[" * 100_000), r":3: expected a JSON object, found a line JSON "
