@@ -280,3 +280,21 @@ def test_no_edit_of_mission_events_or_outcome_turns_a_fail_into_a_pass(
         assert re.match(rf"^{re.escape(str(trace))}:[0-9]+: .*expected .*found", str(exc)), exc
         return
     assert judge(summary) != "pass"
+
+
+def test_a_genuine_run_cut_in_its_settle_period_replays_as_it_ran(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Every task ended, then --duration cut the settle period: outcome 'timeout' is honest
+    there (the tasks' outcomes stand) and replay gives the live run's verdict, not a refusal."""
+    live, _ = run_into(EXAMPLES / "simple_wall" / "simple_wall.mission", tmp_path / "live",
+                       duration=10.5)
+    assert live.outcome == "timeout"
+    # both tasks succeeded (at 0.1 s and 9.0 s) before the cut: it fell in the settle period
+    assert (tmp_path / "live" / "events.csv").read_text().count("SIG_MISSION_TASK_SUCCESS") == 2
+    capsys.readouterr()
+    status = rei(["replay", str(tmp_path / "live" / "trace.jsonl"), "-o", str(tmp_path / "again")])
+    assert status == 1, capsys.readouterr().err  # inconclusive, as the live run
+    assert (tmp_path / "again" / "events.csv").read_text() == \
+        (tmp_path / "live" / "events.csv").read_text()
+    assert json.loads((tmp_path / "again" / "summary.json").read_text())["verdict"] == \
+        judge(live)
