@@ -106,6 +106,15 @@ class Publisher:
         self._handle.put(payload, attachment=meta)
 
 
+def in_order(zenoh: Any, callback: Callable[[Any], None]) -> Any:
+    """``callback`` run on the Zenoh thread that received the message, not on a Python thread
+    of its own (zenoh-python's default): a session's messages from one peer then reach their
+    callbacks in the order they came, across topics and replies. So what a stack said before
+    its cmd_vel (a goal's status, a result) is known when that cmd_vel is, and a run does not
+    depend on how the threads were scheduled. The callbacks only decode and store."""
+    return zenoh.handlers.Callback(callback, indirect=False)
+
+
 class Subscription:
     def __init__(self, token: EntityToken, callback: Callable[[Any, wire.Attachment], None]
                  ) -> None:
@@ -181,8 +190,8 @@ class Client:
             self.received.messages += 1
             on_response(response)
 
-        self._node.session.get(self.keyexpr, reply, payload=payload, attachment=meta,
-                               target=zenoh.QueryTarget.ALL_COMPLETE,
+        self._node.session.get(self.keyexpr, in_order(zenoh, reply), payload=payload,
+                               attachment=meta, target=zenoh.QueryTarget.ALL_COMPLETE,
                                consolidation=zenoh.ConsolidationMode.NONE, timeout=timeout)
         return sequence
 
@@ -258,10 +267,10 @@ class RmwNode:
 
         if qos.durability == Durability.TRANSIENT_LOCAL:
             subscription.handle = zenoh.ext.declare_advanced_subscriber(
-                self.session, key, handler,
+                self.session, key, in_order(zenoh, handler),
                 history=zenoh.ext.HistoryConfig(detect_late_publishers=True))
         else:
-            subscription.handle = self.session.declare_subscriber(key, handler)
+            subscription.handle = self.session.declare_subscriber(key, in_order(zenoh, handler))
         self._declared.append(subscription.handle)
         self._declared.append(self.session.liveliness().declare_token(token.keyexpr))
         return subscription

@@ -350,11 +350,13 @@ class StandInNav2:
         uuid = bytes(request.goal_info.goal_id.uuid)
         with self.lock:
             self.counts["cancels"] += 1
+        # the goal ends before the answer goes: a client that goes on (or resets and sends a
+        # goal with the same id) once answered never meets this cancel finishing late
+        self._finish(uuid, 5)
         t = self.store.types
         self._reply(query, t["action_msgs/srv/CancelGoal_Response"](0, []),
                     "action_msgs/srv/CancelGoal_Response")
         query.drop()
-        self._finish(uuid, 5)
 
     def _finish(self, uuid: bytes, status: int) -> None:
         with self.lock:
