@@ -6,12 +6,13 @@ on 127.0.0.1 at a free port, multicast scouting off): the same router `rei bus` 
 
 from __future__ import annotations
 
-import socket
 import subprocess
 import sys
 from collections.abc import Iterator
 
 import pytest
+
+from rei.runtime.bus.router import free_port
 
 ROUTER = """
 import sys, zenoh
@@ -26,17 +27,11 @@ session.close()
 """
 
 
-def free_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return int(probe.getsockname()[1])
-
-
 @pytest.fixture
 def zenoh_router() -> Iterator[str]:
     """The endpoint (tcp/127.0.0.1:PORT) of a Zenoh router running for this test."""
     pytest.importorskip("zenoh")
-    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    endpoint = f"tcp/127.0.0.1:{free_port('127.0.0.1')}"
     process = subprocess.Popen([sys.executable, "-c", ROUTER, endpoint],
                                stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
     try:

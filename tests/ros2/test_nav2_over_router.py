@@ -232,8 +232,8 @@ def test_rei_run_names_a_bad_option_and_exits_2(tmp_path: Path) -> None:
 
 
 def test_an_unreachable_router_is_a_run_error_with_the_address(tmp_path: Path) -> None:
-    from tests.ros2.conftest import free_port
-    port = free_port()
+    from rei.runtime.bus.router import free_port
+    port = free_port("127.0.0.1")
     run = subprocess.run([sys.executable, "-m", "rei.runtime.cli", "run",
                           str(REPO / "examples/simple_wall/simple_wall.mission"), "-o",
                           str(tmp_path / "out"), "--controller",
