@@ -29,7 +29,13 @@ For each bundled example mission and a generated 200-object room (192 static obj
   run's set-up until the loop starts, the robot's process start-up), from a run cut after
   one physics step.
 
+Scaling (``--scaling``): CPU per simulated second, every process counted, of a cyclic
+mission in halls of 200, 1,000 and 2,000 objects, and of the 200-object hall's mission cut
+at 5, 20 and 60 simulated minutes (the slope between lengths must stay flat: no cost that
+grows with the time already simulated), with each run's peak memory.
+
 Usage: python bench/simulation.py [--out DIR] [--repeat N] [--skip-irsim] [--world NAME]
+       python bench/simulation.py --scaling [--repeat N] [--lengths S ...]
 Real-time factor = simulated seconds / wall seconds; never asserted by tests.
 """
 
@@ -38,6 +44,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import cProfile
+import json
 import os
 import pstats
 import subprocess
@@ -68,28 +75,52 @@ EXAMPLES = ["navigation", "simple_wall", "small_dense", "medium_sparse"]
 TYPES = ["box", "chair", "pillar", "table"]
 
 
-def big_room(folder: Path) -> Path:
-    """A 42 x 22 hall with 192 static objects on a 2 m lattice and 8 humans walking lanes."""
-    cols, rows = 42, 22
+def hall(folder: Path, name: str, cols: int, rows: int, statics: int, humans: int = 8) -> Path:
+    """A ``cols`` x ``rows`` hall (1 m tiles) with ``statics`` objects on a 2 m lattice and
+    ``humans`` walking lanes across it at the same speed whatever its width; the room file."""
     grid = ["#" * (cols + 2)] + ["#" + "." * cols + "#" for _ in range(rows)] + ["#" * (cols + 2)]
-    lines = ["room big_hall {", "    tile 1.0", "    grid hall {"]
+    lines = [f"room {name} {{", "    tile 1.0", "    grid hall {"]
     lines += [f'        "{row}"' for row in grid]
     lines += ["    }", "    robot bot : turtlebot3_waffle on hall_1_1 heading 0"]
     lattice = [(r, c) for r in range(2, rows + 1, 2) for c in range(2, cols, 2)]
-    humans = 8
-    for n, (r, c) in enumerate(lattice[:200 - humans]):
+    if len(lattice) < statics:
+        raise ValueError(f"a {cols} x {rows} hall holds {len(lattice)} objects, not {statics}")
+    for n, (r, c) in enumerate(lattice[:statics]):
         lines.append(f"    object o{n} : {TYPES[n % len(TYPES)]} on hall_{r}_{c}")
     for h in range(humans):
         r = 3 + 2 * (h * 2 % 9)
+        lap = round((30 + 3 * h) * cols / 42)
         lines.append(f"    human h{h} on hall_{r}_5 trajectory loop {{ hall_{r}_5 at 0  "
-                     f"hall_{r}_{cols - 4} at {30 + 3 * h} }}")
+                     f"hall_{r}_{cols - 4} at {lap} }}")
     lines.append("}")
-    room = folder / "big_hall.room"
+    room = folder / f"{name}.room"
     room.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return room
+
+
+def big_room(folder: Path) -> Path:
+    """A 42 x 22 hall with 192 static objects on a 2 m lattice and 8 humans walking lanes."""
+    cols, rows = 42, 22
+    hall(folder, "big_hall", cols, rows, 192)
     mission = folder / "big_hall.mission"
     mission.write_text(f'mission cross_the_hall in "big_hall.room" {{\n    time_limit 400\n'
                        f"    goal start_place at hall_1_1 timeout 30\n"
                        f"    goal far_corner at hall_{rows}_{cols} tolerance 0.3 timeout 370\n}}\n",
+                       encoding="utf-8")
+    return mission
+
+
+def cyclic_hall(folder: Path, cols: int, rows: int, statics: int) -> Path:
+    """A hall of ``statics`` objects and 8 humans and a mission that crosses the same 42 x 22
+    corner of it and back (odd tiles: never on the lattice), again and again, for hours: how
+    a run's cost grows with the objects and with the mission's length (``--scaling``)."""
+    name = f"hall_{statics + 8}"
+    hall(folder, name, cols, rows, statics)
+    mission = folder / f"{name}.mission"
+    mission.write_text(f'mission back_and_forth in "{name}.room" {{\n    time_limit 36000\n'
+                       f"    cycles 100\n"
+                       f"    goal far_corner at hall_21_41 tolerance 0.3 timeout 370\n"
+                       f"    goal back_home at hall_1_1 tolerance 0.3 timeout 370\n}}\n",
                        encoding="utf-8")
     return mission
 
@@ -337,6 +368,77 @@ def startup(mission_file: Path, work: Path) -> dict[str, float]:
             "total": python + imports + setup + robot, "wall": wall}
 
 
+SCALING_PROBE = """
+import json, resource, sys, time
+from pathlib import Path
+from rei.runtime.commands.run import run_into
+cpu = time.process_time()
+_, record = run_into(Path(sys.argv[1]), Path(sys.argv[2]), duration=float(sys.argv[3]))
+cpu = time.process_time() - cpu
+robot = resource.getrusage(resource.RUSAGE_CHILDREN)
+rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+print(json.dumps({"sim": record.duration, "run": cpu, "robot": robot.ru_utime + robot.ru_stime,
+                  "loop": record.cpu_seconds, "rss": rss, "outcome": record.outcome}))
+"""
+"""One whole `rei run` (generation, loop, summary, report) in a fresh interpreter, cut at a
+duration: the CPU of the run's process and of the robot's, the loop's, peak memory (MiB)."""
+
+SCALING_HALLS = ((42, 22, 192), (92, 46, 992), (130, 64, 1992))
+"""(columns, rows, static objects) of the halls of 200, 1,000 and 2,000 objects."""
+
+
+def whole_run(mission_file: Path, work: Path, duration: float) -> dict[str, Any]:
+    """A fresh `rei run` of the mission cut at ``duration`` (see ``SCALING_PROBE``)."""
+    done = subprocess.run([sys.executable, "-c", SCALING_PROBE, str(mission_file),
+                           str(work / f"run_{duration:g}"), str(duration)],
+                          capture_output=True, text=True, check=True)
+    figures: dict[str, Any] = json.loads(done.stdout.splitlines()[-1])
+    figures["cpu"] = figures["run"] + figures["robot"]
+    return figures
+
+
+def scaling(work: Path, repeat: int, object_seconds: float,
+            lengths: tuple[float, ...]) -> None:
+    """How a run's cost grows: CPU per simulated second against the objects in the room
+    (200, 1,000, 2,000), and against the mission's length in the 200-object hall (each
+    length one whole run: the increments between lengths are the slope). Prints tables."""
+    print(f"\n## Scaling: objects (a cyclic mission in halls of 200-2,000 objects, "
+          f"{object_seconds:g} simulated s; per simulated second, set-up excluded: "
+          f"(whole run - run cut after one step) / simulated s; best of {repeat})\n")
+    print("| bodies | objects | sim s | whole run CPU s | cut run CPU s | loop CPU s "
+          "| CPU ms per sim s | × real time per CPU s | peak MiB |")
+    print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    missions = {}
+    for cols, rows, statics in SCALING_HALLS:
+        folder = work / f"hall_{statics}"
+        folder.mkdir(parents=True, exist_ok=True)
+        mission = missions[statics] = cyclic_hall(folder, cols, rows, statics)
+        runs = [whole_run(mission, folder, object_seconds) for _ in range(repeat)]
+        run = min(runs, key=lambda r: r["cpu"])
+        cut = min((whole_run(mission, folder, 0.01) for _ in range(repeat)),
+                  key=lambda r: r["cpu"])
+        per = (run["cpu"] - cut["cpu"]) / run["sim"]
+        bodies = len(load_manifest(folder / "run_0.01" / "world").walls) + statics + 8 + 1
+        print(f"| {bodies} | {statics + 8} | {run['sim']:.0f} | {run['cpu']:.2f} | "
+              f"{cut['cpu']:.2f} | {run['loop']:.2f} | {1e3 * per:.2f} | {1 / per:.0f} | "
+              f"{run['rss']:.0f} |", flush=True)
+    print(f"\n## Scaling: mission length (the 200-object hall's cyclic mission cut at "
+          f"{', '.join(f'{t:g}' for t in lengths)} simulated s, one whole run each; slope = "
+          f"CPU per simulated second between two lengths)\n")
+    print("| sim s | outcome | whole run CPU s | loop CPU s | CPU ms per sim s (whole run) "
+          "| slope from the previous length, ms per sim s | peak MiB |")
+    print("|---:|---|---:|---:|---:|---:|---:|")
+    previous = None
+    for seconds in lengths:
+        run = min((whole_run(missions[192], work / "hall_192", seconds)
+                   for _ in range(repeat)), key=lambda r: r["cpu"])
+        slope = "" if previous is None else \
+            f"{1e3 * (run['cpu'] - previous['cpu']) / (run['sim'] - previous['sim']):.2f}"
+        print(f"| {run['sim']:.0f} | {run['outcome']} | {run['cpu']:.2f} | {run['loop']:.2f} | "
+              f"{1e3 * run['cpu'] / run['sim']:.2f} | {slope} | {run['rss']:.0f} |", flush=True)
+        previous = run
+
+
 def irsim_world(manifest: WorldManifest, goal: tuple[float, float], path: Path) -> None:
     x0, y0, x1, y1 = manifest.bounds
     r = manifest.robot
@@ -408,8 +510,23 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--skip-irsim", action="store_true")
     parser.add_argument("--world", action="append", default=None,
                         help="only this world (an example's name or 'big'); repeatable")
+    parser.add_argument("--scaling", action="store_true",
+                        help="only how the cost grows: halls of 200, 1,000 and 2,000 objects, "
+                             "and a mission of 5, 20 and 60 simulated minutes")
+    parser.add_argument("--lengths", type=float, nargs="+", default=[300.0, 1200.0, 3600.0],
+                        metavar="S", help="mission lengths of --scaling (simulated seconds)")
+    parser.add_argument("--object-seconds", type=float, default=120.0, metavar="S",
+                        help="simulated seconds of each hall of --scaling")
     args = parser.parse_args(argv)
     work_root = Path(args.out or tempfile.mkdtemp(prefix="rei-bench-sim-"))
+    if args.scaling:
+        load = " / ".join(f"{v:.1f}" for v in os.getloadavg())
+        print(f"# rei bench simulation --scaling — {time.strftime('%Y-%m-%d %H:%M')}, "
+              f"{os.cpu_count()} cores, load average {load}", flush=True)
+        scaling(work_root, args.repeat, args.object_seconds, tuple(args.lengths))
+        load = " / ".join(f"{v:.1f}" for v in os.getloadavg())
+        print(f"\n# load average at the end: {load}")
+        return 0
     missions = [(name, REPO / "examples" / name / f"{name}.mission") for name in EXAMPLES]
     (work_root / "big").mkdir(parents=True, exist_ok=True)
     missions.append(("200 objects", big_room(work_root / "big")))
