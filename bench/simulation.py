@@ -372,16 +372,37 @@ SCALING_PROBE = """
 import json, resource, sys, time
 from pathlib import Path
 from rei.runtime.commands.run import run_into
+
+class Windows:
+    \"\"\"A sink reading this process's CPU at the sample that opens each sixth of the run:
+    the cost of each stretch of simulated time within one run.\"\"\"
+    def __init__(self, length):
+        self.width, self.marks = length / 6, []
+    def start(self, header):
+        pass
+    def feed(self, sample):
+        if sample.time >= len(self.marks) * self.width:
+            self.marks.append((sample.time, time.process_time()))
+    def finish(self, end_time, outcome, reason):
+        self.marks.append((end_time, time.process_time()))
+
+windows = Windows(float(sys.argv[3]))
 cpu = time.process_time()
-_, record = run_into(Path(sys.argv[1]), Path(sys.argv[2]), duration=float(sys.argv[3]))
+_, record = run_into(Path(sys.argv[1]), Path(sys.argv[2]), duration=float(sys.argv[3]),
+                     sinks=[windows])
 cpu = time.process_time() - cpu
+stretches = [(c1 - c0) / (t1 - t0) for (t0, c0), (t1, c1)
+             in zip(windows.marks, windows.marks[1:]) if t1 > t0]
 robot = resource.getrusage(resource.RUSAGE_CHILDREN)
 rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 print(json.dumps({"sim": record.duration, "run": cpu, "robot": robot.ru_utime + robot.ru_stime,
-                  "loop": record.cpu_seconds, "rss": rss, "outcome": record.outcome}))
+                  "loop": record.cpu_seconds, "rss": rss, "outcome": record.outcome,
+                  "components": record.component_cpu, "stretches": stretches}))
 """
 """One whole `rei run` (generation, loop, summary, report) in a fresh interpreter, cut at a
-duration: the CPU of the run's process and of the robot's, the loop's, peak memory (MiB)."""
+duration: the CPU of the run's process and of the robot's, the loop's, peak memory (MiB),
+and the run's process's CPU per simulated second in each sixth of the run (its first sixth
+holds the loop's own set-up)."""
 
 SCALING_HALLS = ((42, 22, 192), (92, 46, 992), (130, 64, 1992))
 """(columns, rows, static objects) of the halls of 200, 1,000 and 2,000 objects."""
@@ -406,8 +427,10 @@ def scaling(work: Path, repeat: int, object_seconds: float,
           f"{object_seconds:g} simulated s; per simulated second, set-up excluded: "
           f"(whole run - run cut after one step) / simulated s; best of {repeat})\n")
     print("| bodies | objects | sim s | whole run CPU s | cut run CPU s | loop CPU s "
-          "| CPU ms per sim s | × real time per CPU s | peak MiB |")
-    print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+          "| CPU ms per sim s | × real time per CPU s | bare pybullet CPU ms per sim s "
+          "| loop's world component ms per sim s | loop's other components ms per sim s "
+          "| peak MiB |")
+    print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     missions = {}
     for cols, rows, statics in SCALING_HALLS:
         folder = work / f"hall_{statics}"
@@ -418,16 +441,22 @@ def scaling(work: Path, repeat: int, object_seconds: float,
         cut = min((whole_run(mission, folder, 0.01) for _ in range(repeat)),
                   key=lambda r: r["cpu"])
         per = (run["cpu"] - cut["cpu"]) / run["sim"]
-        bodies = len(load_manifest(folder / "run_0.01" / "world").walls) + statics + 8 + 1
+        world = run["components"].get("world", 0.0)  # physics and the truth read from it
+        manifest = load_manifest(folder / "run_0.01" / "world")
+        bodies = len(manifest.walls) + len(manifest.objects) + 1
+        bare = max(bare_rate(manifest, 1000)[1] for _ in range(repeat))  # steps per CPU s
         print(f"| {bodies} | {statics + 8} | {run['sim']:.0f} | {run['cpu']:.2f} | "
               f"{cut['cpu']:.2f} | {run['loop']:.2f} | {1e3 * per:.2f} | {1 / per:.0f} | "
+              f"{1e3 * 100.0 / bare:.2f} | {1e3 * world / run['sim']:.2f} | "
+              f"{1e3 * (sum(run['components'].values()) - world) / run['sim']:.2f} | "
               f"{run['rss']:.0f} |", flush=True)
     print(f"\n## Scaling: mission length (the 200-object hall's cyclic mission cut at "
           f"{', '.join(f'{t:g}' for t in lengths)} simulated s, one whole run each; slope = "
           f"CPU per simulated second between two lengths)\n")
     print("| sim s | outcome | whole run CPU s | loop CPU s | CPU ms per sim s (whole run) "
-          "| slope from the previous length, ms per sim s | peak MiB |")
-    print("|---:|---|---:|---:|---:|---:|---:|")
+          "| slope from the previous length, ms per sim s | run's process ms per sim s, "
+          "sixths 2-6 of the run | peak MiB |")
+    print("|---:|---|---:|---:|---:|---:|---|---:|")
     previous = None
     for seconds in lengths:
         run = min((whole_run(missions[192], work / "hall_192", seconds)
@@ -435,7 +464,9 @@ def scaling(work: Path, repeat: int, object_seconds: float,
         slope = "" if previous is None else \
             f"{1e3 * (run['cpu'] - previous['cpu']) / (run['sim'] - previous['sim']):.2f}"
         print(f"| {run['sim']:.0f} | {run['outcome']} | {run['cpu']:.2f} | {run['loop']:.2f} | "
-              f"{1e3 * run['cpu'] / run['sim']:.2f} | {slope} | {run['rss']:.0f} |", flush=True)
+              f"{1e3 * run['cpu'] / run['sim']:.2f} | {slope} | "
+              f"{' '.join(f'{1e3 * v:.1f}' for v in run['stretches'][1:])} | "
+              f"{run['rss']:.0f} |", flush=True)
         previous = run
 
 
