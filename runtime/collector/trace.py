@@ -261,13 +261,23 @@ class _Fields:
 
     def number(self, key: str, low: float = -math.inf, high: float = math.inf,
                low_open: bool = False, note: str = "") -> float:
-        return _number(self.data[key], self.where, self.field(key), low, high, low_open, note)
+        value = self.data[key]
+        # the common case, a float in range, before the field's path is even spelt out
+        if type(value) is float and (value > low if low_open else value >= low) \
+                and value <= high and math.isfinite(value):
+            return value
+        return _number(value, self.where, self.field(key), low, high, low_open, note)
 
     def optional_number(self, key: str, **bounds: Any) -> float | None:
         return None if self.data[key] is None else self.number(key, **bounds)
 
     def numbers(self, key: str, n: int, form: str, **bounds: Any) -> tuple[float, ...]:
-        return _numbers(self.data[key], self.where, self.field(key), n, form, **bounds)
+        value = self.data[key]
+        # the common case (``_numbers``' first), before the field's path is even spelt out
+        if not bounds and type(value) is list and len(value) == n \
+                and _FLOATS.issuperset(map(type, value)) and all(map(math.isfinite, value)):
+            return tuple(value)
+        return _numbers(value, self.where, self.field(key), n, form, **bounds)
 
     def whole(self, key: str, low: int) -> int:
         value = self.data[key]
