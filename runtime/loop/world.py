@@ -78,8 +78,7 @@ class WorldRun:
             if velocities is not None:
                 # the previous step's row: the message starts at a control tick
                 row = k - 1 - round(velocities.time * self.spec.physics_rate)
-                for body, vx, vy, wz in velocities.steps[row]:
-                    world.set_planar_velocity(body, vx, vy, wz)
+                world.set_planar_velocities(velocities.steps[row])
             linear, angular = board.command.motor if board.command is not None else (0.0, 0.0)
             world.drive_robot(linear, angular, self._yaw)
             world.step()

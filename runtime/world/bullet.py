@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 import os
 import sys
+from collections.abc import Iterable
 from pathlib import Path
 from types import ModuleType
 from typing import cast
@@ -132,6 +133,14 @@ class BulletWorld:
     def set_planar_velocity(self, bid: int, vx: float, vy: float, wz: float) -> None:
         self._states = None
         p.resetBaseVelocity(bid, (vx, vy, 0.0), (0.0, 0.0, wz), physicsClientId=self.client)
+
+    def set_planar_velocities(self, rows: Iterable[tuple[int, float, float, float]]) -> None:
+        """``set_planar_velocity`` for each (body, vx, vy, wz), in order: one Python call per
+        physics step for all the animated bodies rather than one per body."""
+        self._states = None
+        reset, cid = p.resetBaseVelocity, self.client
+        for bid, vx, vy, wz in rows:
+            reset(bid, (vx, vy, 0.0), (0.0, 0.0, wz), physicsClientId=cid)
 
     def drive_robot(self, linear: float, angular: float, yaw: float) -> None:
         """Apply a differential-drive command at the robot's heading ``yaw``."""
