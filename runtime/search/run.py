@@ -43,7 +43,7 @@ from rei.runtime.campaign.store import RunRecord, extend_plan
 from rei.runtime.evaluator.margins import smallest_margin
 from rei.runtime.search.candidates import CANDIDATES, Candidate, build_candidate, write_candidates
 from rei.runtime.search.errors import SearchError
-from rei.runtime.search.strategies import STRATEGIES, Told, make_strategy
+from rei.runtime.search.strategies import Told, make_strategy, refuse_unusable
 
 SEARCH_FILE = "search.json"
 SEARCH_TABLE = "search.csv"
@@ -118,9 +118,6 @@ def check_config(config: SearchConfig) -> tuple[ParameterSpace, tuple[SearchDime
     from rei.runtime.evaluator.margins import RULES  # noqa: PLC0415
     from rei.runtime.search.strategies import MEASURE_RANGES  # noqa: PLC0415
 
-    if config.strategy not in STRATEGIES:
-        raise SearchError(f"--strategy: expected one of {', '.join(STRATEGIES)}, found "
-                          f"'{config.strategy}'")
     if config.budget < 1:
         raise SearchError(f"--budget: expected a number of simulations of at least 1, found "
                           f"{config.budget}")
@@ -146,6 +143,7 @@ def check_config(config: SearchConfig) -> tuple[ParameterSpace, tuple[SearchDime
         raise SearchError("nothing to search: every factor has one level and --layout fixes "
                           "the room's construction; give a factor several levels or a "
                           "LOW:HIGH range, or drop --layout")
+    refuse_unusable(config.strategy, len(dims))
     return space, dims
 
 

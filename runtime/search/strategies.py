@@ -253,6 +253,17 @@ MEASURE_RANGES: dict[str, tuple[float, float]] = {
 """The grid's range per difficulty descriptor (values outside fall into the edge cells)."""
 
 
+def refuse_unusable(name: str, dims: int) -> None:
+    """SearchError when strategy ``name`` cannot search ``dims`` dimensions."""
+    if name not in STRATEGIES:
+        raise SearchError(f"--strategy: expected one of {', '.join(STRATEGIES)}, found "
+                          f"'{name}'")
+    if name == "cmaes" and dims < 2:
+        # Optuna's CMA-ES samples a one-dimensional space at random, with a warning: say so.
+        raise SearchError("--strategy cmaes: expected at least two searched dimensions (CMA-ES "
+                          "adapts a covariance), found one; use tpe for a single parameter")
+
+
 def make_strategy(name: str, dimensions: tuple[SearchDimension, ...], seed: int, batch: int,
                   measures: tuple[str, str] = DEFAULT_MEASURES) -> SearchStrategy:
     """A fresh strategy; two made with the same arguments propose the same points."""
@@ -261,13 +272,10 @@ def make_strategy(name: str, dimensions: tuple[SearchDimension, ...], seed: int,
         return RandomStrategy(dims, seed)
     if name in ("sobol", "halton"):
         return QuasiRandomStrategy(dims, seed, name)
-    if name == "cmaes" and dims < 2:
-        # Optuna's CMA-ES samples a one-dimensional space at random, with a warning: say so.
-        raise SearchError("--strategy cmaes: expected at least two searched dimensions (CMA-ES "
-                          "adapts a covariance), found one; use tpe for a single parameter")
+    refuse_unusable(name, dims)
     if name in ("tpe", "cmaes"):
         return OptunaStrategy(dimensions, seed, batch, name)
     if name == "map-elites":
         ranges = (MEASURE_RANGES[measures[0]], MEASURE_RANGES[measures[1]])
         return MapElitesStrategy(dims, seed, batch, ranges)
-    raise SearchError(f"--strategy: expected one of {', '.join(STRATEGIES)}, found '{name}'")
+    raise AssertionError(name)  # refuse_unusable knows every name
