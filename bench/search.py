@@ -4,11 +4,11 @@ against random sampling on the same budget of simulations?
 For every navigator (the correct ``reference`` and the defects of bench/defects chosen with
 ``--only``), every strategy (``--strategies``, random always included: it is the baseline)
 and every seed, one search of ``--budget`` simulations over the ``--preset`` rooms (layout
-searched, ``--speed`` of the humans a continuous range, the default objective: the smallest
-margin of any requirement). A defect is *found* by a search when one of its candidates fails
-and the correct navigator passes that same candidate (same files, same run seed: one extra
-run), so a candidate no navigator could pass is never counted as a detection. The reference's
-searches must find nothing (false alarms).
+searched, optionally ``--speed LOW:HIGH`` of the humans as a continuous range; the default
+objective: the smallest margin of any requirement). A defect is *found* by a search when one
+of its candidates fails and the correct navigator passes that same candidate (same files,
+same run seed: one extra run), so a candidate no navigator could pass is never counted as a
+detection. The reference's searches must find nothing (false alarms).
 
 Reported per strategy: defects found per search seed (mean and spread), the rate per 1,000
 simulations (found / simulations run x 1,000: an extrapolation from the budget actually run,
@@ -97,7 +97,8 @@ def one_search(nav: str, spec: str, strategy: str, seed: int, args: argparse.Nam
                ) -> SearchOutcome:
     root = args.out / nav / f"{strategy}-{seed}"
     shutil.rmtree(root, ignore_errors=True)
-    config = SearchConfig(preset=args.preset, levels=(("speed", "0.5:1.4"),),
+    levels = (("speed", args.speed),) if args.speed else ()
+    config = SearchConfig(preset=args.preset, levels=levels,
                           strategy=strategy, seed=seed, budget=args.budget, batch=args.batch,
                           controller=None if spec == REFERENCE else spec)
     result = run_search(config, root, LocalEngine(args.workers),
@@ -189,6 +190,10 @@ def main() -> int:
     parser.add_argument("--batch", type=int, default=4, help="candidates per batch")
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--preset", default="small")
+    parser.add_argument("--speed", default=None, metavar="LOW:HIGH",
+                        help="search the humans' walking speed in this range (default: the "
+                             "preset's levels; 0.5:1.4 lets search find fast social humans "
+                             "that walk into even the correct navigator)")
     parser.add_argument("--markdown", action="store_true")
     parser.add_argument("--out", type=Path, default=REPO / "bench" / "out" / "search")
     args = parser.parse_args()

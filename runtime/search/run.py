@@ -255,7 +255,14 @@ def run_search(config: SearchConfig, root: Path, engine: CampaignEngine,
     strategy = make_strategy(config.strategy, dims, config.seed % 2**32, config.batch,
                              config.measures)
     folder = root / CANDIDATES
-    progress = SearchProgress(config.budget, stream if stream is not None else sys.stderr)
+    out = stream if stream is not None else sys.stderr
+    if (root / "campaign.json").is_file():
+        from rei.runtime.campaign.store import CampaignStore  # noqa: PLC0415
+
+        recorded = len(CampaignStore.read(root)[2])
+        print(f"resuming {root}: {recorded} simulation(s) already recorded; replaying them",
+              file=out)
+    progress = SearchProgress(config.budget, out)
     candidates: list[Candidate] = []
     results: list[CandidateResult] = []
     complete = True
