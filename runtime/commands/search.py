@@ -15,8 +15,12 @@ import argparse
 import os
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from rei.lang.cli_support import EXIT_INTERRUPTED
+
+if TYPE_CHECKING:
+    from rei.runtime.search import SearchConfig
 
 HELP_EXAMPLES = """\
 rei search -o out/search --controller my_nav:Navigator --budget 200 --workers 2
@@ -32,7 +36,7 @@ EXIT_HELP = ("Exit status (the campaign's rule): 0 no run failed (nothing found)
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     from rei.lang.commands.rooms import OVERRIDES  # noqa: PLC0415
-    from rei.runtime.commands.campaign import _seconds, positive_int  # noqa: PLC0415
+    from rei.runtime.commands.campaign import _seconds, add_engine_arguments  # noqa: PLC0415
     from rei.runtime.commands.run import CONTROLLER_HELP  # noqa: PLC0415
     from rei.runtime.search.strategies import (  # noqa: PLC0415
         DEFAULT_MEASURES,
@@ -90,27 +94,20 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.add_argument("--duration", type=_seconds, default=None, metavar="S",
                         help="simulated seconds per run (runs cut short are inconclusive and "
                              "give no margin: use it for smoke tests only)")
-    parser.add_argument("--workers", type=positive_int, default=None, metavar="N",
-                        help="runs at once with the local engine (default: number of CPUs)")
-    parser.add_argument("--timeout", type=_seconds, default=None, metavar="S",
-                        help="wall-clock watchdog per run (as `rei campaign --timeout`)")
-    parser.add_argument("--engine", choices=("local", "dask"), default="local",
-                        help="local worker processes (default) or a Dask distributed cluster")
-    parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                        help="Dask scheduler address (--engine dask)")
+    add_engine_arguments(parser)
     parser.add_argument("--no-report", action="store_true", help="skip report.html")
     parser.add_argument("-q", "--quiet", action="store_true",
                         help="no progress line; only the final verdict line")
     parser.set_defaults(func=run)
 
 
-def config_of(args: argparse.Namespace) -> object:
+def config_of(args: argparse.Namespace) -> SearchConfig:
     from rei.generators.rooms.space import ParameterError  # noqa: PLC0415
     from rei.lang import __version__  # noqa: PLC0415
     from rei.lang.commands.rooms import OVERRIDES  # noqa: PLC0415
     from rei.runtime.search import SearchConfig, SearchError  # noqa: PLC0415
 
-    levels = []
+    levels: list[tuple[str, str]] = []
     for name, _ in OVERRIDES:
         value = getattr(args, name)
         if value is None:
@@ -137,28 +134,21 @@ def config_of(args: argparse.Namespace) -> object:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rei.runtime.campaign import CampaignError, DaskEngine, LocalEngine  # noqa: PLC0415
-    from rei.runtime.campaign.engines import CampaignEngine  # noqa: PLC0415
+    from rei.runtime.campaign import CampaignError  # noqa: PLC0415
     from rei.runtime.campaign.provenance import collect  # noqa: PLC0415
-    from rei.runtime.commands.campaign import _terminate_as_interrupt, finish  # noqa: PLC0415
-    from rei.runtime.search import SearchConfig, run_search  # noqa: PLC0415
+    from rei.runtime.commands.campaign import (  # noqa: PLC0415
+        _terminate_as_interrupt,
+        engine_of,
+        finish,
+    )
+    from rei.runtime.search import run_search  # noqa: PLC0415
     from rei.runtime.search.run import check_config  # noqa: PLC0415
 
     config = config_of(args)
-    assert isinstance(config, SearchConfig)
     check_config(config)  # bad options stop here, before the folder or an engine exists
     if args.vepl is not None and not args.vepl.is_file():
         raise CampaignError(f"--vepl: file '{args.vepl}' does not exist")
-    engine: CampaignEngine
-    if args.engine == "dask":
-        if not args.scheduler:
-            raise CampaignError("--engine dask: expected --scheduler ADDRESS "
-                                "(start one with `dask scheduler`)")
-        engine = DaskEngine(args.scheduler, timeout=args.timeout)
-    else:
-        if args.scheduler:
-            raise CampaignError("--scheduler is only used with --engine dask")
-        engine = LocalEngine(args.workers or os.cpu_count() or 1, timeout=args.timeout)
+    engine = engine_of(args)
     provenance = {**collect(["rei", *sys.argv[1:]] if sys.argv else [], engine.describe(),
                             args.controller, None), "pass_rate": 1.0}
     if not args.quiet:
