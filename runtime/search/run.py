@@ -152,7 +152,8 @@ def check_config(config: SearchConfig) -> tuple[ParameterSpace, tuple[SearchDime
 
 def objective(record: RunRecord | None, requirement: str | None) -> float:
     """The value a strategy minimises for one run: the requirement's margin (the smallest of
-    any, without a requirement), bounded; see NO_EVIDENCE and FAILED_WITHOUT_MARGIN."""
+    any, without a requirement), bounded; a failed run (failed requirement) is never above
+    FAILED_WITHOUT_MARGIN; a run that tells nothing is NO_EVIDENCE."""
     if record is None or record.summary is None or record.verdict == "error":
         return NO_EVIDENCE
     verdicts = record.summary.verdicts
@@ -163,8 +164,14 @@ def objective(record: RunRecord | None, requirement: str | None) -> float:
         chosen = [v for v in verdicts if v.requirement == requirement]
         margin = chosen[0].margin if chosen else None
         failed = bool(chosen) and chosen[0].status == "fail"
-    if margin is None or not math.isfinite(margin):
-        return FAILED_WITHOUT_MARGIN if failed else NO_EVIDENCE
+    if margin is not None and not math.isfinite(margin):
+        margin = None
+    if failed and (margin is None or margin >= 0):
+        # Failed by a verdict without a margin (a task, an event pattern) while others
+        # passed with room to spare: a failure must never rank as a near pass.
+        return FAILED_WITHOUT_MARGIN
+    if margin is None:
+        return NO_EVIDENCE
     return min(max(margin, -MARGIN_BOUND), MARGIN_BOUND)
 
 

@@ -130,3 +130,32 @@ def test_cmaes_needs_two_dimensions() -> None:
     assert len(one) == 1
     with pytest.raises(SearchError, match="at least two"):
         make_strategy("cmaes", one, 0, 4)
+
+
+def test_the_objective_is_the_margin_and_never_hides_a_failure() -> None:
+    from dataclasses import replace  # noqa: PLC0415
+
+    from rei.runtime.campaign import RunRecord, RunSpec  # noqa: PLC0415
+    from rei.runtime.results import Verdict  # noqa: PLC0415
+    from rei.runtime.search import objective  # noqa: PLC0415
+    from rei.runtime.search.run import FAILED_WITHOUT_MARGIN, NO_EVIDENCE  # noqa: PLC0415
+    from tests.campaign.records import summary_for  # noqa: PLC0415
+
+    spec = RunSpec("m.r00", "/m.mission", "x/m.mission", "x", 0, 1)
+
+    def record(*verdicts: Verdict, status: str = "ran") -> RunRecord:
+        summary = replace(summary_for("m", "r", 1, True, 10.0), verdicts=verdicts)
+        return RunRecord(spec, status, 0, 1.0, "", summary)
+
+    speed = Verdict("SPEED_LIMIT", "pass", None, "", margin=0.04)
+    near = Verdict("NO_ROBOT_COLLISION", "pass", None, "", margin=0.01)
+    broken = Verdict("GOAL_HEADING", "fail", 3.0, "off by 0.5 rad")  # failed, no margin
+    assert objective(record(speed, near), None) == 0.01  # the smallest margin
+    assert objective(record(speed, near), "SPEED_LIMIT") == 0.04
+    assert objective(record(speed, broken), None) == FAILED_WITHOUT_MARGIN
+    assert objective(record(speed, broken), "GOAL_HEADING") == FAILED_WITHOUT_MARGIN
+    assert objective(record(speed), "HUMAN_SLOW_ZONE") == NO_EVIDENCE  # not in the run
+    assert objective(record(speed, status="crashed"), None) == NO_EVIDENCE
+    assert objective(None, None) == NO_EVIDENCE
+    far = Verdict("SPEED_LIMIT", "fail", 1.0, "", margin=-1e9)
+    assert objective(record(far), None) == -10.0  # bounded, still the lowest
