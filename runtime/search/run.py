@@ -37,9 +37,9 @@ from rei.generators.rooms.space import (
     preset_space,
 )
 from rei.runtime.campaign.engines import CampaignEngine
-from rei.runtime.campaign.plan import plan_campaign
+from rei.runtime.campaign.plan import CampaignPlan, plan_campaign
 from rei.runtime.campaign.run import run_campaign
-from rei.runtime.campaign.store import RunRecord, extend_plan
+from rei.runtime.campaign.store import MANIFEST, CampaignStore, RunRecord, extend_plan
 from rei.runtime.evaluator.margins import smallest_margin
 from rei.runtime.search.candidates import CANDIDATES, Candidate, build_candidate, write_candidates
 from rei.runtime.search.errors import SearchError
@@ -263,9 +263,7 @@ def run_search(config: SearchConfig, root: Path, engine: CampaignEngine,
                              config.measures)
     folder = root / CANDIDATES
     out = stream if stream is not None else sys.stderr
-    if (root / "campaign.json").is_file():
-        from rei.runtime.campaign.store import CampaignStore  # noqa: PLC0415
-
+    if (root / MANIFEST).is_file():
         recorded = len(CampaignStore.read(root)[2])
         print(f"resuming {root}: {recorded} simulation(s) already recorded; replaying them",
               file=out)
@@ -288,12 +286,15 @@ def run_search(config: SearchConfig, root: Path, engine: CampaignEngine,
                 plan = plan_campaign([index], seed=config.seed, controller=config.controller,
                                      vepl=Path(config.vepl) if config.vepl else None,
                                      duration=config.duration)
-                extend_plan(root, plan)
-                ran = run_campaign(plan, root, engine, provenance, stream=io.StringIO())
-                if not ran.complete:
-                    complete = False
-                    break
-                records = {Path(r.spec.mission_file).name: r for r in ran.records}
+                replayed = _recorded_batch(root, plan)
+                if replayed is None:
+                    extend_plan(root, plan)
+                    ran = run_campaign(plan, root, engine, provenance, stream=io.StringIO())
+                    if not ran.complete:
+                        complete = False
+                        break
+                    replayed = list(ran.records)
+                records = {Path(r.spec.mission_file).name: r for r in replayed}
             for candidate in fresh:
                 pair = candidate.pair
                 record = records.get(pair.mission_file) if pair is not None else None
@@ -313,6 +314,27 @@ def run_search(config: SearchConfig, root: Path, engine: CampaignEngine,
         raise SearchError(f"no candidate could be built, so nothing ran; the generator "
                           f"said: {problem}")
     return SearchResult(root, tuple(results), complete)
+
+
+def _recorded_batch(root: Path, plan: CampaignPlan) -> list[RunRecord] | None:
+    """When resuming: the records of a batch that an earlier session finished (the folder's
+    plan already goes beyond ``plan``), else None (the batch runs now)."""
+    if not (root / MANIFEST).is_file():
+        return None
+    stored, _, records = CampaignStore.read(root)
+    if len(stored.runs) <= len(plan.runs):
+        return None
+    head = CampaignPlan(stored.version, stored.seed, stored.repeat,
+                        stored.runs[:len(plan.runs)])
+    if head != plan:
+        raise SearchError(f"{root}: the recorded runs do not match this search's candidates "
+                          f"(was it made by another version of REI?); choose another -o folder")
+    wanted = {s.run_id for s in plan.runs}
+    mine = [r for r in records if r.spec.run_id in wanted]
+    if len(mine) != len(wanted):
+        raise SearchError(f"{root}: runs of a finished batch are missing from runs/; "
+                          f"refusing to guess their results — choose another -o folder")
+    return mine
 
 
 def search_table(results: Sequence[CandidateResult], dims: Sequence[SearchDimension]) -> str:
