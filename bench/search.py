@@ -22,7 +22,8 @@ CPU seconds (this process and its children) are reported with the load average, 
 machine is shared.
 
 Usage: python bench/search.py [--only NAME ...] [--strategies S ...] [--seeds S ...]
-       [--budget N] [--batch K] [--workers N] [--preset small] [--markdown] [--out DIR]
+       [--budget N] [--batch K] [--workers N] [--preset small] [--speed LOW:HIGH]
+       [--factor NAME=LEVELS ...] [--markdown] [--out DIR]
 """
 
 from __future__ import annotations
@@ -97,8 +98,9 @@ def one_search(nav: str, spec: str, strategy: str, seed: int, args: argparse.Nam
                ) -> SearchOutcome:
     root = args.out / nav / f"{strategy}-{seed}"
     shutil.rmtree(root, ignore_errors=True)
-    levels = (("speed", args.speed),) if args.speed else ()
-    config = SearchConfig(preset=args.preset, levels=levels,
+    levels = tuple(tuple(f.split("=", 1)) for f in args.factor)
+    levels = (*levels, ("speed", args.speed)) if args.speed else levels
+    config = SearchConfig(preset=args.preset, levels=levels,  # type: ignore[arg-type]
                           strategy=strategy, seed=seed, budget=args.budget, batch=args.batch,
                           controller=None if spec == REFERENCE else spec)
     result = run_search(config, root, LocalEngine(args.workers),
@@ -194,6 +196,9 @@ def main() -> int:
                         help="search the humans' walking speed in this range (default: the "
                              "preset's levels; 0.5:1.4 lets search find fast social humans "
                              "that walk into even the correct navigator)")
+    parser.add_argument("--factor", action="append", default=[], metavar="NAME=LEVELS",
+                        help="a factor's levels or LOW:HIGH range, as `rei search --NAME` "
+                             "takes them (e.g. stressor=emerge)")
     parser.add_argument("--markdown", action="store_true")
     parser.add_argument("--out", type=Path, default=REPO / "bench" / "out" / "search")
     args = parser.parse_args()
