@@ -47,6 +47,9 @@ def _refused(capsys: pytest.CaptureFixture[str], out: Path, *argv: str) -> str:
     ([], "nothing to search"),
     (["--max-speed", "0.05:0.3", "--strategy", "cmaes"], "--strategy cmaes: expected at least two"),
     (["--max-speed", "0.05:0.3", "--vepl", "missing.vepl"], "--vepl: file 'missing.vepl'"),
+    (["--max-speed", "0.05:0.3", "--engine", "dask"], "--engine dask: expected --scheduler"),
+    (["--max-speed", "0.05:0.3", "--scheduler", "tcp://127.0.0.1:1"],
+     "--scheduler is only used with --engine dask"),
 ])
 def test_bad_options_exit_2_with_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str],
                                           argv: list[str], expected: str) -> None:
@@ -90,3 +93,15 @@ def test_a_folder_of_another_search_or_of_other_files_is_refused(
     err = capsys.readouterr().err
     assert code == EXIT_BAD_INPUT and "not a REI search folder" in err
     assert sorted(p.name for p in files.iterdir()) == ["notes.txt"]
+
+
+def test_rei_campaign_refuses_the_same_engine_options(tmp_path: Path,
+                                                      capsys: pytest.CaptureFixture[str]
+                                                      ) -> None:
+    """`rei campaign` and `rei search` share the engine options and their checks."""
+    examples = Path(__file__).resolve().parents[2] / "examples"
+    for extra, expected in ((["--engine", "dask"], "--engine dask: expected --scheduler"),
+                            (["--scheduler", "tcp://127.0.0.1:1"], "--scheduler is only")):
+        code = main(["campaign", str(examples), "-o", str(tmp_path / "out"), *extra])
+        assert code == EXIT_BAD_INPUT and expected in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
