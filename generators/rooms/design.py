@@ -1,5 +1,6 @@
 """Which rows (one level per factor) a suite uses: the full grid, a pairwise covering array,
-or seeded random picks — two strategies over one parameter space.
+or seeded random picks — two strategies over one parameter space — and, for `rei search`,
+the row at a point of the unit cube (``decode_point``).
 
 The pairwise array is built by IPOG (Lei & Tai's In-Parameter-Order): start from every pair
 of the first two factors, then add one factor at a time, first choosing its level in each
@@ -13,11 +14,11 @@ from __future__ import annotations
 import hashlib
 import itertools
 import random
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Literal
 
-from rei.generators.rooms.space import ParameterSpace
+from rei.generators.rooms.space import Interval, ParameterSpace
 
 Strategy = Literal["systematic", "random"]
 Design = Literal["full", "pairwise", "random"]
@@ -125,3 +126,70 @@ def design_suite(space: ParameterSpace, strategy: Strategy, count: int | None, s
     chosen: list[tuple[int, ...]] = full_grid(sizes) if use_full else pairwise(sizes)
     return (SuiteDesign("full" if use_full else "pairwise", tuple(chosen)),
             count if count is not None else len(chosen))
+
+
+# -- rows from points of the unit cube (`rei search`) ---------------------------------------
+
+LAYOUT = "layout"
+"""The search dimension that picks a room's construction stream (object placement, the
+humans' paths, the goals' tiles): a seed, so nearby values give unrelated rooms."""
+LAYOUT_SEEDS = 2**31
+
+
+@dataclass(frozen=True)
+class SearchDimension:
+    """One coordinate of a search point: a factor's levels, a continuous factor's interval,
+    or the layout seed."""
+
+    name: str
+    levels: tuple[str, ...] = ()
+    interval: Interval | None = None
+
+    @property
+    def categorical(self) -> bool:
+        return self.interval is None and self.name != LAYOUT
+
+    def decode(self, u: float) -> str:
+        """The level at coordinate ``u`` in [0, 1]: categorical levels take equal slices."""
+        u = min(max(u, 0.0), 1.0)
+        if self.interval is not None:
+            return self.interval.level(u)
+        count = len(self.levels) if self.name != LAYOUT else LAYOUT_SEEDS
+        index = min(int(u * count), count - 1)
+        return self.levels[index] if self.name != LAYOUT else str(index)
+
+
+@dataclass(frozen=True)
+class SearchRow:
+    """A suite row a search picked: one level per factor (continuous ones may take any value
+    of their interval) and the seed of the room's construction stream."""
+
+    levels: tuple[tuple[str, str], ...]
+    layout: int
+
+
+def search_dimensions(space: ParameterSpace, intervals: Mapping[str, Interval],
+                      layout: int | None) -> tuple[SearchDimension, ...]:
+    """The coordinates of a search over ``space``: every factor with more than one level or
+    with an interval, in FACTOR order, then the layout unless it is fixed."""
+    dims = []
+    for factor in space.factors:
+        if factor.name in intervals:
+            dims.append(SearchDimension(factor.name, interval=intervals[factor.name]))
+        elif len(factor.levels) > 1:
+            dims.append(SearchDimension(factor.name, levels=factor.levels))
+    if layout is None:
+        dims.append(SearchDimension(LAYOUT))
+    return tuple(dims)
+
+
+def decode_point(space: ParameterSpace, dims: Sequence[SearchDimension],
+                 point: Sequence[float], layout: int | None) -> SearchRow:
+    """The row at ``point`` (one coordinate in [0, 1] per dimension); factors that are not
+    dimensions keep their single level."""
+    if len(point) != len(dims):
+        raise ValueError(f"expected a point of {len(dims)} coordinates, found {len(point)}")
+    chosen = {d.name: d.decode(u) for d, u in zip(dims, point, strict=True)}
+    levels = tuple((f.name, chosen.get(f.name, f.levels[0])) for f in space.factors)
+    seed = int(chosen[LAYOUT]) if LAYOUT in chosen else (layout or 0)
+    return SearchRow(levels, seed)

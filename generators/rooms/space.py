@@ -312,3 +312,58 @@ def refuse_impossible(params: RoomParameters) -> None:
         raise ParameterError("humans", f"at most {(floors - params.goals) // 2} humans in a "
                                        f"{w}x{h} room", f"{params.humans}")
 
+
+
+# -- continuous levels, for search ----------------------------------------------------------
+
+CONTINUOUS_FACTORS: Mapping[str, tuple[float, float, bool]] = {
+    "speed": (*WALKING_SPEEDS, False),
+    "spacing": (0.0, float(2 * MAX_SIDE), True),
+    "max_speed": (0.0, MAX_ROBOT_SPEED, True),
+}
+"""Factors whose level is a number, so a row may carry any value in a range (`rei search`
+writes ``LOW:HIGH`` for them): (lowest, highest, lowest excluded). The numbers are the same
+limits ``parse_row`` applies, so an interval inside them only ever gives parseable levels."""
+
+LEVEL_DECIMALS = 3
+"""A continuous level is written with this many decimals: the same bytes on every machine."""
+
+
+@dataclass(frozen=True)
+class Interval:
+    """A continuous factor's range of values, both ends included."""
+
+    factor: str
+    low: float
+    high: float
+
+    def level(self, fraction: float) -> str:
+        """The level at ``fraction`` (0..1) of the way from low to high, rounded to
+        LEVEL_DECIMALS and kept inside the interval."""
+        value = self.low + min(max(fraction, 0.0), 1.0) * (self.high - self.low)
+        value = min(max(round(value, LEVEL_DECIMALS), self.low), self.high)
+        text = f"{value:.{LEVEL_DECIMALS}f}".rstrip("0").rstrip(".")
+        return text or "0"
+
+
+def is_interval(text: str) -> bool:
+    """A level written LOW:HIGH (a range to search) rather than one value."""
+    return ":" in text
+
+
+def parse_interval(name: str, text: str) -> Interval:
+    """``LOW:HIGH`` for a continuous factor, checked against the factor's own limits."""
+    option = name.replace("_", "-")
+    if name not in CONTINUOUS_FACTORS:
+        numeric = ", ".join(n.replace("_", "-") for n in CONTINUOUS_FACTORS)
+        raise ParameterError(option, f"levels without ':' (only {numeric} take a LOW:HIGH "
+                                     f"range)", f"'{text}'")
+    low_limit, high_limit, low_open = CONTINUOUS_FACTORS[name]
+    parts = text.split(":")
+    if len(parts) != 2:
+        raise ParameterError(option, "a range LOW:HIGH, e.g. 0.5:1.4", f"'{text}'")
+    low = _float(option, parts[0].strip(), low_limit, high_limit, low_open)
+    high = _float(option, parts[1].strip(), low_limit, high_limit, low_open)
+    if not low < high:
+        raise ParameterError(option, "a range LOW:HIGH with LOW below HIGH", f"'{text}'")
+    return Interval(name, low, high)

@@ -233,6 +233,32 @@ class CampaignStore:
         return write_tables(self.root, self.records())
 
 
+def extend_plan(root: Path, plan: CampaignPlan) -> None:
+    """Grow the campaign in ``root`` to ``plan``, whose first runs must be the stored plan's
+    runs unchanged (`rei search` plans one batch of candidates at a time); create the folder
+    and its manifest when there is none. ``CampaignStore.open`` then accepts ``plan``.
+    Anything but a longer plan with the same beginning is refused as ``open`` refuses it."""
+    manifest = root / MANIFEST
+    if root.exists() and not root.is_dir():
+        raise CampaignError(f"{root}: expected a campaign folder, found a file")
+    root.mkdir(parents=True, exist_ok=True)
+    with _lock(root):
+        if not manifest.is_file():
+            data: dict[str, Any] = {"format": FORMAT, "version": STORE_VERSION,
+                                    "plan": plan.to_json(), "sessions": []}
+        else:
+            data = _check_manifest(manifest)
+            stored = CampaignPlan.from_json(data["plan"])
+            head = CampaignPlan(plan.version, plan.seed, plan.repeat,
+                                plan.runs[:len(stored.runs)])
+            if stored == plan:
+                return
+            if head != stored:
+                raise CampaignError(_plan_difference(manifest, stored, head))
+            data["plan"] = plan.to_json()
+        write_atomic(manifest, _dumps(data))
+
+
 def _lock(root: Path) -> IO[bytes]:
     path = root / ".lock"
     # Neither truncated nor replaced (another campaign may hold a lock on this very file);

@@ -21,8 +21,12 @@ import threading
 from collections.abc import Iterator
 from pathlib import Path
 from types import FrameType
+from typing import TYPE_CHECKING
 
 from rei.lang.cli_support import EXIT_INTERRUPTED
+
+if TYPE_CHECKING:
+    from rei.runtime.campaign.engines import CampaignEngine
 
 EXIT_STATUS_HELP = ("Exit status: 0 every mission passes (--pass-rate), 1 a mission fails, is "
                     "flaky or is inconclusive (none failed, one could not be decided), 2 bad "
@@ -93,8 +97,6 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                         help=".mission files, folders with .mission files, or a suite index .csv")
     parser.add_argument("-o", "--output", type=Path, required=True, metavar="DIR",
                         help="campaign folder (created; an existing one is resumed)")
-    parser.add_argument("--workers", type=positive_int, default=None, metavar="N",
-                        help="runs at once with the local engine (default: number of CPUs)")
     parser.add_argument("--repeat", type=positive_int, default=1, metavar="K",
                         help="runs per mission, each with its own derived seed (default 1)")
     parser.add_argument("--seed", type=int, default=0, metavar="S",
@@ -112,13 +114,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                         help="module of the specification's user functions, passed to `rei run`")
     parser.add_argument("--duration", type=_seconds, default=None, metavar="S",
                         help="simulated seconds per run, passed to `rei run` (smoke tests)")
-    parser.add_argument("--timeout", type=_seconds, default=None, metavar="S",
-                        help="wall-clock watchdog per run (default: 10 x --duration + 30 s, "
-                             "at least 60 s; 30 min without --duration)")
-    parser.add_argument("--engine", choices=("local", "dask"), default="local",
-                        help="local worker processes (default) or a Dask distributed cluster")
-    parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                        help="Dask scheduler address, e.g. tcp://10.0.0.5:8786 (--engine dask)")
+    add_engine_arguments(parser)
     parser.add_argument("--pass-rate", type=_rate, default=1.0, metavar="P",
                         help="required pass rate of each mission, 0..1 (default 1: every run "
                              "must pass). A mission passes when the 95%% Wilson interval of its "
@@ -147,6 +143,34 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.set_defaults(func=run)
 
 
+def add_engine_arguments(parser: argparse.ArgumentParser) -> None:
+    """--workers, --timeout, --engine and --scheduler: where the runs of `rei campaign` and
+    `rei search` execute (``engine_of`` reads them)."""
+    parser.add_argument("--workers", type=positive_int, default=None, metavar="N",
+                        help="runs at once with the local engine (default: number of CPUs)")
+    parser.add_argument("--timeout", type=_seconds, default=None, metavar="S",
+                        help="wall-clock watchdog per run (default: 10 x --duration + 30 s, "
+                             "at least 60 s; 30 min without --duration)")
+    parser.add_argument("--engine", choices=("local", "dask"), default="local",
+                        help="local worker processes (default) or a Dask distributed cluster")
+    parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                        help="Dask scheduler address, e.g. tcp://10.0.0.5:8786 (--engine dask)")
+
+
+def engine_of(args: argparse.Namespace) -> CampaignEngine:
+    """The campaign engine the options of ``add_engine_arguments`` ask for."""
+    from rei.runtime.campaign import CampaignError, DaskEngine, LocalEngine  # noqa: PLC0415
+
+    if args.engine == "dask":
+        if not args.scheduler:
+            raise CampaignError("--engine dask: expected --scheduler ADDRESS "
+                                "(start one with `dask scheduler`)")
+        return DaskEngine(args.scheduler, timeout=args.timeout)
+    if args.scheduler:
+        raise CampaignError("--scheduler is only used with --engine dask")
+    return LocalEngine(args.workers or os.cpu_count() or 1, timeout=args.timeout)
+
+
 def _faults(args: argparse.Namespace) -> tuple[str, ...]:
     """The --fault entries as written for every run, checked before any run starts: a
     signal the specification does not define would fail every run alike."""
@@ -163,14 +187,7 @@ def _faults(args: argparse.Namespace) -> tuple[str, ...]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rei.runtime.campaign import (  # noqa: PLC0415
-        CampaignError,
-        DaskEngine,
-        LocalEngine,
-        plan_campaign,
-        run_campaign,
-    )
-    from rei.runtime.campaign.engines import CampaignEngine  # noqa: PLC0415
+    from rei.runtime.campaign import plan_campaign, run_campaign  # noqa: PLC0415
     from rei.runtime.campaign.plan import STATIC  # noqa: PLC0415
     from rei.runtime.campaign.provenance import collect  # noqa: PLC0415
 
@@ -179,16 +196,7 @@ def run(args: argparse.Namespace) -> int:
                          static_dir=args.output / STATIC if args.pair_static else None,
                          variation=not args.no_variation, functions=args.functions,
                          record=args.record, faults=_faults(args))
-    engine: CampaignEngine
-    if args.engine == "dask":
-        if not args.scheduler:
-            raise CampaignError("--engine dask: expected --scheduler ADDRESS "
-                                "(start one with `dask scheduler`)")
-        engine = DaskEngine(args.scheduler, timeout=args.timeout)
-    else:
-        if args.scheduler:
-            raise CampaignError("--scheduler is only used with --engine dask")
-        engine = LocalEngine(args.workers or os.cpu_count() or 1, timeout=args.timeout)
+    engine = engine_of(args)
     provenance = {**collect(["rei", *sys.argv[1:]] if sys.argv else [], engine.describe(),
                             args.controller, args.controller_version),
                   "pass_rate": args.pass_rate}

@@ -1,0 +1,239 @@
+"""Search benchmark: how many of bench/bugs.py's defects does `rei search` find, per strategy,
+against random sampling on the same budget of simulations?
+
+For every navigator (the correct ``reference`` and the defects of bench/defects chosen with
+``--only``), every strategy (``--strategies``, random always included: it is the baseline)
+and every seed, one search of ``--budget`` simulations over the ``--preset`` rooms (layout
+searched, optionally ``--speed LOW:HIGH`` of the humans as a continuous range; the default
+objective: the smallest margin of any requirement). A defect is *found* by a search when one
+of its candidates fails and the correct navigator passes that same candidate (same files,
+same run seed: one extra run), so a candidate no navigator could pass is never counted as a
+detection. The reference's searches must find nothing (false alarms).
+
+Reported per strategy: defects found per search seed (mean and spread), the rate per 1,000
+simulations (found / simulations run x 1,000: an extrapolation from the budget actually run,
+labelled so), the ratio to random's rate measured in the same invocation, simulations to the
+first confirmed failure, distinct descriptor cells among failing candidates (diversity), and
+the reference's false alarms. Shrinking (wp-shrink's `rei shrink`) is a hook: the "shrunk"
+column is filled when that command is installed, else "n/a".
+
+Writes bench/out/search/search.json; ``--markdown`` prints the tables for bench/RESULTS.md.
+CPU seconds (this process and its children) are reported with the load average, since the
+machine is shared.
+
+Usage: python bench/search.py [--only NAME ...] [--strategies S ...] [--seeds S ...]
+       [--budget N] [--batch K] [--workers N] [--preset small] [--speed LOW:HIGH]
+       [--factor NAME=LEVELS ...] [--markdown] [--out DIR]
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import io
+import json
+import os
+import resource
+import shutil
+import statistics
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+REPO = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(REPO))
+os.environ["PYTHONPATH"] = os.pathsep.join(
+    p for p in (str(REPO), os.environ.get("PYTHONPATH", "")) if p)
+
+from bench.defects import DEFECTS  # noqa: E402
+from rei.runtime.campaign import LocalEngine, plan_campaign, run_campaign  # noqa: E402
+from rei.runtime.search import SearchConfig, run_search  # noqa: E402
+from rei.runtime.search.run import CandidateResult  # noqa: E402
+
+REFERENCE = "reference"
+
+
+@dataclass(frozen=True)
+class SearchOutcome:
+    navigator: str
+    strategy: str
+    seed: int
+    simulations: int
+    failing: int
+    confirmed: str
+    """The first failing candidate the reference passes ('' when none)."""
+    first_at: int | None
+    """Simulations run up to and including the confirmed failure."""
+    cells: int
+    """Distinct (measure A, measure B) cells of 0.25 x 0.25 among failing candidates."""
+    requirements: tuple[str, ...]
+    shrunk: float | None
+
+
+def shrink_reduction(mission: Path) -> float | None:
+    """Hook for wp-shrink's `rei shrink`: the size reduction of the shrunk case, when that
+    command exists on this branch (it does not yet: None)."""
+    if importlib.util.find_spec("rei.runtime.commands.shrink") is None:
+        return None
+    return None  # wired when `rei shrink`'s output format lands (see bench/RESULTS.md)
+
+
+def confirm(result: CandidateResult, root: Path, seed: int, workers: int) -> bool:
+    """True when the reference passes the failing candidate (same files and run seed)."""
+    pair = result.candidate.pair
+    assert pair is not None
+    mission = root / "candidates" / pair.mission_file
+    plan = plan_campaign([mission], seed=seed)
+    # plan_campaign derives the run seed from the mission's folder/name, as the search did.
+    check = root.parent / f"{root.name}-confirm-{result.candidate.name}"
+    shutil.rmtree(check, ignore_errors=True)
+    done = run_campaign(plan, check, LocalEngine(workers), {"command": ["bench/search.py"]},
+                        stream=io.StringIO())
+    return all(r.passed for r in done.records)
+
+
+def one_search(nav: str, spec: str, strategy: str, seed: int, args: argparse.Namespace
+               ) -> SearchOutcome:
+    root = args.out / nav / f"{strategy}-{seed}"
+    shutil.rmtree(root, ignore_errors=True)
+    levels = tuple(tuple(f.split("=", 1)) for f in args.factor)
+    levels = (*levels, ("speed", args.speed)) if args.speed else levels
+    config = SearchConfig(preset=args.preset, levels=levels,  # type: ignore[arg-type]
+                          strategy=strategy, seed=seed, budget=args.budget, batch=args.batch,
+                          controller=None if spec == REFERENCE else spec)
+    result = run_search(config, root, LocalEngine(args.workers),
+                        {"command": ["bench/search.py"]}, stream=io.StringIO())
+    ran = [r for r in result.results if r.record is not None]
+    failing = [r for r in ran if r.failed]
+    confirmed, first_at = "", None
+    for r in failing if nav != REFERENCE else []:
+        if confirm(r, root, seed, args.workers):
+            confirmed = r.candidate.name
+            first_at = ran.index(r) + 1
+            break
+    cells = {(int(r.candidate.descriptor(config.measures[0]) / 0.25),
+              int(r.candidate.descriptor(config.measures[1]) / 0.25)) for r in failing}
+    reqs = sorted({v.requirement for r in failing if r.record and r.record.summary
+                   for v in r.record.summary.verdicts if v.status == "fail"})
+    shrunk = None
+    if confirmed:
+        shrunk = shrink_reduction(root / "candidates" / f"{confirmed}_0001.mission")
+    return SearchOutcome(nav, strategy, seed, len(ran), len(failing), confirmed, first_at,
+                         len(cells), tuple(reqs), shrunk)
+
+
+def summarise(outcomes: list[SearchOutcome], strategies: list[str], defects: list[str],
+              seeds: list[int]) -> dict[str, Any]:
+    rows: dict[str, Any] = {}
+    for strategy in strategies:
+        mine = [o for o in outcomes if o.strategy == strategy and o.navigator != REFERENCE]
+        per_seed = [sum(bool(o.confirmed) for o in mine if o.seed == s) for s in seeds]
+        sims = sum(o.simulations for o in mine)
+        found = sum(bool(o.confirmed) for o in mine)
+        firsts = [o.first_at for o in mine if o.first_at is not None]
+        alarms = sum(o.failing for o in outcomes
+                     if o.strategy == strategy and o.navigator == REFERENCE)
+        rows[strategy] = {
+            "found_per_seed": per_seed,
+            "mean": statistics.mean(per_seed) if per_seed else 0.0,
+            "spread": statistics.pstdev(per_seed) if len(per_seed) > 1 else 0.0,
+            "simulations": sims,
+            "per_1000": 1000.0 * found / sims if sims else 0.0,
+            "first_failure_median": statistics.median(firsts) if firsts else None,
+            "failing_cells": sum(o.cells for o in mine),
+            "defects_found": sorted({o.navigator for o in mine if o.confirmed}),
+            "false_alarms": alarms,
+        }
+    base = rows.get("random", {}).get("per_1000") or 0.0
+    for strategy in strategies:
+        rows[strategy]["ratio_to_random"] = (rows[strategy]["per_1000"] / base
+                                             if base else None)
+    return rows
+
+
+def table(summary: dict[str, Any], outcomes: list[SearchOutcome], defects: list[str]) -> str:
+    lines = ["| strategy | defects found per seed (mean ± sd) | per 1,000 simulations "
+             "(extrapolated) | ratio to random | median simulations to first failure | "
+             "failing descriptor cells | reference false alarms |",
+             "|---|---|---|---|---|---|---|"]
+    for name, row in summary.items():
+        ratio = f"{row['ratio_to_random']:.2f}" if row["ratio_to_random"] is not None else "—"
+        first = row["first_failure_median"]
+        lines.append(f"| {name} | {row['found_per_seed']} ({row['mean']:.2f} ± "
+                     f"{row['spread']:.2f}) | {row['per_1000']:.0f} | {ratio} | "
+                     f"{first if first is not None else '—'} | {row['failing_cells']} | "
+                     f"{row['false_alarms']} |")
+    lines += ["", "| defect | " + " | ".join(summary) + " | failed requirements | shrunk |",
+              "|---|" + "---|" * (len(summary) + 2)]
+    for nav in defects:
+        cells = []
+        for strategy in summary:
+            mine = [o for o in outcomes if o.navigator == nav and o.strategy == strategy]
+            cells.append(f"{sum(bool(o.confirmed) for o in mine)}/{len(mine)}")
+        reqs = sorted({q for o in outcomes if o.navigator == nav for q in o.requirements})
+        shrunk = [o.shrunk for o in outcomes if o.navigator == nav and o.shrunk is not None]
+        lines.append(f"| {nav} | " + " | ".join(cells) + f" | {', '.join(reqs) or '—'} | "
+                     + (f"{statistics.mean(shrunk):.0%}" if shrunk else "n/a") + " |")
+    return "\n".join(lines)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--only", nargs="+", default=["stale-scans", "control-latency",
+                                                      "blind-sector"], metavar="NAME",
+                        help="defects to search for (default: the three the default "
+                             "campaign misses); the reference always runs")
+    parser.add_argument("--strategies", nargs="+", default=["random", "tpe", "map-elites"],
+                        metavar="S", help="strategies (random is always added)")
+    parser.add_argument("--seeds", type=int, nargs="+", default=[1, 2], metavar="S")
+    parser.add_argument("--budget", type=int, default=16, help="simulations per search")
+    parser.add_argument("--batch", type=int, default=4, help="candidates per batch")
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--preset", default="small")
+    parser.add_argument("--speed", default=None, metavar="LOW:HIGH",
+                        help="search the humans' walking speed in this range (default: the "
+                             "preset's levels; 0.5:1.4 lets search find fast social humans "
+                             "that walk into even the correct navigator)")
+    parser.add_argument("--factor", action="append", default=[], metavar="NAME=LEVELS",
+                        help="a factor's levels or LOW:HIGH range, as `rei search --NAME` "
+                             "takes them (e.g. stressor=emerge)")
+    parser.add_argument("--markdown", action="store_true")
+    parser.add_argument("--out", type=Path, default=REPO / "bench" / "out" / "search")
+    args = parser.parse_args()
+    strategies = ["random", *[s for s in args.strategies if s != "random"]]
+    known = {d.name: d.spec for d in DEFECTS}
+    unknown = sorted(set(args.only) - set(known))
+    if unknown:
+        raise SystemExit(f"--only: unknown defect(s) {', '.join(unknown)}")
+    navs = [(REFERENCE, REFERENCE), *[(n, known[n]) for n in args.only]]
+    started, load = time.perf_counter(), os.getloadavg()
+    outcomes = []
+    for seed in args.seeds:
+        for nav, spec in navs:
+            for strategy in strategies:
+                o = one_search(nav, spec, strategy, seed, args)
+                outcomes.append(o)
+                print(f"seed {seed} {nav} {strategy}: {o.failing}/{o.simulations} failing, "
+                      f"confirmed {o.confirmed or '-'} ({time.perf_counter() - started:.0f} s)",
+                      file=sys.stderr)
+    own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(
+        resource.RUSAGE_CHILDREN)
+    summary = summarise(outcomes, strategies, args.only, args.seeds)
+    settings = {"seeds": args.seeds, "budget": args.budget, "batch": args.batch,
+                "preset": args.preset, "workers": args.workers, "defects": args.only,
+                "strategies": strategies, "wall_seconds": time.perf_counter() - started,
+                "cpu_seconds": own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime,
+                "load_average_at_start": load, "load_average_at_end": os.getloadavg()}
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "search.json").write_text(json.dumps(
+        {"settings": settings, "summary": summary,
+         "searches": [o.__dict__ for o in outcomes]}, indent=1) + "\n", encoding="utf-8")
+    print(json.dumps(settings))
+    print(table(summary, outcomes, args.only))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,107 @@
+"""`rei search` refuses bad input with exit status 2 and one line naming the option, what was
+expected and what was found, before any folder or run exists; and it never writes into a
+folder that holds something else (another search, or files that are not a search)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from rei.lang.cli_support import EXIT_BAD_INPUT
+from rei.runtime.cli import main
+from rei.runtime.search import SearchConfig
+
+ONE_ROOM = ["--shape", "rect", "--size", "5x3", "--objects", "0", "--mix", "furniture",
+            "--humans", "0", "--goals", "2", "--spacing", "2", "--cycles", "1",
+            "--behaviour", "yielding", "--heading", "no", "--max-speed", "none",
+            "--layout", "1"]
+"""Every factor of the small preset at one level and the layout fixed: nothing left to search
+until a test adds a range."""
+
+
+def _refused(capsys: pytest.CaptureFixture[str], out: Path, *argv: str) -> str:
+    code = main(["search", "-o", str(out), *argv])
+    err = capsys.readouterr().err.strip()
+    assert code == EXIT_BAD_INPUT, err
+    assert "Traceback" not in err and len(err.splitlines()) == 1, err
+    assert not out.exists(), "a refused search must not create its folder"
+    return err
+
+
+@pytest.mark.parametrize(("argv", "expected"), [
+    (["--max-speed", "nan:0.3"], "--max-speed: expected a finite number in (0, 10], found 'nan'"),
+    (["--max-speed", "0.05:inf"], "--max-speed: expected a finite number in (0, 10], found 'inf'"),
+    (["--speed", "1.3:0.6"], "--speed: expected a range LOW:HIGH with LOW below HIGH"),
+    (["--size", "5x3:6x4"], "--size: expected levels without ':'"),
+    (["--max-speed", "0.05:0.3", "--budget", "0"],
+     "--budget: expected a number of simulations of at least 1, found 0"),
+    (["--max-speed", "0.05:0.3", "--batch", "0"], "--batch: expected at least 1, found 0"),
+    (["--max-speed", "0.05:0.3", "--requirement", "SPEED_LIMT"],
+     "--requirement: expected a requirement with a margin"),
+    (["--max-speed", "0.05:0.3", "--measures", "tortuosity"],
+     "--measures: expected two descriptor names"),
+    (["--max-speed", "0.05:0.3", "--measures", "tortuosity,colour"],
+     "--measures: expected two of"),
+    ([], "nothing to search"),
+    (["--max-speed", "0.05:0.3", "--strategy", "cmaes"], "--strategy cmaes: expected at least two"),
+    (["--max-speed", "0.05:0.3", "--vepl", "missing.vepl"], "--vepl: file 'missing.vepl'"),
+    (["--max-speed", "0.05:0.3", "--engine", "dask"], "--engine dask: expected --scheduler"),
+    (["--max-speed", "0.05:0.3", "--scheduler", "tcp://127.0.0.1:1"],
+     "--scheduler is only used with --engine dask"),
+])
+def test_bad_options_exit_2_with_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                          argv: list[str], expected: str) -> None:
+    err = _refused(capsys, tmp_path / "out", *ONE_ROOM, *argv)
+    assert expected in err
+
+
+def test_a_misspelt_requirement_gets_a_suggestion(tmp_path: Path,
+                                                  capsys: pytest.CaptureFixture[str]) -> None:
+    err = _refused(capsys, tmp_path / "out", *ONE_ROOM, "--max-speed", "0.05:0.3",
+                   "--requirement", "SPEED_LIMT")
+    assert "SPEED_LIMIT" in err.split("found")[-1]
+
+
+def test_unknown_strategy_and_factor_are_refused_by_the_parser(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    for argv in (["--strategy", "annealing"], ["--colour", "red"]):
+        with pytest.raises(SystemExit) as stop:
+            main(["search", "-o", str(tmp_path / "out"), *argv])
+        assert stop.value.code == EXIT_BAD_INPUT
+        err = capsys.readouterr().err
+        assert ("invalid choice: 'annealing'" in err) or ("unrecognized arguments: --colour"
+                                                           in err)
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_folder_of_another_search_or_of_other_files_is_refused(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "search.json").write_text(json.dumps(SearchConfig(seed=99).to_json()))
+    code = main(["search", "-o", str(other), *ONE_ROOM, "--max-speed", "0.05:0.3"])
+    err = capsys.readouterr().err
+    assert code == EXIT_BAD_INPUT and "holds a different search" in err
+    assert sorted(p.name for p in other.iterdir()) == ["search.json"]
+
+    files = tmp_path / "files"
+    files.mkdir()
+    (files / "notes.txt").write_text("mine")
+    code = main(["search", "-o", str(files), *ONE_ROOM, "--max-speed", "0.05:0.3"])
+    err = capsys.readouterr().err
+    assert code == EXIT_BAD_INPUT and "not a REI search folder" in err
+    assert sorted(p.name for p in files.iterdir()) == ["notes.txt"]
+
+
+def test_rei_campaign_refuses_the_same_engine_options(tmp_path: Path,
+                                                      capsys: pytest.CaptureFixture[str]
+                                                      ) -> None:
+    """`rei campaign` and `rei search` share the engine options and their checks."""
+    examples = Path(__file__).resolve().parents[2] / "examples"
+    for extra, expected in ((["--engine", "dask"], "--engine dask: expected --scheduler"),
+                            (["--scheduler", "tcp://127.0.0.1:1"], "--scheduler is only")):
+        code = main(["campaign", str(examples), "-o", str(tmp_path / "out"), *extra])
+        assert code == EXIT_BAD_INPUT and expected in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
