@@ -22,7 +22,7 @@ from typing import Any, Literal
 from rei.generators.output import open_output
 from rei.runtime.cache import CACHE_VARIABLE
 from rei.runtime.campaign.plan import RunSpec
-from rei.runtime.processes import child_status, start_child, stop_child
+from rei.runtime.processes import child_status, one_math_thread, start_child, stop_child
 from rei.runtime.results import RunSummary
 
 RunStatus = Literal["ran", "crashed", "hung", "interrupted"]
@@ -150,16 +150,12 @@ def execute_run(spec: RunSpec, work_dir: Path, *, timeout: float | None = None,
     return RunResult(spec.run_id, "ran", code, wall, summary, "")
 
 
-THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
-
-
 def run_environment(cache: Path | None = None) -> dict[str, str]:
     """The environment of a run: one math-library thread per run unless the user chose
     otherwise (parallel runs each spawning a thread per core would fight over the cores), and
     the campaign's cache of generated artifacts, if any (a user's $REI_CACHE_DIR wins)."""
     env = dict(os.environ)
-    for name in THREAD_VARIABLES:
-        env.setdefault(name, "1")
+    one_math_thread(env)
     if cache is not None and not env.get(CACHE_VARIABLE):
         env[CACHE_VARIABLE] = os.path.abspath(cache)
     return env
