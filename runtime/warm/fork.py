@@ -236,6 +236,22 @@ def _standard_streams(fds: list[int], pass_fds: tuple[int, ...]) -> None:
         start = max(start, fd + 1)
     for fd in pass_fds:
         os.set_inheritable(fd, True)
+    # A parent may have replaced sys.stdout (a test runner capturing it, the robot's host
+    # pointing it at stderr): an interpreter's streams write to 0, 1 and 2.
+    for name, fd, mode in (("stdin", 0, "r"), ("stdout", 1, "w"), ("stderr", 2, "w")):
+        if _descriptor(getattr(sys, name)) != fd:
+            stream = open(fd, mode, closefd=False, encoding="utf-8",  # noqa: SIM115
+                          errors="backslashreplace" if fd == 2 else "strict",
+                          buffering=1 if fd != 0 else -1)
+            setattr(sys, name, stream)
+            setattr(sys, f"__{name}__", stream)
+
+
+def _descriptor(stream: object) -> int | None:
+    try:
+        return int(stream.fileno())  # type: ignore[attr-defined]
+    except (AttributeError, OSError, ValueError):
+        return None
 
 
 def _max_fd() -> int:
