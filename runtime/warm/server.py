@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import gc
 import importlib
 import json
 import os
@@ -277,6 +278,10 @@ def preload() -> None:
     for language in LANGUAGES:
         metamodel(language)
     code_fingerprint()  # cached: the children inherit it (checked fresh before each fork)
+    # What is imported now lives as long as the server: out of the collector's sight, so its
+    # passes in the children do not touch (and copy) those pages of the shared memory.
+    gc.collect()
+    gc.freeze()
 
 
 def _run(request: dict[str, Any]) -> int:

@@ -184,17 +184,19 @@ def test_a_hung_warm_run_is_killed_and_the_server_serves_the_next(
             hung = execute_run(spec_of(EXAMPLES / "simple_wall", 60.0,
                                        "hanging_controllers:Hanging"),
                                tmp_path / "hung", timeout=2.0, warm=workers)
-            first = servers_of(os.getpid())
+            servers.append(servers_of(os.getpid()))
             after = execute_run(spec_of(EXAMPLES / "simple_wall", 1.0), tmp_path / "after",
                                 warm=workers)
-            assert servers_of(os.getpid()) == first  # the same server, reused
+            servers.append(servers_of(os.getpid()))
             return [hung, after]
 
+        servers: list[set[int]] = []
         thread, results = in_thread(work)
         thread.join(SAFETY_LIMIT)
     finally:
         workers.close()
     hung, after = results[0]
+    assert servers[0] and servers[0] == servers[1]  # the same server forked the next run
     assert hung.status == "hung" and "watchdog" in hung.message
     assert after.status == "ran", after.message
 
@@ -244,20 +246,23 @@ def test_changed_rei_code_is_never_served_from_a_warm_server(
         def work() -> list[RunResult]:
             first = execute_run(spec_of(EXAMPLES / "simple_wall", 1.0), tmp_path / "first",
                                 warm=workers)
-            old = servers_of(os.getpid())
+            servers.append(servers_of(os.getpid()))
             # An edit of REI's code (its modification time is what the fingerprint sees).
             os.utime(source, ns=(before.st_atime_ns, before.st_mtime_ns + 10**9))
             second = execute_run(spec_of(EXAMPLES / "simple_wall", 1.0), tmp_path / "second",
                                  warm=workers)
-            assert old and not old & servers_of(os.getpid()), "the stale server was kept"
+            servers.append(servers_of(os.getpid()))
             return [first, second]
 
+        servers: list[set[int]] = []
         thread, results = in_thread(work)
         thread.join(SAFETY_LIMIT)
     finally:
         os.utime(source, ns=(before.st_atime_ns, before.st_mtime_ns))
         workers.close()
     first, second = results[0]
+    assert servers[0] and servers[1], servers
+    assert not servers[0] & servers[1], "the stale server forked the run after the edit"
     assert first.status == second.status == "ran", second.message
 
 
