@@ -205,6 +205,23 @@ def run_environment(cache: Path | None = None) -> dict[str, str]:
     return env
 
 
+WARM_ATTRIBUTE = "rei_warm_workers"
+"""Where a Dask worker keeps the fork servers of its threads."""
+
+
+def _dask_worker_warm() -> WarmWorkers | None:
+    """The fork servers of the Dask worker running this task (one per worker thread, each
+    dying with its thread, as the local engine's), or None outside a Dask worker."""
+    try:
+        from distributed import get_worker  # noqa: PLC0415
+        worker: Any = get_worker()
+    except (ImportError, ValueError):
+        return None
+    # setdefault: one object even when two of the worker's threads ask at once
+    warm = vars(worker).setdefault(WARM_ATTRIBUTE, WarmWorkers())
+    return warm if isinstance(warm, WarmWorkers) else None
+
+
 def execute_run_remote(spec: RunSpec, work_dir: str, timeout: float | None = None,
                        runner: Sequence[str] | None = None) -> RunResult:
     """The Dask task: run in a private folder on the worker, then deliver the run's files.
@@ -224,7 +241,8 @@ def execute_run_remote(spec: RunSpec, work_dir: str, timeout: float | None = Non
     shared = target.is_dir()
     with tempfile.TemporaryDirectory(prefix="rei-run-") as tmp:
         work = Path(tmp) / spec.run_id
-        result = execute_run(spec, work, timeout=timeout, runner=program)
+        result = execute_run(spec, work, timeout=timeout, runner=program,
+                             warm=_dask_worker_warm())
         if shared:
             if target.is_dir():
                 for entry in sorted(work.iterdir()):
