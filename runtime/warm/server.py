@@ -336,12 +336,12 @@ def _wait(sock: socket.socket, child: Child) -> int | None:
     pidfd = os.pidfd_open(child.pid)
     try:
         while True:
-            ready, _, _ = select.select([sock, pidfd], [], [])
+            ready, _, _ = select.select([sock.fileno(), pidfd], [], [])
             if pidfd in ready:
                 status = child_status(child)  # its group swept, then reaped
                 if status is not None:
                     return status
-            if sock in ready:
+            if sock.fileno() in ready:
                 message = _receive(sock, None)
                 if message is None:
                     stop_child(child)
