@@ -20,12 +20,15 @@ machine do not count, but slow it. With --sample N (N > 0) also the headline a u
 with a cluster: N whole runs of the medium preset on 2 workers, before and after, and 1,000
 runs extrapolated from them (wall: N runs' wall x 1000/N; CPU: CPU s per run x 1000 / 2
 cores, the wall two free cores would take).
-Targets (issue 26): start-up <= 0.25 CPU s per run in a campaign, `rei demo` <= 20 s wall,
-1,000 medium runs on two cores <= 10 minutes.
+With --alone N: `rei run` alone, as a user types it (examples/navigation cut at 0.01 simulated
+s: start-up and outputs), N times before and after alternating, CPU s of its process tree.
+Targets (issue 26): start-up <= 0.25 CPU s per run in a campaign, `rei run` alone <= 0.6 CPU
+s, `rei demo` <= 20 s wall, 1,000 medium runs on two cores <= 10 minutes.
 
 Usage: python bench/campaign.py [--count N] [--repeat K] [--duration S] [--rounds R] [--seed S]
        python bench/campaign.py --figures [--compare warm|cache] [--count N] [--repeat K]
                                 [--rounds R] [--sample N]
+       python bench/campaign.py --alone N [--compare warm|cache]
 """
 
 from __future__ import annotations
@@ -225,6 +228,30 @@ def headline(args: argparse.Namespace, root: Path) -> dict[str, tuple[float, flo
     }
 
 
+def alone(args: argparse.Namespace, root: Path) -> int:
+    """`rei run` alone, before and after (--compare), CPU s of its process tree."""
+    mission = Path(__file__).resolve().parents[1] / "examples" / "navigation" / \
+        "navigation.mission"
+    found: dict[bool, list[float]] = {False: [], True: []}
+    load = os.getloadavg()[0]
+    for i in range(args.alone):
+        for on in (False, True):
+            with setting(args.compare, on):
+                cpu = children_cpu()
+                subprocess.run([sys.executable, "-m", "rei.runtime.cli", "run", str(mission),
+                                "-o", str(root / f"alone-{on}-{i}"), "--duration", "0.01",
+                                "-q"], check=False, stdout=subprocess.DEVNULL)
+                found[on].append(children_cpu() - cpu)
+    name, off = SETTINGS[args.compare]
+    before, after = (statistics.median(found[on]) for on in (False, True))
+    print(f"`rei run` alone (navigation, 0.01 simulated s), median of {args.alone}; load "
+          f"average {load:.2f} before, {os.getloadavg()[0]:.2f} after")
+    print(f"| measure | before ({name}={off}) | after ({args.compare} on) | after / before |")
+    print("|---|---:|---:|---:|")
+    print(f"| `rei run` alone: CPU s | {before:.3f} | {after:.3f} | {after / before:.2f} |")
+    return 0
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--count", type=int, default=8, help="medium rooms (default 8)")
@@ -242,12 +269,16 @@ def main() -> int:
     parser.add_argument("--sample", type=int, default=0, metavar="N",
                         help="with --figures: also N whole medium runs before and after, "
                              "and 1,000 runs extrapolated (default 0: not measured)")
+    parser.add_argument("--alone", type=int, default=0, metavar="N",
+                        help="only `rei run` alone, N times before and after (--compare)")
     parser.add_argument("--startup-duration", type=float, default=0.1, metavar="S",
                         help="with --figures: simulated seconds of the start-up runs")
     args = parser.parse_args()
 
     with tempfile.TemporaryDirectory(prefix="rei-bench-campaign-") as tmp:
         root = Path(tmp)
+        if args.alone > 0:
+            return alone(args, root)
         with redirect_stdout(io.StringIO()):
             status = rei_gen(["rooms", "-o", str(root / "suite"), "--count", str(args.count),
                               "--preset", "medium", "--seed", str(args.seed)])
