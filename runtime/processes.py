@@ -14,7 +14,9 @@ mechanisms, both needed:
   a terminal's Ctrl-C reaches only the parent, which decides what happens to its children.
 
 ``child_status`` tells that a child has ended without reaping it, so its process group id
-cannot be reused before the group is swept. This module must never signal a process or a
+cannot be reused before the group is swept. Given the function the child runs
+(``start_child(..., warm=entry)``) the child is forked instead of executed when that is safe
+(``rei.runtime.warm``): the same guarantees, without a fresh interpreter's imports. This module must never signal a process or a
 process group it did not start.
 """
 
