@@ -16,8 +16,8 @@ mechanisms, both needed:
 ``child_status`` tells that a child has ended without reaping it, so its process group id
 cannot be reused before the group is swept. Given the function the child runs
 (``start_child(..., warm=entry)``) the child is forked instead of executed when that is safe
-(``rei.runtime.warm``): the same guarantees, without a fresh interpreter's imports. This module must never signal a process or a
-process group it did not start.
+(``rei.runtime.warm``): the same guarantees, without a fresh interpreter's imports. This
+module must never signal a process or a process group it did not start.
 """
 
 from __future__ import annotations
