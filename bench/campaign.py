@@ -8,16 +8,27 @@ the 1-worker local campaign measured in the same invocation. Cluster start-up is
 
 Targets (issue 8): scaling efficiency 1 -> 2 workers >= 90 %, Dask overhead < 10 %.
 
-With --figures, instead: what users feel, with the cache of generated worlds and automata off
-(before, REI_CACHE_DIR=off) and on (after), alternating in the same invocation — runs per CPU
-minute of a medium campaign on 2 workers, the start-up CPU seconds per run (the same campaign
-with runs cut after --startup-duration simulated seconds), and the wall time of `rei demo` on 2
-workers. CPU time is every process of the campaign, the runs' children included (getrusage of
-the waited-for children), so other jobs on a shared machine do not count, but slow it.
-Targets (issue 26): start-up <= 0.25 CPU s per run in a campaign, `rei demo` <= 20 s wall.
+With --figures, instead: what users feel, before and after, alternating in the same
+invocation — runs per CPU minute of a medium campaign on 2 workers, the start-up CPU seconds
+per run (the same campaign with runs cut after --startup-duration simulated seconds), and the
+wall time of `rei demo` on 2 workers. --compare warm (default): before = REI_WARM=off (every
+process a fresh interpreter), after = warm workers (rei.runtime.warm: a fork server per worker,
+the simulation and the robot's host forked), the cache on in both; --compare cache: before =
+REI_CACHE_DIR=off, after = the campaign's cache. CPU time is every process of the campaign,
+the runs' children included (getrusage of the waited-for children), so other jobs on a shared
+machine do not count, but slow it. With --sample N (N > 0) also the headline a user compares
+with a cluster: N whole runs of the medium preset on 2 workers, before and after, and 1,000
+runs extrapolated from them (wall: N runs' wall x 1000/N; CPU: CPU s per run x 1000 / 2
+cores, the wall two free cores would take).
+With --alone N: `rei run` alone, as a user types it (examples/navigation cut at 0.01 simulated
+s: start-up and outputs), N times before and after alternating, CPU s of its process tree.
+Targets (issue 26): start-up <= 0.25 CPU s per run in a campaign, `rei run` alone <= 0.6 CPU
+s, `rei demo` <= 20 s wall, 1,000 medium runs on two cores <= 10 minutes.
 
 Usage: python bench/campaign.py [--count N] [--repeat K] [--duration S] [--rounds R] [--seed S]
-       python bench/campaign.py --figures [--count N] [--repeat K] [--rounds R]
+       python bench/campaign.py --figures [--compare warm|cache] [--count N] [--repeat K]
+                                [--rounds R] [--sample N]
+       python bench/campaign.py --alone N [--compare warm|cache]
 """
 
 from __future__ import annotations
@@ -88,35 +99,40 @@ def children_cpu() -> float:
     return usage.ru_utime + usage.ru_stime
 
 
+SETTINGS = {"warm": ("REI_WARM", "off"), "cache": ("REI_CACHE_DIR", "off")}
+"""--compare: the variable that turns the measured feature off (before)."""
+
+
 @contextmanager
-def cache_setting(on: bool) -> Iterator[None]:
-    """REI_CACHE_DIR=off for the runs started meanwhile (before), or unset (after: the
-    campaign's own DIR/cache)."""
-    saved = os.environ.get("REI_CACHE_DIR")
+def setting(compare: str, on: bool) -> Iterator[None]:
+    """The feature off (before: its variable set to off) or on (after: the variable unset)
+    for the processes started meanwhile."""
+    name, off = SETTINGS[compare]
+    saved = os.environ.get(name)
     if on:
-        os.environ.pop("REI_CACHE_DIR", None)
+        os.environ.pop(name, None)
     else:
-        os.environ["REI_CACHE_DIR"] = "off"
+        os.environ[name] = off
     try:
         yield
     finally:
         if saved is None:
-            os.environ.pop("REI_CACHE_DIR", None)
+            os.environ.pop(name, None)
         else:
-            os.environ["REI_CACHE_DIR"] = saved
+            os.environ[name] = saved
 
 
-def measured(plan: CampaignPlan, out: Path, cache: bool) -> tuple[float, float]:
+def measured(plan: CampaignPlan, out: Path, compare: str, on: bool) -> tuple[float, float]:
     """(wall s, CPU s of all processes) of the campaign on 2 local workers."""
-    with cache_setting(cache):
+    with setting(compare, on):
         cpu = children_cpu()
         wall = timed(plan, LocalEngine(2), out)
         return wall, children_cpu() - cpu
 
 
-def demo(out: Path, cache: bool) -> tuple[float, float]:
+def demo(out: Path, compare: str, on: bool) -> tuple[float, float]:
     """(wall s, CPU s) of `rei demo -o OUT --workers 2`, as a user types it."""
-    with cache_setting(cache):
+    with setting(compare, on):
         cpu = children_cpu()
         start = time.perf_counter()
         subprocess.run([sys.executable, "-m", "rei.runtime.cli", "demo", "-o", str(out),
@@ -130,44 +146,109 @@ def figures(args: argparse.Namespace, root: Path) -> int:
     cut = plan_campaign([root / "suite" / "index.csv"], repeat=args.repeat, seed=args.seed,
                         duration=args.startup_duration)
     runs = len(plan.runs)
+    name, off = SETTINGS[args.compare]
     print(f"medium preset: {args.count} rooms x {args.repeat} repeats = {runs} runs on 2 local "
-          f"workers; {os.cpu_count()} CPUs; {args.rounds} rounds; before = REI_CACHE_DIR=off, "
-          f"after = the campaign's cache")
+          f"workers; {os.cpu_count()} CPUs; {args.rounds} rounds; before = {name}={off}, "
+          f"after = {args.compare} on")
     rows: dict[str, list[tuple[float, float]]] = {}
+    loads: list[float] = []
     for i in range(args.rounds):
-        load = os.getloadavg()[0]
-        for cache in (False, True):
-            label = "after" if cache else "before"
+        loads.append(os.getloadavg()[0])
+        for on in (False, True):
+            label = "after" if on else "before"
             rows.setdefault(f"whole {label}", []).append(
-                measured(plan, root / f"whole-{label}-{i}", cache))
+                measured(plan, root / f"whole-{label}-{i}", args.compare, on))
             rows.setdefault(f"start-up {label}", []).append(
-                measured(cut, root / f"cut-{label}-{i}", cache))
-            rows.setdefault(f"demo {label}", []).append(demo(root / f"demo-{label}-{i}", cache))
-        print(f"  round {i + 1} (load average before: {load:.2f}): " + ", ".join(
+                measured(cut, root / f"cut-{label}-{i}", args.compare, on))
+            rows.setdefault(f"demo {label}", []).append(
+                demo(root / f"demo-{label}-{i}", args.compare, on))
+        print(f"  round {i + 1} (load average before: {loads[-1]:.2f}): " + ", ".join(
             f"{k} {v[-1][0]:.1f} s wall / {v[-1][1]:.1f} CPU s" for k, v in rows.items()),
             flush=True)
     simulated = sum(r.summary.duration for r in CampaignStore.read(root / "whole-after-0")[2]
                     if r.summary is not None)
+    sample = headline(args, root) if args.sample > 0 else {}
 
     def best(key: str) -> tuple[float, float]:
         return min(rows[key], key=lambda pair: pair[1])
 
     print()
-    print("| measure | before (no cache) | after (cache) |")
-    print("|---|---:|---:|")
-    for name, key, show in (
-            ("whole runs: runs per CPU minute", "whole", lambda w, c: f"{runs / c * 60:.1f}"),
-            ("whole runs: CPU s per run", "whole", lambda w, c: f"{c / runs:.2f}"),
-            ("whole runs: wall s (2 workers)", "whole", lambda w, c: f"{w:.1f}"),
+    print(f"| measure | before ({name}={off}) | after ({args.compare} on) | after / before |")
+    print("|---|---:|---:|---:|")
+    for title, key, show in (
+            ("whole runs: runs per CPU minute", "whole", lambda w, c: runs / c * 60),
+            ("whole runs: CPU s per run", "whole", lambda w, c: c / runs),
+            ("whole runs: wall s (2 workers)", "whole", lambda w, c: w),
             (f"start-up: CPU s per run (runs cut at {args.startup_duration:g} simulated s)",
-             "start-up", lambda w, c: f"{c / runs:.3f}"),
-            ("`rei demo --workers 2`: wall s", "demo", lambda w, c: f"{w:.1f}"),
-            ("`rei demo --workers 2`: CPU s", "demo", lambda w, c: f"{c:.1f}")):
-        before, after = best(f"{key} before"), best(f"{key} after")
-        print(f"| {name} | {show(*before)} | {show(*after)} |")
+             "start-up", lambda w, c: c / runs),
+            ("`rei demo --workers 2`: wall s", "demo", lambda w, c: w),
+            ("`rei demo --workers 2`: CPU s", "demo", lambda w, c: c)):
+        before, after = show(*best(f"{key} before")), show(*best(f"{key} after"))
+        print(f"| {title} | {before:.3f} | {after:.3f} | {after / before:.2f} |")
+    for title, (before, after) in sample.items():
+        print(f"| {title} | {before:.1f} | {after:.1f} | {after / before:.2f} |")
     print()
     print(f"simulated per run (mean): {simulated / runs:.0f} s; best of {args.rounds} rounds "
-          f"by CPU time")
+          f"by CPU time; load average before each round: "
+          + ", ".join(f"{load:.2f}" for load in loads))
+    return 0
+
+
+def headline(args: argparse.Namespace, root: Path) -> dict[str, tuple[float, float]]:
+    """--sample N whole runs of the medium preset on 2 workers, before and after; the
+    1,000-run figures extrapolated from them."""
+    repeat = 2
+    count = max(1, args.sample // repeat)
+    with redirect_stdout(io.StringIO()):
+        status = rei_gen(["rooms", "-o", str(root / "sample-suite"), "--count", str(count),
+                          "--preset", "medium", "--seed", str(args.seed + 1)])
+    if status != 0:
+        raise SystemExit(status)
+    plan = plan_campaign([root / "sample-suite" / "index.csv"], repeat=repeat, seed=args.seed)
+    runs = len(plan.runs)
+    found: dict[str, list[float]] = {}
+    for on in (False, True):
+        load = os.getloadavg()[0]
+        wall, cpu = measured(plan, root / f"sample-{'after' if on else 'before'}",
+                             args.compare, on)
+        print(f"  sample of {runs} medium runs, {args.compare} {'on' if on else 'off'} (load "
+              f"average before: {load:.2f}): {wall:.1f} s wall, {cpu:.1f} CPU s", flush=True)
+        found.setdefault("wall", []).append(wall)
+        found.setdefault("cpu", []).append(cpu)
+    (wall_before, wall_after), (cpu_before, cpu_after) = found["wall"], found["cpu"]
+    scale = 1000 / runs
+    return {
+        f"sample of {runs} medium runs: wall s (2 workers)": (wall_before, wall_after),
+        f"sample of {runs} medium runs: runs per CPU minute":
+            (runs / cpu_before * 60, runs / cpu_after * 60),
+        "1,000 medium runs, extrapolated from the sample's wall: min":
+            (wall_before * scale / 60, wall_after * scale / 60),
+        "1,000 medium runs on two free cores (CPU s / 2), extrapolated: min":
+            (cpu_before * scale / 2 / 60, cpu_after * scale / 2 / 60),
+    }
+
+
+def alone(args: argparse.Namespace, root: Path) -> int:
+    """`rei run` alone, before and after (--compare), CPU s of its process tree."""
+    mission = Path(__file__).resolve().parents[1] / "examples" / "navigation" / \
+        "navigation.mission"
+    found: dict[bool, list[float]] = {False: [], True: []}
+    load = os.getloadavg()[0]
+    for i in range(args.alone):
+        for on in (False, True):
+            with setting(args.compare, on):
+                cpu = children_cpu()
+                subprocess.run([sys.executable, "-m", "rei.runtime.cli", "run", str(mission),
+                                "-o", str(root / f"alone-{on}-{i}"), "--duration", "0.01",
+                                "-q"], check=False, stdout=subprocess.DEVNULL)
+                found[on].append(children_cpu() - cpu)
+    name, off = SETTINGS[args.compare]
+    before, after = (statistics.median(found[on]) for on in (False, True))
+    print(f"`rei run` alone (navigation, 0.01 simulated s), median of {args.alone}; load "
+          f"average {load:.2f} before, {os.getloadavg()[0]:.2f} after")
+    print(f"| measure | before ({name}={off}) | after ({args.compare} on) | after / before |")
+    print("|---|---:|---:|---:|")
+    print(f"| `rei run` alone: CPU s | {before:.3f} | {after:.3f} | {after / before:.2f} |")
     return 0
 
 
@@ -181,13 +262,23 @@ def main() -> int:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--figures", action="store_true",
                         help="runs per CPU minute, start-up per run and `rei demo` wall time, "
-                             "cache off (before) and on (after)")
+                             "before and after (--compare)")
+    parser.add_argument("--compare", choices=sorted(SETTINGS), default="warm",
+                        help="with --figures: the feature turned off before and on after: "
+                             "warm workers (default) or the cache")
+    parser.add_argument("--sample", type=int, default=0, metavar="N",
+                        help="with --figures: also N whole medium runs before and after, "
+                             "and 1,000 runs extrapolated (default 0: not measured)")
+    parser.add_argument("--alone", type=int, default=0, metavar="N",
+                        help="only `rei run` alone, N times before and after (--compare)")
     parser.add_argument("--startup-duration", type=float, default=0.1, metavar="S",
                         help="with --figures: simulated seconds of the start-up runs")
     args = parser.parse_args()
 
     with tempfile.TemporaryDirectory(prefix="rei-bench-campaign-") as tmp:
         root = Path(tmp)
+        if args.alone > 0:
+            return alone(args, root)
         with redirect_stdout(io.StringIO()):
             status = rei_gen(["rooms", "-o", str(root / "suite"), "--count", str(args.count),
                               "--preset", "medium", "--seed", str(args.seed)])

@@ -14,8 +14,10 @@ mechanisms, both needed:
   a terminal's Ctrl-C reaches only the parent, which decides what happens to its children.
 
 ``child_status`` tells that a child has ended without reaping it, so its process group id
-cannot be reused before the group is swept. This module must never signal a process or a
-process group it did not start.
+cannot be reused before the group is swept. Given the function the child runs
+(``start_child(..., warm=entry)``) the child is forked instead of executed when that is safe
+(``rei.runtime.warm``): the same guarantees, without a fresh interpreter's imports. This
+module must never signal a process or a process group it did not start.
 """
 
 from __future__ import annotations
@@ -26,13 +28,27 @@ import os
 import signal
 import subprocess
 import sys
-from collections.abc import Callable, Mapping, Sequence
-from typing import IO, Any
+from collections.abc import Callable, Mapping, MutableMapping, Sequence
+from typing import IO, Any, Protocol
 
 PR_SET_PDEATHSIG = 1
 """From <linux/prctl.h>."""
 
 Stream = int | IO[bytes] | None
+
+
+class Child(Protocol):
+    """A child started by ``start_child``: a ``subprocess.Popen`` or a forked
+    ``rei.runtime.warm.fork.ForkedChild``, both with this much of Popen's interface."""
+
+    pid: int
+    returncode: int | None
+    stdin: IO[bytes] | None
+    stdout: IO[bytes] | None
+
+    def poll(self) -> int | None: ...
+
+    def wait(self, timeout: float | None = None) -> int: ...
 
 
 PR_SET_DUMPABLE = 4
@@ -46,6 +62,18 @@ def _prctl() -> Any:
                       ctypes.c_ulong]
     prctl.restype = ctypes.c_int
     return prctl
+
+
+THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+"""The math libraries' thread counts (read when numpy is first imported)."""
+
+
+def one_math_thread(env: MutableMapping[str, str]) -> None:
+    """One math-library thread unless the user chose otherwise: a run's arrays are small,
+    parallel runs would each start a thread per core and fight over the cores, and a process
+    with such threads alive cannot fork its children warm (rei.runtime.warm)."""
+    for name in THREAD_VARIABLES:
+        env.setdefault(name, "1")
 
 
 def keep_private() -> None:
@@ -80,14 +108,26 @@ def start_child(argv: Sequence[str], *, stdin: Stream = subprocess.DEVNULL,
                 stdout: Stream = None, stderr: Stream = None,
                 env: Mapping[str, str] | None = None,
                 cwd: str | os.PathLike[str] | None = None,
-                pass_fds: Sequence[int] = ()) -> subprocess.Popen[bytes]:
+                pass_fds: Sequence[int] = (),
+                warm: Callable[[], int | None] | None = None) -> Child:
     """Start ``argv`` as a child that dies with the calling thread (Linux) and leads its own
-    process group; end it with ``stop_child``, or wait for it with ``child_status``."""
+    process group; end it with ``stop_child``, or wait for it with ``child_status``.
+
+    ``warm``: the function ``argv`` runs, in this process's environment (``env`` None);
+    when given and ``rei.runtime.warm.fork.can_fork()`` (Linux, one thread, REI_WARM not
+    off), the child is forked and runs it, its imports already done, instead of a fresh
+    interpreter — the same child otherwise (``rei.runtime.warm``)."""
+    if warm is not None and env is None:
+        from rei.runtime.warm.fork import can_fork, fork_child  # noqa: PLC0415
+
+        if can_fork():
+            return fork_child(warm, stdin=stdin, stdout=stdout, stderr=stderr, cwd=cwd,
+                              pass_fds=pass_fds, die_with_parent=die_with_parent())
     return subprocess.Popen(argv, stdin=stdin, stdout=stdout, stderr=stderr, env=env, cwd=cwd,
                             process_group=0, preexec_fn=die_with_parent(), pass_fds=pass_fds)
 
 
-def child_status(process: subprocess.Popen[bytes]) -> int | None:
+def child_status(process: Child) -> int | None:
     """The child's exit status (negative: the signal that ended it) once it has ended, else
     None. Its whole process group is killed then: nothing it started outlives it."""
     if process.returncode is not None:
@@ -104,7 +144,7 @@ def child_status(process: subprocess.Popen[bytes]) -> int | None:
     return process.wait()
 
 
-def stop_child(process: subprocess.Popen[bytes]) -> int:
+def stop_child(process: Child) -> int:
     """SIGKILL the child and its process group; its exit status once reaped."""
     if process.returncode is None:
         _kill_group(process.pid)

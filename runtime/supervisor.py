@@ -45,11 +45,17 @@ import threading
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from subprocess import Popen
 from types import FrameType
 from typing import Any
 
-from rei.runtime.processes import child_status, keep_private, start_child, stop_child
+from rei.runtime.processes import (
+    Child,
+    child_status,
+    keep_private,
+    one_math_thread,
+    start_child,
+    stop_child,
+)
 
 SETUP_LIMIT = 120.0
 """Wall-clock seconds REI's own set-up or output writing may go without a report."""
@@ -169,7 +175,7 @@ def _signal_name(number: int) -> str:
         return f"signal {number}"
 
 
-def _signal_group(process: Popen[bytes], number: int) -> None:
+def _signal_group(process: Child, number: int) -> None:
     try:
         os.killpg(process.pid, number)
     except (ProcessLookupError, PermissionError):
@@ -180,11 +186,14 @@ def supervise(request: RunRequest) -> SupervisedRun:
     """Run ``request`` in a child process and wait for it under the liveness limits; a child
     that dies or hangs gets summary.json written here (outcome error)."""
     read_end, write_end = os.pipe()
-    argv = [sys.executable, "-m", "rei.runtime.supervisor", str(write_end), request.to_json()]
+    args = [str(write_end), request.to_json()]
+    argv = [sys.executable, "-m", "rei.runtime.supervisor", *args]
     try:
         # The child's stdout is this process's stderr: stdout carries the results `rei run`
-        # prints, never what a controller or a library prints while running.
-        process = start_child(argv, stdout=2, pass_fds=(write_end,))
+        # prints, never what a controller or a library prints while running. Forked when it
+        # can be (rei.runtime.warm): REI's imports are then those this process has made.
+        process = start_child(argv, stdout=2, pass_fds=(write_end,),
+                              warm=lambda: child_main(args))
     finally:
         os.close(write_end)
     watch = _Watch()
@@ -374,6 +383,7 @@ def child_main(argv: list[str]) -> int:
     """The child: run the request, report to the supervisor, return the exit status."""
     fd, text = int(argv[0]), argv[1]
     keep_private()  # the robot under test cannot reach this pipe through /proc
+    one_math_thread(os.environ)  # before numpy is imported; the campaign's runs have it too
     channel = _Channel(fd)
     from rei.lang.errors import LanguageError, ReiError, printable_lines  # noqa: PLC0415
     from rei.runtime.commands.run import execute_request  # noqa: PLC0415

@@ -25,6 +25,7 @@ from rei.runtime.campaign.execute import (
     execute_run_remote,
 )
 from rei.runtime.campaign.plan import RunSpec
+from rei.runtime.warm.server import WarmWorkers
 
 WorkDirFactory = Callable[[RunSpec], Path]
 
@@ -80,6 +81,8 @@ class LocalEngine:
         stop = threading.Event()
         # Threads only wait on the run processes; the isolation is the process per run.
         pool = concurrent.futures.ThreadPoolExecutor(self.workers, thread_name_prefix="rei-run")
+        # A fork server per thread, imports done once per worker (rei.runtime.warm.server).
+        warm = WarmWorkers()
         try:
             pending: dict[concurrent.futures.Future[RunResult], tuple[RunSpec, Path]] = {}
             queue = list(specs)
@@ -89,7 +92,8 @@ class LocalEngine:
                 spec = queue.pop()
                 folder = work_dir(spec)
                 future = pool.submit(execute_run, spec, folder, timeout=self.timeout,
-                                     runner=self.runner, stop=stop, cache=self.cache)
+                                     runner=self.runner, stop=stop, cache=self.cache,
+                                     warm=warm)
                 pending[future] = (spec, folder)
 
             # Submitting only as workers free up keeps partial folders to the running ones.
@@ -106,6 +110,7 @@ class LocalEngine:
         finally:
             stop.set()
             pool.shutdown(wait=True, cancel_futures=True)
+            warm.close()
 
 
 @dataclass(frozen=True)

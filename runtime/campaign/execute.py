@@ -17,13 +17,21 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import IO, Any, Literal
 
 from rei.generators.output import open_output
 from rei.runtime.cache import CACHE_VARIABLE
 from rei.runtime.campaign.plan import RunSpec
-from rei.runtime.processes import child_status, start_child, stop_child
+from rei.runtime.processes import (
+    Child,
+    child_status,
+    one_math_thread,
+    start_child,
+    stop_child,
+)
 from rei.runtime.results import RunSummary
+from rei.runtime.warm import warm_enabled
+from rei.runtime.warm.server import WarmRun, WarmWorkers
 
 RunStatus = Literal["ran", "crashed", "hung", "interrupted"]
 """ran: `rei run` ended by itself and wrote a summary; crashed: it died by a signal from
@@ -98,9 +106,13 @@ def _read_summary(path: Path) -> tuple[dict[str, Any] | None, str]:
 
 def execute_run(spec: RunSpec, work_dir: Path, *, timeout: float | None = None,
                 runner: Sequence[str] = DEFAULT_RUNNER,
-                stop: threading.Event | None = None, cache: Path | None = None) -> RunResult:
+                stop: threading.Event | None = None, cache: Path | None = None,
+                warm: WarmWorkers | None = None) -> RunResult:
     """Run ``spec`` with its output in ``work_dir`` (created); kill it after ``timeout`` s.
     ``cache``: the run reuses generated worlds and automata from there (rei.runtime.cache).
+    ``warm``: the `rei run` process is forked by this thread's fork server, its imports done
+    (rei.runtime.warm.server), when the runner is REI's own and REI_WARM is not off; the
+    same process otherwise, and watched, killed and judged the same way.
 
     Setting ``stop`` kills the run at once and reports it interrupted (the campaign is ending);
     nothing else makes a run interrupted. On Linux the run dies with the calling thread, so
@@ -113,18 +125,21 @@ def execute_run(spec: RunSpec, work_dir: Path, *, timeout: float | None = None,
     with open_output(work_dir / "campaign-stdout.txt", binary=True) as out, \
             open_output(work_dir / "campaign-stderr.txt", binary=True) as err:
         # Its own process group and death with this thread (rei.runtime.processes): Ctrl-C
-        # reaches the campaign, which stops the runs; kill -9 of the campaign kills them too.
-        process = start_child(argv, stdout=out, stderr=err, env=run_environment(cache))
+        # reaches the campaign, which stops the runs; kill -9 of the campaign kills them too
+        # (a warm run dies with its fork server, which dies with this thread).
+        env = run_environment(cache)
+        process = _start(argv, env, out, err, warm if tuple(runner) == DEFAULT_RUNNER
+                         and warm_enabled(env) else None)
         try:
-            code = child_status(process)
+            code = process.status()
             while code is None:
                 if stop is not None and stop.is_set():
-                    stop_child(process)
+                    process.stop()
                     return RunResult(spec.run_id, "interrupted", None,
                                      time.monotonic() - started, None,
                                      "stopped by the campaign")
                 if time.monotonic() - started > limit:
-                    stop_child(process)
+                    process.stop()
                     return RunResult(spec.run_id, "hung", None, time.monotonic() - started,
                                      None, f"watchdog: no result after {limit:g} s wall-clock; "
                                            f"killed")
@@ -132,16 +147,18 @@ def execute_run(spec: RunSpec, work_dir: Path, *, timeout: float | None = None,
                     stop.wait(POLL_SECONDS)
                 else:
                     time.sleep(POLL_SECONDS)
-                code = child_status(process)
+                code = process.status()
         except BaseException:
-            stop_child(process)  # the campaign is stopping: never leave a run behind
+            process.stop()  # the campaign is stopping: never leave a run behind
             raise
     wall = time.monotonic() - started
     if code < 0:
         # Whoever sent it, it was not the campaign (that case returned above): the run is over.
         detail = _tail(work_dir / "campaign-stderr.txt")
+        lost = (" (its warm worker, the fork server, died, and the run with it)"
+                if isinstance(process, WarmRun) and process.lost else "")
         return RunResult(spec.run_id, "crashed", code, wall, None,
-                         death_reason(code) + (f": {detail}" if detail else ""))
+                         death_reason(code) + lost + (f": {detail}" if detail else ""))
     summary, problem = _read_summary(work_dir / "summary.json")
     if summary is None:
         detail = _tail(work_dir / "campaign-stderr.txt")
@@ -150,7 +167,31 @@ def execute_run(spec: RunSpec, work_dir: Path, *, timeout: float | None = None,
     return RunResult(spec.run_id, "ran", code, wall, summary, "")
 
 
-THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+class _ColdRun:
+    """A run started as a fresh interpreter, with a ``WarmRun``'s two calls."""
+
+    def __init__(self, process: Child) -> None:
+        self.process = process
+
+    def status(self) -> int | None:
+        return child_status(self.process)
+
+    def stop(self) -> int:
+        return stop_child(self.process)
+
+
+def _start(argv: list[str], env: dict[str, str], out: IO[bytes], err: IO[bytes],
+           warm: WarmWorkers | None) -> WarmRun | _ColdRun:
+    """The run's process: forked by this thread's fork server when ``warm`` (and it can),
+    else a fresh interpreter; why it could not be warm goes to the run's error output."""
+    if warm is not None:
+        run, why = warm.start(argv[len(DEFAULT_RUNNER):], env, os.getcwd(), out.fileno(),
+                              err.fileno())
+        if run is not None:
+            return run
+        err.write(f"rei campaign: this run starts a fresh interpreter: {why}\n".encode())
+        err.flush()
+    return _ColdRun(start_child(argv, stdout=out, stderr=err, env=env))
 
 
 def run_environment(cache: Path | None = None) -> dict[str, str]:
@@ -158,11 +199,27 @@ def run_environment(cache: Path | None = None) -> dict[str, str]:
     otherwise (parallel runs each spawning a thread per core would fight over the cores), and
     the campaign's cache of generated artifacts, if any (a user's $REI_CACHE_DIR wins)."""
     env = dict(os.environ)
-    for name in THREAD_VARIABLES:
-        env.setdefault(name, "1")
+    one_math_thread(env)
     if cache is not None and not env.get(CACHE_VARIABLE):
         env[CACHE_VARIABLE] = os.path.abspath(cache)
     return env
+
+
+WARM_ATTRIBUTE = "rei_warm_workers"
+"""Where a Dask worker keeps the fork servers of its threads."""
+
+
+def _dask_worker_warm() -> WarmWorkers | None:
+    """The fork servers of the Dask worker running this task (one per worker thread, each
+    dying with its thread, as the local engine's), or None outside a Dask worker."""
+    try:
+        from distributed import get_worker  # noqa: PLC0415
+        worker: Any = get_worker()
+    except (ImportError, ValueError):
+        return None
+    # setdefault: one object even when two of the worker's threads ask at once
+    warm = vars(worker).setdefault(WARM_ATTRIBUTE, WarmWorkers())
+    return warm if isinstance(warm, WarmWorkers) else None
 
 
 def execute_run_remote(spec: RunSpec, work_dir: str, timeout: float | None = None,
@@ -184,7 +241,8 @@ def execute_run_remote(spec: RunSpec, work_dir: str, timeout: float | None = Non
     shared = target.is_dir()
     with tempfile.TemporaryDirectory(prefix="rei-run-") as tmp:
         work = Path(tmp) / spec.run_id
-        result = execute_run(spec, work, timeout=timeout, runner=program)
+        result = execute_run(spec, work, timeout=timeout, runner=program,
+                             warm=_dask_worker_warm())
         if shared:
             if target.is_dir():
                 for entry in sorted(work.iterdir()):

@@ -38,11 +38,14 @@ from rei.runtime.commands.run import (
     print_results,
     write_page,
 )
-from rei.runtime.messages import Sample, StreamHeader
 from rei.runtime.results import RESULTS_VERSION, Outcome, RunSummary
 
+# The messages only as type names: importing them (numpy) with every `rei` command line
+# would cost each command's process ~0.15 CPU s, and leave numpy's threads in `rei run`'s
+# supervising process, which then cannot fork its simulation (rei.runtime.warm).
 if TYPE_CHECKING:
     from rei.runtime.collector import TraceWriter
+    from rei.runtime.messages import Sample, StreamHeader
 
 HELP_EXAMPLES = """\
 rei replay out/nav/trace.jsonl -o out/nav-strict --vepl examples/navigation/human_safety.vepl

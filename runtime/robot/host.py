@@ -57,7 +57,7 @@ from typing import IO, Any, BinaryIO, TypeVar
 
 from rei.runtime.errors import RunError
 from rei.runtime.messages import LaserScan, NavState
-from rei.runtime.processes import start_child, stop_child
+from rei.runtime.processes import Child, start_child, stop_child
 from rei.runtime.robot.protocol import (
     ContractViolation,
     ControllerContext,
@@ -319,9 +319,9 @@ class HostedController(RemoteController):
         self._scan: LaserScan | None = None
         """The scan of the last step sent: the host keeps its copy for the next steps."""
         self._home = tempfile.TemporaryDirectory(prefix="rei-controller-")
-        self._process: subprocess.Popen[bytes] = start_child(
+        self._process: Child = start_child(
             [sys.executable, "-c", "from rei.runtime.robot.host import main; main()"],
-            stdin=subprocess.PIPE, stdout=subprocess.PIPE, cwd=self._home.name)
+            stdin=subprocess.PIPE, stdout=subprocess.PIPE, cwd=self._home.name, warm=main)
         assert self._process.stdin is not None and self._process.stdout is not None
         self._requests: IO[bytes] = self._process.stdin
         self._answers: IO[bytes] = self._process.stdout
@@ -468,7 +468,7 @@ def _violated(what: str, reason: str, non_finite: bool) -> str:
     return f"controller {what}() sent {kind} {noun}: {reason}"
 
 
-def _stop(process: subprocess.Popen[bytes], home: tempfile.TemporaryDirectory[str]) -> None:
+def _stop(process: Child, home: tempfile.TemporaryDirectory[str]) -> None:
     stop_child(process)
     for stream in (process.stdin, process.stdout):
         if stream is not None:

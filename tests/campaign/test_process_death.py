@@ -54,9 +54,15 @@ def alive(pid: int, cmdline: bytes) -> bool:
     return state != "Z" and now == cmdline
 
 
+WARM_SERVER = b"rei.runtime.warm.server\0"
+"""In the command line of a campaign worker's fork server (rei.runtime.warm.server), which
+its forked `rei run` processes keep."""
+
+
 def rei_runs(parent: int) -> dict[int, bytes]:
-    """The live `rei run` processes whose parent is ``parent``, with their command lines."""
-    found: dict[int, bytes] = {}
+    """The live `rei run` processes of the campaign ``parent``, with their command lines:
+    its children started as `rei run`, and the children of its workers' fork servers."""
+    processes: dict[int, tuple[int, bytes]] = {}
     for entry in Path("/proc").iterdir():
         if not entry.name.isdigit():
             continue
@@ -65,9 +71,13 @@ def rei_runs(parent: int) -> dict[int, bytes]:
             cmdline = (entry / "cmdline").read_bytes()
         except (OSError, ValueError):
             continue
-        if int(ppid) == parent and state != "Z" and b"rei.runtime.cli\0run\0" in cmdline:
-            found[int(entry.name)] = cmdline
-    return found
+        if state != "Z":
+            processes[int(entry.name)] = (int(ppid), cmdline)
+    servers = {pid for pid, (ppid, cmdline) in processes.items()
+               if ppid == parent and WARM_SERVER in cmdline}
+    return {pid: cmdline for pid, (ppid, cmdline) in processes.items()
+            if (ppid == parent and b"rei.runtime.cli\0run\0" in cmdline)
+            or (ppid in servers and WARM_SERVER in cmdline)}
 
 
 def wait_until(condition: Callable[[], bool], what: str) -> None:
