@@ -46,8 +46,22 @@ def label_axes(ax: Axes, x: str | None = None, y: str | None = None,
         ax.set_title(title, fontsize=TITLE_PT, pad=title_pad)
 
 
+def settle_layout(fig: Figure) -> None:
+    """Run the figure's constrained layout once, then fix its positions and drop the engine.
+
+    With a layout engine set, ``savefig`` draws the figure twice (a dry run, so that the
+    layout sees the text, then the real one) and the engine lays it out on both: half the CPU
+    time of a run page (issue 26). Laying out once and printing once gives the same
+    positions the engine chose, text still measured, at a single draw."""
+    engine = fig.get_layout_engine()
+    if engine is not None:
+        engine.execute(fig)
+        fig.set_layout_engine(None)
+
+
 def inline_svg(fig: Figure) -> str:
     """The figure as an <svg> element (XML prolog and DOCTYPE dropped) for inline embedding."""
+    settle_layout(fig)
     buffer = io.StringIO()
     with matplotlib.rc_context({"svg.hashsalt": SVG_SALT, "svg.fonttype": "none"}):
         fig.savefig(buffer, format="svg", metadata={"Date": None, "Creator": None})
@@ -58,6 +72,7 @@ def inline_svg(fig: Figure) -> str:
 def png_data_uri(fig: Figure, dpi: int = 96) -> str:
     """PNG at 96 dpi: 9 pt text is 12 px in the image, which pages never shrink below
     11 px."""
+    settle_layout(fig)
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=dpi, metadata={"Software": None})
     return "data:image/png;base64," + base64.b64encode(buffer.getvalue()).decode("ascii")
