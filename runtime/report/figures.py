@@ -50,9 +50,9 @@ def settle_layout(fig: Figure) -> None:
     """Run the figure's constrained layout once, then fix its positions and drop the engine.
 
     With a layout engine set, ``savefig`` draws the figure twice (a dry run, so that the
-    layout sees the text, then the real one) and the engine lays it out on both: half the CPU
-    time of a run page (issue 26). Laying out once and printing once gives the same
-    positions the engine chose, text still measured, at a single draw."""
+    layout sees the text, then the real one) and the engine lays it out on both. Laying out
+    once (text measured by the Agg canvas) and printing once keeps the engine's margins at
+    ~15 % less CPU per run page (issue 26, bench/RESULTS.md)."""
     engine = fig.get_layout_engine()
     if engine is not None:
         engine.execute(fig)
