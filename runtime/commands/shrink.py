@@ -66,7 +66,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.add_argument("--seed", type=int, default=0, metavar="S",
                         help="the first seed; the seeds are S, S+1, ..., S+K-1 (default 0)")
     parser.add_argument("--max-runs", type=positive_int, default=200, metavar="N",
-                        help="stop after N runs with the best case so far (default 200)")
+                        help="stop after N runs with the best case so far (default 200; runs "
+                             "remembered from an earlier session count too, so a resumed "
+                             "shrink ends where an uninterrupted one would)")
     parser.add_argument("--keep", action="append", choices=STAGES, default=None,
                         help="leave this part of the case as it is (repeatable): elements "
                              "(humans, objects, goals), trajectories, floors, numbers")

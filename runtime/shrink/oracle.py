@@ -79,7 +79,10 @@ class FailureOracle:
     journal: Path
     """JSON lines {digest, settings, outcomes}: what earlier sessions found."""
     runs: int = 0
-    """Runs started by this oracle (cached candidates cost none)."""
+    """Runs judged: every candidate's seeds, whether they ran now or came from the journal
+    (so a resumed shrink reports and budgets exactly as an uninterrupted one)."""
+    started: int = 0
+    """Runs this session actually started."""
     known: dict[str, tuple[SeedOutcome, ...]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -101,6 +104,7 @@ class FailureOracle:
     def outcomes(self, case: ScenarioCase) -> tuple[SeedOutcome, ...]:
         """The candidate's outcome on every seed (from the journal when known)."""
         digest = case.digest()
+        self.runs += len(self.settings.seeds)
         if digest in self.known:
             return self.known[digest]
         folder = self.work / digest[:16]
@@ -110,7 +114,7 @@ class FailureOracle:
                              cache=self.work / "cache")
         by_seed: dict[int, SeedOutcome] = {}
         for spec, run_dir, result in engine.execute(specs, lambda s: folder / "runs" / s.run_id):
-            self.runs += 1
+            self.started += 1
             by_seed[spec.seed] = _outcome(spec.seed, result.status, result.summary,
                                           result.message)
             shutil.rmtree(run_dir, ignore_errors=True)

@@ -47,6 +47,8 @@ def shrink_into(mission: Path, out: Path, settings: RunSettings, *,
         return _shrink(mission, case, out, oracle, requirement, max_runs, keep, progress)
     finally:
         shutil.rmtree(out / WORK, ignore_errors=True)
+        progress(f"{oracle.started} runs started now, {oracle.runs - oracle.started} "
+                 f"remembered from {out / JOURNAL}")
 
 
 def _shrink(mission: Path, case: ScenarioCase, out: Path, oracle: FailureOracle,

@@ -98,9 +98,7 @@ class Shrinker:
         if case.problems():
             self.rejected_by_check += 1
             return False
-        digest = case.digest()
-        seeds = len(self.oracle.settings.seeds)
-        if digest not in self.oracle.known and self.oracle.runs + seeds > self.max_runs:
+        if self.oracle.runs + len(self.oracle.settings.seeds) > self.max_runs:
             raise BudgetSpent
         return fails_everywhere(self.oracle.outcomes(case), self.requirement)
 
@@ -136,8 +134,7 @@ class Shrinker:
         kept = ddmin(items, fails)
         removed = [e for e in items if e not in kept]
         if removed:
-            steps.append({"stage": stage, "removed": [f"{_singular(e.kind)} {e.label}"
-                                                      for e in removed]})
+            steps.append({"stage": stage, "removed": [_described(e) for e in removed]})
         return best[0]
 
     def _numbers(self, case: ScenarioCase, steps: list[dict[str, Any]]) -> ScenarioCase:
@@ -167,9 +164,11 @@ class Shrinker:
         return best
 
 
-def _singular(kind: str) -> str:
-    return {"humans": "human", "dynamic_objects": "dynamic object", "objects": "object",
-            "goals": "", "floors": "floor", "trajectory_vertices": ""}[kind].strip() or "-"
+def _described(element: Element) -> str:
+    """``human pacer``, ``floor hall_2_4``; goals and vertices say what they are already."""
+    noun = {"humans": "human", "dynamic_objects": "dynamic object", "objects": "object",
+            "floors": "floor"}.get(element.kind)
+    return f"{noun} {element.label}" if noun else element.label
 
 
 def _labels(gone: Sequence[Element]) -> str:
@@ -212,6 +211,8 @@ def summary_json(report: ShrinkReport, replay: str | None, files: dict[str, str]
     return {
         "version": SHRINK_VERSION,
         "mission": report.mission,
+        # where `rei report` matches a shrink to a campaign's runs (rei.runtime.report.clusters)
+        "mission_file": str(Path(report.mission).resolve()),
         "result": report.result,
         "requirement": report.requirement,
         "complete": report.stopped is None,

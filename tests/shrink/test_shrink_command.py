@@ -1,0 +1,106 @@
+"""`rei shrink` end to end: real `rei run` processes (pybullet) with a navigator of the
+bug-finding benchmark that has one known defect (bench/defects: ExceedsDriveLimit, caught by
+SPEED_LIMIT) in a room with people, objects and goals that have nothing to do with it."""
+
+from __future__ import annotations
+
+import json
+import shlex
+from pathlib import Path
+
+import pytest
+
+from rei.lang.cli import main as rei_gen
+from rei.runtime.cli import main
+
+REPO = Path(__file__).resolve().parents[2]
+CASES = Path(__file__).parent / "cases"
+CLUTTERED = CASES / "cluttered.mission"
+SPEEDING = "bench.defects.control:ExceedsDriveLimit"
+
+
+@pytest.fixture
+def at_repo(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(REPO)  # `module:Class` controllers import from the current folder
+
+
+def _shrink(out: Path, *extra: str) -> int:
+    return main(["shrink", str(CLUTTERED), "-o", str(out), "--controller", SPEEDING,
+                 "--requirement", "SPEED_LIMIT", "--seeds", "2", "--duration", "3",
+                 "--keep", "floors", "--workers", "2", "-q", *extra])
+
+
+@pytest.mark.slow
+@pytest.mark.usefixtures("at_repo")
+def test_shrink_drops_what_is_irrelevant_and_keeps_the_failure(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "shrunk"
+    assert _shrink(out) == 1  # the case fails: the one pass rule, and a case was written
+    line = capsys.readouterr().out.strip().splitlines()[-1]
+    assert line.startswith("verdict: FAIL (SPEED_LIMIT, shrunk 25 -> ")
+    summary = json.loads((out / "shrink.json").read_text(encoding="utf-8"))
+    assert summary["result"] == "shrunk" and summary["requirement"] == "SPEED_LIMIT"
+    assert summary["run"]["seeds"] == [0, 1] and summary["complete"] is True
+    after = summary["sizes"]["after"]
+    # the people, the objects, the third goal and the trajectory went; the floors were kept
+    assert (after["humans"], after["objects"], after["trajectory_vertices"]) == (0, 0, 0)
+    assert after["goals"] == 2 and after["floors"] == 15  # two goals: the least a mission has
+    assert summary["sizes"]["before"]["elements"] == 25
+    assert summary["reduction"]["elements"] == round(1 - after["elements"] / 25, 4) > 0.3
+    assert summary["runs"] <= 40 and summary["rejected_by_check"] >= 1
+    # the result checks clean with the same checks as a hand-written file
+    assert rei_gen(["check", str(out / "cluttered.mission"), str(out / "cluttered.room")]) == 0
+    assert (out / "before-after.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # the replay command reproduces the failure
+    argv = shlex.split(summary["replay"])
+    assert argv[:3] == ["rei", "run", str(out / "cluttered.mission")] and "--seed" in argv
+    assert main(argv[1:] + ["-q"]) == 1
+    replayed = json.loads((Path(argv[argv.index("-o") + 1]) / "summary.json").read_text(
+        encoding="utf-8"))
+    assert {v["requirement"]: v["status"] for v in replayed["verdicts"]}["SPEED_LIMIT"] == "fail"
+    # the same command again resumes from shrink-runs.jsonl: nothing runs, same outputs
+    first = {name: (out / name).read_bytes()
+             for name in ("cluttered.mission", "cluttered.room", "shrink.json")}
+    capsys.readouterr()
+    assert main(["shrink", str(CLUTTERED), "-o", str(out), "--controller", SPEEDING,
+                 "--requirement", "SPEED_LIMIT", "--seeds", "2", "--duration", "3",
+                 "--keep", "floors", "--workers", "2"]) == 1
+    assert "0 runs started now" in capsys.readouterr().err
+    assert {name: (out / name).read_bytes() for name in first} == first
+
+
+@pytest.mark.slow
+@pytest.mark.usefixtures("at_repo")
+def test_a_case_that_passes_is_not_shrunk(tmp_path: Path,
+                                          capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "nothing"
+    assert main(["shrink", str(CLUTTERED), "-o", str(out), "--seeds", "1", "-q"]) == 0
+    line = capsys.readouterr().out.strip()
+    assert line.startswith("verdict: NOTHING TO SHRINK: every requirement passes")
+    summary = json.loads((out / "shrink.json").read_text(encoding="utf-8"))
+    assert summary["result"] == "passes" and summary["replay"] is None
+    assert not list(out.glob("*.mission")) and not (out / "before-after.png").exists()
+
+
+def test_bad_input_is_refused_in_one_line(tmp_path: Path,
+                                          capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "out"
+    assert main(["shrink", str(tmp_path / "missing.mission"), "-o", str(out)]) == 2
+    assert "missing.mission: expected a .mission file to shrink, found nothing" in \
+        capsys.readouterr().err
+    (tmp_path / "bad.room").write_text("room bad {\n    tile 1.0\n}\n", encoding="utf-8")
+    (tmp_path / "bad.mission").write_text(
+        'mission m in "bad.room" {\n    goal a at nowhere\n    goal b at nowhere\n}\n',
+        encoding="utf-8")
+    assert main(["shrink", str(tmp_path / "bad.mission"), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "bad.mission:2:" in err and "Traceback" not in err
+    for option in (["--duration", "nan"], ["--timeout", "-1"]):
+        assert main(["shrink", str(CLUTTERED), "-o", str(out), *option]) == 2
+        assert "expected a positive finite number" in capsys.readouterr().err
+    assert main(["shrink", str(CLUTTERED), "-o", str(CASES)]) == 2  # would replace the case
+    assert "expected a folder other than the case's own" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exit_:
+        main(["shrink", str(CLUTTERED), "-o", str(out), "--seeds", "0"])
+    assert exit_.value.code == 2
+    assert not out.exists() or not list(out.iterdir())  # nothing was run or written
