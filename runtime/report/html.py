@@ -29,8 +29,8 @@ from rei.runtime.campaign.stats import (
 )
 from rei.runtime.campaign.store import RunRecord, required_pass_rate, verdict_reason
 from rei.runtime.report import plots
-from rei.runtime.report.data import CampaignData, read_events
 from rei.runtime.report.clusters import Cluster, clusters, failures
+from rei.runtime.report.data import CampaignData, read_events
 from rei.runtime.report.overview import requirement_matrix
 from rei.runtime.report.run_page import run_page_link
 from rei.runtime.report.tables import (
