@@ -205,11 +205,18 @@ def elements(case: ScenarioCase) -> list[Element]:
 
 
 def sizes(case: ScenarioCase) -> dict[str, int]:
-    """How big the case is: a count per element kind, their sum (``elements``), and the
-    characters of both files (``characters``)."""
+    """How big the case is: a count per element kind (every floor, explicit ones too, though
+    only grid floors are dropped), their sum (``elements``), and the characters of both files
+    (``characters``)."""
+    room, mission, _ = case.models()
     counts = dict.fromkeys(ELEMENT_KINDS, 0)
-    for element in elements(case):
-        counts[element.kind] += 1
+    for obj in room.objects:
+        if obj.role != "robot":
+            counts[_ROLE_KIND[obj.role]] += 1
+            if obj.trajectory is not None:
+                counts["trajectory_vertices"] += len(obj.trajectory.vertices)
+    counts["goals"] = len(mission.goals)
+    counts["floors"] = len(room.floors)
     counts["elements"] = sum(counts[k] for k in ELEMENT_KINDS)
     counts["characters"] = len(case.room_text) + len(case.mission_text)
     return counts

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import shlex
+import shutil
 from pathlib import Path
 
 import pytest
@@ -67,6 +68,18 @@ def test_shrink_drops_what_is_irrelevant_and_keeps_the_failure(
                  "--keep", "floors", "--workers", "2"]) == 1
     assert "0 runs started now" in capsys.readouterr().err
     assert {name: (out / name).read_bytes() for name in first} == first
+    # a campaign's report shows the shrunk case as its cluster's reproducer (issue 25.4)
+    campaign = tmp_path / "campaign"
+    assert main(["campaign", str(CLUTTERED), "-o", str(campaign), "--controller", SPEEDING,
+                 "--duration", "3", "--workers", "1", "-q"]) == 1
+    shutil.copytree(out, campaign / "shrunk" / "cluttered")
+    assert main(["report", str(campaign)]) == 1
+    clusters = json.loads((campaign / "clusters.json").read_text(encoding="utf-8"))["clusters"]
+    assert [c["requirement"] for c in clusters] == ["SPEED_LIMIT"]
+    reproducer = clusters[0]["reproducer"]
+    assert reproducer["shrunk"] is True and reproducer["replay"] == summary["replay"]
+    assert reproducer["mission"] == "shrunk/cluttered/cluttered.mission"
+    assert reproducer["elements"] == after["elements"]
 
 
 @pytest.mark.slow
