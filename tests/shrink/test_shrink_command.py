@@ -7,12 +7,17 @@ from __future__ import annotations
 import json
 import shlex
 import shutil
+import signal
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import pytest
 
 from rei.lang.cli import main as rei_gen
 from rei.runtime.cli import main
+from rei.runtime.shrink import load_case, sizes
 
 REPO = Path(__file__).resolve().parents[2]
 CASES = Path(__file__).parent / "cases"
@@ -117,3 +122,36 @@ def test_bad_input_is_refused_in_one_line(tmp_path: Path,
         main(["shrink", str(CLUTTERED), "-o", str(out), "--seeds", "0"])
     assert exit_.value.code == 2
     assert not out.exists() or not list(out.iterdir())  # nothing was run or written
+
+
+@pytest.mark.slow
+def test_an_interrupted_shrink_keeps_its_best_case_and_resumes(tmp_path: Path) -> None:
+    out = tmp_path / "stopped"
+    argv = [sys.executable, "-m", "rei.runtime.cli", "shrink", str(CLUTTERED), "-o", str(out),
+            "--controller", SPEEDING, "--requirement", "SPEED_LIMIT", "--seeds", "2",
+            "--duration", "3", "--keep", "floors", "--workers", "2", "-q"]
+    process = subprocess.Popen(argv, cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                               text=True)
+    journal = out / "shrink-runs.jsonl"
+    # interrupt once the original and a first candidate are judged (more remain)
+    while process.poll() is None and (not journal.is_file()
+                                      or len(journal.read_text().splitlines()) < 2):
+        time.sleep(0.2)
+    process.send_signal(signal.SIGINT)
+    stdout, stderr = process.communicate()
+    assert process.returncode == 130, stderr
+    assert "interrupted; the best case so far is in" in stderr
+    summary = json.loads((out / "shrink.json").read_text(encoding="utf-8"))
+    assert summary["stopped"] == "interrupted" and summary["complete"] is False
+    kept = load_case(out / "cluttered.mission")  # the best case so far: whole, and clean
+    assert kept.problems() == []
+    assert sizes(kept)["elements"] == summary["sizes"]["after"]["elements"] < 25
+    assert not list(out.glob("*.partial"))
+    remembered = len(journal.read_text().splitlines())
+    # the same command again goes on from the journal: what was judged is not run again
+    done = subprocess.run(argv[:-1], cwd=REPO, capture_output=True, text=True, check=False)
+    assert done.returncode == 1, done.stderr
+    assert f"remembered from {journal}" in done.stderr
+    started = int(done.stderr.split(" runs started now")[0].rsplit(None, 1)[-1])
+    total = json.loads((out / "shrink.json").read_text(encoding="utf-8"))["runs"]
+    assert started <= total - 2 * (remembered - 1)  # each remembered candidate: 2 seeds saved
