@@ -179,7 +179,8 @@ def _offsets(text: str, span: Span) -> tuple[int, int]:
 
 
 def elements(case: ScenarioCase) -> list[Element]:
-    """Every removable part of ``case`` (it must parse), in file order per kind."""
+    """Every removable part of ``case`` (it must parse), in file order per kind; a mission's
+    ``cycles`` setting is one too (kind ``cycles``: not counted by ``sizes``)."""
     room, mission, _ = case.models()
     out: list[Element] = []
     for obj in room.objects:
@@ -192,6 +193,10 @@ def elements(case: ScenarioCase) -> list[Element]:
                 v_start, v_end = _offsets(case.room_text, vertex.span)
                 out.append(Element("trajectory_vertices", f"{obj.name} vertex {number}", "room",
                                    v_start, v_end, owner=obj.name))
+    if mission.cycles != 1:  # one pass through the goals is the shorter mission
+        found = _CYCLES.search(_mask_comments(case.mission_text))
+        if found is not None:
+            out.append(Element("cycles", found.group(0), "mission", found.start(), found.end()))
     for number, goal in enumerate(mission.goals, start=1):
         start, end = _offsets(case.mission_text, goal.span)
         label = f"goal {number}" + (f" ({goal.name})" if goal.name else "")
@@ -264,6 +269,9 @@ def _tidy(text: str) -> str:
     were cut."""
     text = re.sub(r"\n[ \t]*\n(?:[ \t]*\n)+", "\n\n", text)
     return re.sub(r"\n[ \t]*\n([ \t]*\})", r"\n\1", text)
+
+
+_CYCLES = re.compile(r"\bcycles\s+\S+")
 
 
 _COMMENT_LINE = re.compile(r"[ \t]*//[^\n]*\n$")

@@ -39,8 +39,8 @@ PICTURE = "before-after.png"
 JOURNAL = "shrink-runs.jsonl"
 STAGES = ("elements", "trajectories", "floors", "numbers")
 """``--keep`` names: what a stage may leave alone. ``elements`` is humans, dynamic objects,
-objects and goals."""
-_STAGE_KINDS = {"elements": ("humans", "dynamic_objects", "objects", "goals"),
+objects, goals and the mission's ``cycles`` (one pass through the goals)."""
+_STAGE_KINDS = {"elements": ("humans", "dynamic_objects", "objects", "goals", "cycles"),
                 "trajectories": ("trajectory_vertices",), "floors": ("floors",)}
 
 ShrinkResult = Literal["shrunk", "passes", "flaky", "run_error"]

@@ -139,3 +139,14 @@ def test_the_requirement_is_chosen_from_what_the_original_does() -> None:
     assert choose_requirement([_seed(0), _seed(1)], "A") == ("passes", "A")
     broken = [SeedOutcome(0, "error", (), "crashed"), _seed(1, "A")]
     assert choose_requirement(broken, None)[0] == "run_error"
+
+
+def test_a_mission_repeated_in_cycles_can_go_through_its_goals_once() -> None:
+    case = load_case(Path(__file__).resolve().parents[2] / "examples" / "small_dense"
+                     / "small_dense.mission")
+    (cycles,) = [e for e in elements(case) if e.kind == "cycles"]
+    assert cycles.label == "cycles 2"
+    once = without(case, [cycles])
+    assert "cycles" not in once.mission_text and once.problems() == []
+    assert once.models()[1].cycles == 1
+    assert sizes(once)["elements"] == sizes(case)["elements"]  # a setting, not an element
