@@ -51,7 +51,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                     "without rerunning them). Exit status: 1 the case fails (the smallest "
                     "failing case is written; flaky when the requirement fails on some seeds "
                     "only: nothing shrunk), 0 it passes on every seed (nothing to shrink; no "
-                    "case written), 2 invalid input, 3 a run of the original broke, 130 "
+                    "case written), 2 invalid input (also a --controller `rei run` cannot "
+                    "load), 3 a run of the original broke, 130 "
                     "interrupted (the best case so far is kept). See docs/shrink.md.")
     parser.add_argument("mission", type=Path, metavar="CASE",
                         help="the failing .mission (its room is read through its import)")
@@ -147,6 +148,12 @@ def _print(report: object, out: Path, quiet: bool) -> int:
     assert isinstance(report, ShrinkReport)
     summary = json.loads((out / SUMMARY).read_text(encoding="utf-8"))
     seeds = ", ".join(str(o.seed) for o in report.original)
+    if report.result == "invalid_input":
+        refused = next(o for o in report.original if o.verdict == "invalid")
+        print(f"rei shrink: error: `rei run` refused the case's input: "
+              f"{printable_lines(refused.message.splitlines()[-1] if refused.message else '')}",
+              file=sys.stderr)
+        return EXIT_BAD_INPUT
     if report.result == "run_error":
         broken = next(o for o in report.original if o.verdict == "error")
         print(f"verdict: ERROR: a run of the original case broke (seed {broken.seed}: "
@@ -182,4 +189,4 @@ def _print(report: object, out: Path, quiet: bool) -> int:
     return EXIT_FAILED if report.stopped != "interrupted" else EXIT_INTERRUPTED
 
 
-__all__ = ["EXIT_BAD_INPUT", "register", "run"]
+__all__ = ["register", "run"]

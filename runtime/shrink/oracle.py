@@ -24,8 +24,8 @@ from rei.runtime.shrink.case import ScenarioCase
 
 @dataclass(frozen=True)
 class SeedOutcome:
-    """One run of a candidate: its seed, the run's verdict (``judge``) and the requirements
-    that failed in it (earliest first)."""
+    """One run of a candidate: its seed, the run's verdict (``judge``; ``invalid`` when
+    `rei run` refused its input) and the requirements that failed in it (earliest first)."""
 
     seed: int
     verdict: str
@@ -116,13 +116,15 @@ class FailureOracle:
         for spec, run_dir, result in engine.execute(specs, lambda s: folder / "runs" / s.run_id):
             self.started += 1
             by_seed[spec.seed] = _outcome(spec.seed, result.status, result.summary,
-                                          result.message)
+                                          result.message, result.exit_code)
             shutil.rmtree(run_dir, ignore_errors=True)
         outcomes = tuple(by_seed[s] for s in self.settings.seeds)
         if any(o.verdict == "interrupted" for o in outcomes):
             raise KeyboardInterrupt  # the user stopped the runs: nothing to remember
         shutil.rmtree(folder, ignore_errors=True)
         self.known[digest] = outcomes
+        if any(o.verdict in ("error", "invalid") for o in outcomes):
+            return outcomes  # not remembered: a broken run may not break again
         with self.journal.open("a", encoding="utf-8") as journal:
             journal.write(json.dumps({"digest": digest, "settings": self.settings.describe(),
                                       "outcomes": [o.to_json() for o in outcomes]},
@@ -130,11 +132,13 @@ class FailureOracle:
         return outcomes
 
 
-def _outcome(seed: int, status: str, summary: dict[str, Any] | None, message: str
-             ) -> SeedOutcome:
+def _outcome(seed: int, status: str, summary: dict[str, Any] | None, message: str,
+             exit_code: int | None = None) -> SeedOutcome:
     if status == "interrupted":
         return SeedOutcome(seed, "interrupted", (), message)
     if status != "ran" or summary is None:
+        if exit_code == 2:  # `rei run` refused its input (a controller it cannot import, ...)
+            return SeedOutcome(seed, "invalid", (), message)
         return SeedOutcome(seed, "error", (), message or f"the run {status}")
     run = RunSummary.from_json(summary)
     failed = tuple(v.requirement for v in failed_verdicts(run) if v.status == "fail")

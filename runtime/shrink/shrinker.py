@@ -43,11 +43,12 @@ objects, goals and the mission's ``cycles`` (one pass through the goals)."""
 _STAGE_KINDS = {"elements": ("humans", "dynamic_objects", "objects", "goals", "cycles"),
                 "trajectories": ("trajectory_vertices",), "floors": ("floors",)}
 
-ShrinkResult = Literal["shrunk", "passes", "flaky", "run_error"]
+ShrinkResult = Literal["shrunk", "passes", "flaky", "run_error", "invalid_input"]
 """shrunk: the case fails the requirement on every seed and the smallest such case is
 written; passes: it fails nothing on any seed (nothing to shrink); flaky: the requirement
 fails on some seeds only (nothing is shrunk: a step could not be judged); run_error: a run
-of the original case broke."""
+of the original case broke; invalid_input: `rei run` refused the original's input (e.g. a
+controller it cannot import)."""
 
 
 class BudgetSpent(Exception):
@@ -181,6 +182,8 @@ def choose_requirement(outcomes: Sequence[SeedOutcome], wanted: str | None
     """The requirement to keep failing and what the original case does: ``wanted`` (or the
     first requirement the first seed failed that every seed failed) when it fails on every
     seed; else passes, flaky or run_error."""
+    if any(o.verdict == "invalid" for o in outcomes):
+        return "invalid_input", wanted
     if any(o.verdict == "error" for o in outcomes):
         return "run_error", wanted
     failed_somewhere = [r for o in outcomes for r in o.failed]

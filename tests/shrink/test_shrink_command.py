@@ -118,6 +118,9 @@ def test_bad_input_is_refused_in_one_line(tmp_path: Path,
         assert "expected a positive finite number" in capsys.readouterr().err
     assert main(["shrink", str(CLUTTERED), "-o", str(CASES)]) == 2  # would replace the case
     assert "expected a folder other than the case's own" in capsys.readouterr().err
+    assert main(["shrink", str(CLUTTERED), "-o", str(tmp_path / "refused"), "--controller",
+                 "no_such_module:Navigator", "--seeds", "1", "--duration", "1", "-q"]) == 2
+    assert "cannot import module 'no_such_module'" in capsys.readouterr().err
     with pytest.raises(SystemExit) as exit_:
         main(["shrink", str(CLUTTERED), "-o", str(out), "--seeds", "0"])
     assert exit_.value.code == 2
