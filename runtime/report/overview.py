@@ -14,6 +14,10 @@ from dataclasses import dataclass
 from rei.runtime.campaign.stats import by_mission, wilson_interval
 from rei.runtime.campaign.store import RunRecord
 
+# The failure clusters lived here before they led the report; their home is
+# rei.runtime.report.clusters, and these names stay importable from here for existing callers.
+from rei.runtime.report.clusters import Cluster, Failure, clusters, failures
+
 
 @dataclass(frozen=True)
 class Cell:
@@ -82,3 +86,8 @@ def requirement_matrix(records: Sequence[RunRecord]) -> Matrix:
         rows.append(MissionRow(mission, len(runs), sum(r.passed for r in runs), tuple(cells)))
     rows.sort(key=lambda r: (r.passed / r.runs if r.runs else 0.0, r.mission))
     return Matrix(tuple(names), tuple(rows))
+
+
+
+__all__ = ["Cell", "Cluster", "Failure", "Matrix", "MissionRow", "clusters", "failures",
+           "requirement_matrix"]
