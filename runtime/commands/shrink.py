@@ -72,7 +72,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                              "shrink ends where an uninterrupted one would)")
     parser.add_argument("--keep", action="append", choices=STAGES, default=None,
                         help="leave this part of the case as it is (repeatable): elements "
-                             "(humans, objects, goals), trajectories, floors, numbers")
+                             "(humans, objects, goals, cycles), trajectories, floors, numbers")
     parser.add_argument("--workers", type=positive_int, default=2, metavar="N",
                         help="runs at once (default 2)")
     parser.add_argument("--controller", default=None, metavar="NAME",
