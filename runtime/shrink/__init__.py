@@ -8,7 +8,8 @@ an output folder. Nothing here imports pybullet: runs happen in `rei run` proces
 
 from rei.runtime.shrink.case import ScenarioCase, load_case, sizes
 from rei.runtime.shrink.oracle import RunSettings
-from rei.runtime.shrink.session import shrink_into
+from rei.runtime.shrink.session import shrink_into, size_reduction
 from rei.runtime.shrink.shrinker import ShrinkReport
 
-__all__ = ["RunSettings", "ScenarioCase", "ShrinkReport", "load_case", "shrink_into", "sizes"]
+__all__ = ["RunSettings", "ScenarioCase", "ShrinkReport", "load_case", "shrink_into",
+           "size_reduction", "sizes"]

@@ -117,3 +117,15 @@ def draw_before_after(before: Path, after: Path, report: ShrinkReport, target: P
     partial = target.with_name(target.name + ".partial")
     partial.write_bytes(render_sheet(entries, "png"))
     partial.replace(target)
+
+
+def size_reduction(mission: Path, out: Path, settings: RunSettings, *, max_runs: int = 200,
+                   requirement: str | None = None, keep: frozenset[str] = frozenset()
+                   ) -> float | None:
+    """Shrink ``mission`` into ``out`` and return its size reduction (``reduction.elements``
+    of shrink.json: 1 - elements after / before), or None when there was nothing to shrink
+    (the case does not fail the requirement on every seed, or its runs broke): the figure
+    a benchmark averages over shrunk cases (bench/shrinking.py, bench/search.py)."""
+    report = shrink_into(mission, out, settings, requirement=requirement, max_runs=max_runs,
+                         keep=keep)
+    return report.reduction()["elements"] if report.result == "shrunk" else None

@@ -17,7 +17,7 @@ import pytest
 
 from rei.lang.cli import main as rei_gen
 from rei.runtime.cli import main
-from rei.runtime.shrink import load_case, sizes
+from rei.runtime.shrink import RunSettings, load_case, size_reduction, sizes
 
 REPO = Path(__file__).resolve().parents[2]
 CASES = Path(__file__).parent / "cases"
@@ -73,6 +73,12 @@ def test_shrink_drops_what_is_irrelevant_and_keeps_the_failure(
                  "--keep", "floors", "--workers", "2"]) == 1
     assert "0 runs started now" in capsys.readouterr().err
     assert {name: (out / name).read_bytes() for name in first} == first
+    # the benchmarks' figure, from the library: the same shrink, all of it remembered
+    settings = RunSettings(seeds=(0, 1), controller=SPEEDING, duration=3.0, workers=2)
+    assert size_reduction(CLUTTERED, out, settings, requirement="SPEED_LIMIT",
+                          keep=frozenset({"floors"})) == summary["reduction"]["elements"]
+    assert json.loads((out / "shrink.json").read_text(encoding="utf-8"))["runs"] == \
+        summary["runs"]
     # a campaign's report shows the shrunk case as its cluster's reproducer (issue 25.4)
     campaign = tmp_path / "campaign"
     assert main(["campaign", str(CLUTTERED), "-o", str(campaign), "--controller", SPEEDING,
