@@ -10,7 +10,8 @@ failing run whose mission is smallest (fewest humans, objects, goals, floors and
 vertices: rei.runtime.shrink.case.sizes), shortest run next; when `rei shrink` wrote a result
 for that requirement and one of the cluster's missions into ``DIR/shrunk/NAME/``, the shrunk
 case is the reproducer and its replay command the one shown. Everything is a function of the
-campaign folder's files: the same folder gives the same clusters, byte for byte. This module
+campaign folder's files and the mission files its runs name: the same inputs give the same
+clusters, byte for byte. This module
 must never format HTML; it reads run folders (world.json, events.csv) leniently, because a
 crashed run may have left none.
 """
