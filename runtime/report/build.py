@@ -1,4 +1,5 @@
-"""Building everything a campaign folder reports: results tables, junit.xml and report.html.
+"""Building everything a campaign folder reports: results tables, junit.xml, clusters.json (the
+failure clusters, rei.runtime.report.clusters) and report.html.
 
 ``build_report`` reads the store only; it can run while no campaign runs (`rei report DIR`),
 and gives the same bytes for the same records. This module must never run a mission.
@@ -6,12 +7,14 @@ and gives the same bytes for the same records. This module must never run a miss
 
 from __future__ import annotations
 
+import json
 import shlex
 from dataclasses import dataclass
 from pathlib import Path
 
 from rei.runtime.campaign.plan import RunSpec
 from rei.runtime.campaign.store import RunRecord, write_atomic, write_tables
+from rei.runtime.report.clusters import CLUSTERS_JSON, clusters, clusters_json, failures
 from rei.runtime.report.data import load_campaign
 from rei.runtime.report.junit import junit_xml
 
@@ -53,10 +56,14 @@ def build_report(root: Path, *, html: bool = True) -> ReportOutcome:
     rerun = {r.spec.run_id: rerun_command(r.spec) for r in data.records}
     junit = root / "junit.xml"
     write_atomic(junit, junit_xml(data.records, rerun))
+    found = clusters(failures([r for r in data.records if not r.passed], data.run_dir), rerun,
+                     root)
+    write_atomic(root / CLUSTERS_JSON,
+                 (json.dumps(clusters_json(found), indent=2, sort_keys=True) + "\n").encode())
     page = None
     if html:
         from rei.runtime.report.html import render_html  # noqa: PLC0415  (matplotlib is slow)
 
         page = root / "report.html"
-        write_atomic(page, render_html(data, rerun).encode("utf-8"))
+        write_atomic(page, render_html(data, rerun, found).encode("utf-8"))
     return ReportOutcome(root, len(data.plan.runs), data.records, page, junit)

@@ -1,7 +1,8 @@
 """The self-contained HTML report of a campaign (report.html): no external files.
 
-Top to bottom: the verdict counts and the pass rule, the mission × requirement matrix, the
-failures grouped into clusters, one collapsed section per mission with each run's verdict,
+Top to bottom: the verdict counts and the pass rule, the failures grouped into clusters (each
+with its smallest reproducer and replay command: rei.runtime.report.clusters), the mission ×
+requirement matrix, one collapsed section per mission with each run's verdict,
 reason, re-run command and (for failed runs) its map, then the thesis's tables and plots. One
 small inline script sorts the matrix; the page reads fine without it.
 
@@ -28,8 +29,9 @@ from rei.runtime.campaign.stats import (
 )
 from rei.runtime.campaign.store import RunRecord, required_pass_rate, verdict_reason
 from rei.runtime.report import plots
+from rei.runtime.report.clusters import Cluster, clusters, failures
 from rei.runtime.report.data import CampaignData, read_events
-from rei.runtime.report.overview import clusters, failures, requirement_matrix
+from rei.runtime.report.overview import requirement_matrix
 from rei.runtime.report.run_page import run_page_link
 from rei.runtime.report.tables import (
     execution_summary,
@@ -102,7 +104,9 @@ class MissionSection:
     """With --pair-static: 'fails with people only', 'fails in the static room too', ..."""
 
 
-def render_html(data: CampaignData, rerun: dict[str, str]) -> str:
+def render_html(data: CampaignData, rerun: dict[str, str],
+                found: list[Cluster] | None = None) -> str:
+    """The page; ``found``: the clusters (worked out here when not given)."""
     records = list(data.records)
     failed = [r for r in records if not r.passed]
     missions = mission_success(records)
@@ -156,7 +160,8 @@ def render_html(data: CampaignData, rerun: dict[str, str]) -> str:
         flaky=[m for m in missions if m.flaky],
         repeat=data.plan.repeat, seed=data.plan.seed,
         matrix=requirement_matrix(records),
-        clusters=clusters(failures(failed, data.run_dir)),
+        clusters=found if found is not None else clusters(failures(failed, data.run_dir),
+                                                          rerun, data.root),
         missions=sections, rerun=rerun, reason_of=verdict_reason,
         page_of=lambda record: run_page_link(data.root, record),
         success_tables=[success_table(missions, "Mission"), group_success_table(records)],

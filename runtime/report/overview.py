@@ -1,25 +1,22 @@
-"""What a test engineer reads first in a campaign report: the verdict counts, the mission ×
-requirement matrix, and the failures grouped into clusters with one representative each.
+"""The mission × requirement matrix of a campaign report (the failure clusters that lead the
+report are rei.runtime.report.clusters).
 
 Everything follows the one pass rule (rei.runtime.results.judge): a run's verdict is its
-record's ``verdict``; a requirement's cell counts the runs where it applied. A cluster is
-"the same requirement failed on the same kind of object in the same phase of the mission",
-so 34 near-identical failures read as three lines. This module must never format HTML; it
-reads a run's world.json (roles and types of the objects involved) leniently, because a
-crashed run may have left none.
+record's ``verdict``; a requirement's cell counts the runs where it applied. This module must
+never format HTML.
 """
 
 from __future__ import annotations
 
-import json
 from collections.abc import Sequence
 from dataclasses import dataclass
-from pathlib import Path
-from typing import Any
 
 from rei.runtime.campaign.stats import by_mission, wilson_interval
-from rei.runtime.campaign.store import RunRecord, verdict_reason
-from rei.runtime.results import failed_verdicts
+from rei.runtime.campaign.store import RunRecord
+
+# The failure clusters lived here before they led the report; their home is
+# rei.runtime.report.clusters, and these names stay importable from here for existing callers.
+from rei.runtime.report.clusters import Cluster, Failure, clusters, failures
 
 
 @dataclass(frozen=True)
@@ -91,109 +88,6 @@ def requirement_matrix(records: Sequence[RunRecord]) -> Matrix:
     return Matrix(tuple(names), tuple(rows))
 
 
-@dataclass(frozen=True)
-class Failure:
-    """Why one run did not pass, in words, with what the cluster needs."""
 
-    record: RunRecord
-    requirement: str
-    """The first failed (or undecided) requirement, or the run's own error."""
-    status: str
-    time: float | None
-    objects: tuple[str, ...]
-    kinds: tuple[str, ...]
-    """Roles (human, wall, static, dynamic) or catalogue types of the objects involved."""
-    phase: str
-    reason: str
-
-
-@dataclass(frozen=True)
-class Cluster:
-    requirement: str
-    kind: str
-    phase: str
-    failures: tuple[Failure, ...]
-
-    @property
-    def missions(self) -> tuple[str, ...]:
-        return tuple(dict.fromkeys(by_mission(f.record) for f in self.failures))
-
-    @property
-    def representative(self) -> Failure:
-        return self.failures[0]
-
-
-def object_kinds(run_dir: Path) -> dict[str, str]:
-    """name → role of the run's observed objects (humans by role, objects by type)."""
-    try:
-        data = json.loads((run_dir / "world" / "world.json").read_text(encoding="utf-8"))
-        bodies: list[Any] = [*data.get("walls", ()), *data.get("objects", ())]
-        out = {}
-        for body in bodies:
-            role = str(body.get("role", ""))
-            out[str(body["name"])] = role if role in ("wall", "human") else \
-                f"{role} {body.get('type', '')}".strip()
-        return out
-    except (OSError, ValueError, KeyError, TypeError, AttributeError):
-        return {}
-
-
-def phase_of(record: RunRecord, time: float | None) -> str:
-    """The mission's phase at ``time``: the task that ran then, or before / after the tasks."""
-    if time is None or record.summary is None:
-        return "whole run"
-    tasks = record.summary.measurements.get("tasks") or []
-    for task in tasks:
-        try:
-            if float(task["start"]) <= time <= float(task["end"]):
-                return f"task {task['index']}: {task['task']}"
-        except (KeyError, TypeError, ValueError):
-            continue
-    if tasks and time < float(tasks[0].get("start", 0.0) or 0.0):
-        return "before the first task"
-    return "after the tasks" if tasks else "whole run"
-
-
-def failure_of(record: RunRecord, kinds: dict[str, str]) -> Failure:
-    summary = record.summary
-    if record.verdict in ("error", "interrupted") or summary is None:
-        status = record.verdict
-        return Failure(record, "run " + status, status, None, (), (), "whole run",
-                       verdict_reason(record))
-    blocking = failed_verdicts(summary)
-    if not blocking:
-        return Failure(record, "no requirement", record.verdict, None, (), (), "whole run",
-                       verdict_reason(record))
-    first = blocking[0]  # the same one verdict_reason names
-    kind_names = tuple(sorted({kinds.get(o, "task" if o.startswith("task") else "object")
-                               for o in first.objects}))
-    return Failure(record, first.requirement, first.status, first.decided_at, first.objects,
-                   kind_names, phase_of(record, first.decided_at), first.reason)
-
-
-def failures(records: Sequence[RunRecord], run_dir: Any) -> list[Failure]:
-    """The failure of every run that did not pass; ``run_dir(record)`` is its folder."""
-    out = []
-    for record in records:
-        if record.passed:
-            continue
-        kinds = object_kinds(run_dir(record))
-        tasks = {str(t.get("task")) for t in (record.summary.measurements.get("tasks") or [])
-                 } if record.summary is not None else set()
-        kinds.update({t: "task" for t in tasks})
-        out.append(failure_of(record, kinds))
-    return out
-
-
-def clusters(found: Sequence[Failure]) -> list[Cluster]:
-    """Failures grouped by (requirement, kind of object, phase kind), largest first. The
-    phase is compared by its task's position, not its name, so the same goal of different
-    rooms clusters together."""
-    groups: dict[tuple[str, str, str], list[Failure]] = {}
-    for f in found:
-        phase = f.phase.split(":")[0]
-        groups.setdefault((f.requirement, ", ".join(f.kinds) or "—", phase), []).append(f)
-    out = [Cluster(req, kind, phase, tuple(items))
-           for (req, kind, phase), items in groups.items()]
-    out.sort(key=lambda c: (-len(c.failures), c.requirement, c.kind, c.phase))
-    return out
+__all__ = ["Cell", "Cluster", "Failure", "Matrix", "MissionRow", "clusters", "failures",
+           "requirement_matrix"]

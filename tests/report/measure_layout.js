@@ -116,6 +116,14 @@
                                " of " + img.naturalWidth + " px)");
     }
   });
+  // The distinct failures lead the page and fit its width (issue 25.4).
+  var clusters = document.getElementById("failure-clusters");
+  var first = document.querySelector("h2");
+  report.firstSection = first ? first.id : "";
+  report.clusterRows = clusters ? clusters.tBodies[0].rows.length : 0;
+  report.clustersOverflow = clusters ?
+    Math.max(0, Math.round(clusters.getBoundingClientRect().right -
+                           document.documentElement.clientWidth)) : 0;
   var pre = document.createElement("pre");
   pre.id = "layout-report";
   pre.textContent = JSON.stringify(report);

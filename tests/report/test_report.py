@@ -118,7 +118,8 @@ def test_html_is_self_contained_and_deterministic(campaign: Path, tmp_path: Path
     assert all(src.startswith("data:image/png;base64,") for src in page.xpath("//img/@src"))
     assert not page.xpath("//link[@rel='stylesheet']")
     headings = page.xpath("//h2/text()")
-    assert headings[:3] == ["Requirements per mission", "Failures, grouped", "Missions"]
+    # the distinct failures lead the report (issue 25.4)
+    assert headings[:3] == ["Distinct failures", "Requirements per mission", "Missions"]
     for heading in ("Success rates", "Execution summary", "Signals", "Utility over time",
                     "What utilities mean", "Provenance"):
         assert heading in headings
@@ -137,6 +138,10 @@ def test_html_is_self_contained_and_deterministic(campaign: Path, tmp_path: Path
     assert first_cluster[0] == "all_tasks_succeed" and first_cluster[3] == "4"
     assert "task 2 timed out" in first_cluster[5]
     assert any("crashed" in c.xpath("string(.)") for c in clusters)
+    # each with its leading signals and the command that replays its smallest reproducer
+    assert first_cluster[6] == "SIG_GEOM_CLOSE_TRANSIT_FAR → SIG_MISSION_TASK_SUCCESS → " \
+                               "SIG_MISSION_END"
+    assert first_cluster[7].startswith("rei run ") and "--seed" in first_cluster[7]
     # a collapsed section per mission: each run's verdict, reason and re-run command
     sections = page.xpath("//details")
     assert len(sections) == 4
