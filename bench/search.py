@@ -14,8 +14,9 @@ Reported per strategy: defects found per search seed (mean and spread), the rate
 simulations (found / simulations run x 1,000: an extrapolation from the budget actually run,
 labelled so), the ratio to random's rate measured in the same invocation, simulations to the
 first confirmed failure, distinct descriptor cells among failing candidates (diversity), and
-the reference's false alarms. Shrinking (wp-shrink's `rei shrink`) is a hook: the "shrunk"
-column is filled when that command is installed, else "n/a".
+the reference's false alarms. With ``--shrink``, each confirmed failure is then shrunk with
+`rei shrink`'s engine (3 seeds, at most ``--shrink-runs`` runs) and the "shrunk" column gives
+the mean size reduction (share of the case's elements removed); without it, "n/a".
 
 Writes bench/out/search/search.json; ``--markdown`` prints the tables for bench/RESULTS.md.
 CPU seconds (this process and its children) are reported with the load average, since the
@@ -23,13 +24,12 @@ machine is shared.
 
 Usage: python bench/search.py [--only NAME ...] [--strategies S ...] [--seeds S ...]
        [--budget N] [--batch K] [--workers N] [--preset small] [--speed LOW:HIGH]
-       [--factor NAME=LEVELS ...] [--markdown] [--out DIR]
+       [--factor NAME=LEVELS ...] [--shrink [--shrink-runs N]] [--markdown] [--out DIR]
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import io
 import json
 import os
@@ -51,6 +51,8 @@ from bench.defects import DEFECTS  # noqa: E402
 from rei.runtime.campaign import LocalEngine, plan_campaign, run_campaign  # noqa: E402
 from rei.runtime.search import SearchConfig, run_search  # noqa: E402
 from rei.runtime.search.run import CandidateResult  # noqa: E402
+from rei.runtime.shrink import size_reduction  # noqa: E402
+from rei.runtime.shrink.oracle import RunSettings  # noqa: E402
 
 REFERENCE = "reference"
 
@@ -72,12 +74,16 @@ class SearchOutcome:
     shrunk: float | None
 
 
-def shrink_reduction(mission: Path) -> float | None:
-    """Hook for wp-shrink's `rei shrink`: the size reduction of the shrunk case, when that
-    command exists on this branch (it does not yet: None)."""
-    if importlib.util.find_spec("rei.runtime.commands.shrink") is None:
+def shrink_reduction(mission: Path, spec: str, args: argparse.Namespace) -> float | None:
+    """The size reduction (share of elements removed) of `rei shrink`'s minimal case for a
+    confirmed failure, or None when shrinking was not asked for (``--shrink``) or the case
+    did not fail the same requirement on every one of the three seeds."""
+    if not args.shrink:
         return None
-    return None  # wired when `rei shrink`'s output format lands (see bench/RESULTS.md)
+    out = mission.parent.parent / f"shrunk-{mission.stem}"
+    shutil.rmtree(out, ignore_errors=True)
+    settings = RunSettings(seeds=(0, 1, 2), controller=spec, workers=args.workers)
+    return size_reduction(mission, out, settings, max_runs=args.shrink_runs)
 
 
 def confirm(result: CandidateResult, root: Path, seed: int, workers: int) -> bool:
@@ -119,7 +125,8 @@ def one_search(nav: str, spec: str, strategy: str, seed: int, args: argparse.Nam
                    for v in r.record.summary.verdicts if v.status == "fail"})
     shrunk = None
     if confirmed:
-        shrunk = shrink_reduction(root / "candidates" / f"{confirmed}_0001.mission")
+        shrunk = shrink_reduction(root / "candidates" / f"{confirmed}_0001.mission", spec,
+                                  args)
     return SearchOutcome(nav, strategy, seed, len(ran), len(failing), confirmed, first_at,
                          len(cells), tuple(reqs), shrunk)
 
@@ -199,6 +206,10 @@ def main() -> int:
     parser.add_argument("--factor", action="append", default=[], metavar="NAME=LEVELS",
                         help="a factor's levels or LOW:HIGH range, as `rei search --NAME` "
                              "takes them (e.g. stressor=emerge)")
+    parser.add_argument("--shrink", action="store_true",
+                        help="shrink every confirmed failure with rei shrink (3 seeds)")
+    parser.add_argument("--shrink-runs", type=int, default=120, metavar="N",
+                        help="run budget of each shrink (default 120)")
     parser.add_argument("--markdown", action="store_true")
     parser.add_argument("--out", type=Path, default=REPO / "bench" / "out" / "search")
     args = parser.parse_args()
