@@ -59,6 +59,8 @@ class ControlLatency(ReferenceNavigator):
     """
 
     name = "control-latency"
+    latency = LATENCY
+    """Seconds (a subclass may change it: the tests measure REACTION_TIME against it)."""
 
     def reset(self, context: ControllerContext) -> None:
         super().reset(context)
@@ -67,7 +69,7 @@ class ControlLatency(ReferenceNavigator):
 
     def step(self, observation: Observation) -> VelocityCommand:
         self._queue.append((observation.time, super().step(observation)))
-        while self._queue and self._queue[0][0] <= observation.time - LATENCY + 1e-9:
+        while self._queue and self._queue[0][0] <= observation.time - self.latency + 1e-9:
             self._released = self._queue.popleft()[1]
         return self._released
 

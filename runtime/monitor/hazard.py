@@ -1,0 +1,102 @@
+"""Hazard clearance: how near ahead the laser saw a person or a moving object (issue 22).
+
+The REACTION_TIME requirement asks how soon a robot slows down once it *could* know of a
+hazard ahead. What it could know is what its laser measured, so this reads the scan itself
+(the simulated ground-truth scan, never what the navigator claims to have seen): a beam whose
+end point lies on the footprint of a person or a moving object (roles ``human`` and
+``dynamic``; static objects are on the map and walls are not hazards) sees that hazard. A
+hazard hidden behind a wall stub is not seen, so a robot is never asked to react to what no
+beam reached. The clearance of a seeing beam is measured as ``laser_clearance`` is
+(rei.runtime.monitor.laser): its range minus the distance from the laser's mount point to the
+robot footprint's edge along that beam. Only beams ahead count (within ``AHEAD`` of the
+robot's heading): a careful robot may keep its speed while it drives away from a person.
+
+This module must never import the simulator or keep module-level state.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from rei.runtime.messages import LaserScan, StreamHeader
+from rei.runtime.monitor.geometry import local_shape
+from rei.runtime.monitor.laser import beam_angles
+
+HAZARD_ROLES = ("human", "dynamic")
+"""Roles whose bodies are hazards a robot must react to (people and moving objects)."""
+AHEAD = math.pi / 2
+"""rad: beams within this of the robot's heading look ahead (the front half-plane)."""
+HIT_TOLERANCE = 0.05
+"""m: a beam ending this near a hazard's footprint saw it (the laser's 1 cm range noise and
+the difference between a body's collision shape and its footprint; the default .vepl's
+laser_tolerance)."""
+LOOK_WITHIN = 3.0
+"""m: hazards farther than this (footprint distance) are not looked for in the scan; the
+requirements ask about hazards within about a metre."""
+NONE_SEEN = 1e3
+"""The clearance when no beam ahead sees a hazard (as far as FAR_AWAY in the model)."""
+
+
+class HazardSensor:
+    """Per run: the hazards of the stream header and their footprints, prepared once."""
+
+    def __init__(self, header: StreamHeader) -> None:
+        self.mount = (float(header.laser_mount[0]), float(header.laser_mount[1]))
+        self.indices = [i for i, o in enumerate(header.objects) if o.role in HAZARD_ROLES]
+        self.shapes = [local_shape(header.objects[i].footprint, header.tile_size)
+                       for i in self.indices]
+
+    def clearance(self, scan: LaserScan, edges: np.ndarray,
+                  robot_pose: tuple[float, float, float], poses: np.ndarray,
+                  distance: np.ndarray) -> float:
+        """The smallest clearance (range minus edge) of the beams ahead that end on a
+        hazard's footprint; ``NONE_SEEN`` when none does."""
+        near = [k for k, i in enumerate(self.indices) if distance[i] < LOOK_WITHIN]
+        if not near:
+            return NONE_SEEN
+        ranges = np.asarray(scan.ranges, dtype=np.float64)
+        angles = beam_angles(scan)
+        ahead = np.abs(np.remainder(angles + math.pi, math.tau) - math.pi) <= AHEAD
+        # NaN and inf ranges, and ranges at range_max, are beams without a return
+        use = ahead & (ranges < scan.range_max)
+        if not use.any():
+            return NONE_SEEN
+        r, a = ranges[use], angles[use]
+        x, y, yaw = robot_pose
+        c, s = math.cos(yaw), math.sin(yaw)
+        mx = x + c * self.mount[0] - s * self.mount[1]
+        my = y + s * self.mount[0] + c * self.mount[1]
+        ends = np.stack((mx + r * np.cos(yaw + a), my + r * np.sin(yaw + a)), axis=1)
+        seen = np.zeros(len(r), dtype=bool)
+        pose_array = np.asarray(poses, dtype=np.float64)
+        for k in near:
+            ox, oy, oyaw = pose_array[self.indices[k]]
+            poly, radius = self.shapes[k]
+            dx, dy = ends[:, 0] - ox, ends[:, 1] - oy
+            if poly is None:
+                seen |= np.hypot(dx, dy) - radius <= HIT_TOLERANCE
+                continue
+            # into the object's frame, then the distance to its polygon (0 inside)
+            oc, os_ = math.cos(oyaw), math.sin(oyaw)
+            local = np.stack((oc * dx + os_ * dy, -os_ * dx + oc * dy), axis=1)
+            seen |= _polygon_distance(local, poly) <= HIT_TOLERANCE
+        if not seen.any():
+            return NONE_SEEN
+        return float((r - edges[use])[seen].min())
+
+
+def _polygon_distance(points: np.ndarray, poly: np.ndarray) -> np.ndarray:
+    """(N,) distance from each point to a simple polygon's area (0 inside)."""
+    a = poly[None, :, :]
+    b = np.roll(poly, -1, axis=0)[None, :, :]
+    p = points[:, None, :]
+    ab = b - a
+    t = np.clip(((p - a) * ab).sum(axis=2) / np.maximum((ab * ab).sum(axis=2), 1e-18), 0, 1)
+    d = np.hypot(*(p - a - t[..., None] * ab).transpose(2, 0, 1)).min(axis=1)
+    straddles = (a[..., 1] > p[..., 1]) != (b[..., 1] > p[..., 1])
+    dy = np.where(b[..., 1] != a[..., 1], b[..., 1] - a[..., 1], 1.0)
+    x_at = a[..., 0] + (p[..., 1] - a[..., 1]) * ab[..., 0] / dy
+    inside = np.count_nonzero(straddles & (p[..., 0] < x_at), axis=1) % 2 == 1
+    return np.where(inside, 0.0, d)
