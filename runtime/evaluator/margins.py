@@ -129,7 +129,7 @@ class MarginTracker:
         """REACTION_TIME's reaction times, step by step as its queries see them."""
         p = self.p
         slow = w.cmd_speed <= p.get("slow_speed", 0.15) + p.get("speed_tolerance", 0.0)
-        fast_at_hazard = not slow and w.hazard_clearance < p.get("react_zone", 1.0)
+        fast_at_hazard = not slow and w.hazard_clearance < p.get("react_zone", 1.05)
         if fast_at_hazard and not self.fast_at_hazard:
             self.reacting.append((w.time, w.time - self.last_slow))
         self.fast_at_hazard = fast_at_hazard

@@ -48,7 +48,7 @@ def approach(tmp: Path, lag: float | None, placed: list[tuple[ObservedObject, tu
              name: str = "run") -> dict[str, Verdict]:
     """The robot drives along +x at ``speed`` towards (or, ``behind``, away from) the object
     ``ahead_of``; a 5 Hz scan's beam ends on that object; the robot commands SLOW ``lag``
-    seconds after the first scan that shows it within 1 m (None: never)."""
+    seconds after the first scan that shows it within react_zone, 1.05 m (None: never)."""
     n = 60
     objects = tuple(o for o, _ in placed)
     header = StreamHeader(SCHEMA_VERSION, "synthetic", "synthetic", 0, RATE, ROBOT, objects, 1.0,
@@ -66,7 +66,7 @@ def approach(tmp: Path, lag: float | None, placed: list[tuple[ObservedObject, tu
                 ox = poses[ahead_of, 0]
                 gap = abs(ox - x) - 0.25  # from the mount (the centre) to the person's edge
                 this_scan = scan(3.5, gap) if behind else scan(gap)
-                if seen_at is None and gap - HALF < 1.0:
+                if seen_at is None and gap - HALF < 1.05:
                     seen_at = t
         slow = lag is not None and seen_at is not None and t >= seen_at + lag - 1e-9
         v = SLOW if slow else speed
