@@ -21,7 +21,7 @@ import math
 import numpy as np
 
 from rei.runtime.messages import LaserScan, StreamHeader
-from rei.runtime.monitor.geometry import local_shape
+from rei.runtime.monitor.geometry import _inside, _point_segment, local_shape
 from rei.runtime.monitor.laser import beam_angles
 
 HAZARD_ROLES = ("human", "dynamic")
@@ -89,14 +89,6 @@ class HazardSensor:
 
 def _polygon_distance(points: np.ndarray, poly: np.ndarray) -> np.ndarray:
     """(N,) distance from each point to a simple polygon's area (0 inside)."""
-    a = poly[None, :, :]
-    b = np.roll(poly, -1, axis=0)[None, :, :]
-    p = points[:, None, :]
-    ab = b - a
-    t = np.clip(((p - a) * ab).sum(axis=2) / np.maximum((ab * ab).sum(axis=2), 1e-18), 0, 1)
-    d = np.hypot(*(p - a - t[..., None] * ab).transpose(2, 0, 1)).min(axis=1)
-    straddles = (a[..., 1] > p[..., 1]) != (b[..., 1] > p[..., 1])
-    dy = np.where(b[..., 1] != a[..., 1], b[..., 1] - a[..., 1], 1.0)
-    x_at = a[..., 0] + (p[..., 1] - a[..., 1]) * ab[..., 0] / dy
-    inside = np.count_nonzero(straddles & (p[..., 0] < x_at), axis=1) % 2 == 1
-    return np.where(inside, 0.0, d)
+    following = np.roll(poly, -1, axis=0)
+    edges = _point_segment(points[:, None, :], poly[None, :, :], following[None, :, :])
+    return np.where(_inside(points, poly, following), 0.0, edges.min(axis=1))

@@ -161,3 +161,16 @@ def test_the_sensor_measures_from_the_footprint_edge() -> None:
     # the same person out of reach of every beam: nothing seen
     assert sensor.clearance(s, edges, (0.0, 0.0, 0.0), np.array([[1.25, 0.6, 0.0]]),
                             np.array([0.9])) == NONE_SEEN
+
+
+def test_a_beam_sees_a_box_hazard_within_the_tolerance_of_its_face() -> None:
+    cart = ObservedObject("cart", "dynamic", "cart", Box(0.6, 0.4), 0.9)
+    header = StreamHeader(SCHEMA_VERSION, "s", "s", 0, RATE, ROBOT, (cart,), 1.0)
+    sensor = HazardSensor(header)
+    edges = BeamEdges(ROBOT.footprint, (0.0, 0.0)).of(scan(1.0))
+    # the cart's face (turned 90 degrees: its 0.4 m side faces the robot) 3 cm or 10 cm
+    # beyond where the forward beam ends
+    for beyond, seen in ((0.03, True), (0.10, False)):
+        poses = np.array([[1.0 + beyond + 0.2, 0.0, math.pi / 2]])
+        got = sensor.clearance(scan(1.0), edges, (0.0, 0.0, 0.0), poses, np.array([0.9]))
+        assert (got == pytest.approx(1.0 - HALF)) if seen else got == NONE_SEEN
