@@ -1,8 +1,9 @@
 """REACTION_TIME on real pybullet runs (issue 22): in a generated stress room of `rei demo`'s
 suite (seed 1: a person emerges from behind a wall stub beside the route), the reference
 navigator passes and the same navigator with its commands 0.5 s or 0.8 s late fails, the
-margin falls with the latency and has the verdict's sign, and replaying the recorded trace
-gives the same verdict and margin."""
+margin falls with the latency and has the verdict's sign, a second run of the same scenario
+and seed writes the same bytes, and replaying the recorded trace gives the same verdict and
+margin."""
 
 from __future__ import annotations
 
@@ -60,6 +61,10 @@ def test_late_commands_fail_reaction_time_in_an_emerging_person_room(
     assert late is not None and later is not None and later < late < 0
     prompt = verdicts["0.2"].margin
     assert prompt is None or prompt >= 0
+    # the same scenario and seed give the same bytes (verdicts, margins, event log)
+    _reaction(tmp_path / "l05again", mission, "bench.defects.timing:ControlLatency")
+    for name in ("summary.json", "events.csv"):
+        assert (tmp_path / "l05again" / name).read_bytes() == (tmp_path / "l05" / name).read_bytes()
     # the recorded trace replays to the same verdict (the scans are in it)
     again = replay(tmp_path / "l05" / "trace.jsonl", None, tmp_path / "replay")
     replayed = {v.requirement: v for v in again.verdicts}["REACTION_TIME"]
