@@ -113,9 +113,9 @@ class QueryInputs:
     """Likewise |angular velocity| and signed angular velocity (rad/s)."""
     hazard_clearance: float = 1e3
     """Of the latest scan: over the beams ahead (within 90 degrees of the heading) that end
-    on a person's or a moving object's footprint, the smallest range minus the distance from
-    the mount point to the footprint boundary (m); 1000 when no such beam (and before the
-    first scan). Kept between scans (rei.runtime.monitor.hazard)."""
+    on a person's or a moving object's footprint, the smallest distance from the robot's
+    footprint to a beam's end point (m); 1000 when no such beam (and before the first scan).
+    Kept between scans (rei.runtime.monitor.hazard)."""
     settle_travel: float = 0.0
     """Metres the robot's own motion covered since its last task ended, while no task runs
     (the mission's settle period); 0 while a task runs and once the mission ended."""

@@ -6,10 +6,14 @@ hazard ahead. What it could know is what its laser measured, so this reads the s
 end point lies on the footprint of a person or a moving object (roles ``human`` and
 ``dynamic``; static objects are on the map and walls are not hazards) sees that hazard. A
 hazard hidden behind a wall stub is not seen, so a robot is never asked to react to what no
-beam reached. The clearance of a seeing beam is measured as ``laser_clearance`` is
-(rei.runtime.monitor.laser): its range minus the distance from the laser's mount point to the
-robot footprint's edge along that beam. Only beams ahead count (within ``AHEAD`` of the
-robot's heading): a careful robot may keep its speed while it drives away from a person.
+beam reached. How near the hazard is: the distance from the robot's footprint to the seeing
+beam's end point (0 inside it), the measure a navigator's own slow zone uses on its laser
+points (the reference's, runtime/robot/reference.py), so a navigator that slows for a
+laser point within some distance of its footprint is judged on the same number. (Along the
+beam, as ``laser_clearance`` measures, a point ahead and to the side reads farther than it
+is: the clock would start a scan after such a navigator decided.) Only beams ahead count
+(within ``AHEAD`` of the robot's heading): a careful robot may keep its speed while it drives
+away from a person.
 
 This module must never import the simulator or keep module-level state.
 """
@@ -47,12 +51,12 @@ class HazardSensor:
         self.indices = [i for i, o in enumerate(header.objects) if o.role in HAZARD_ROLES]
         self.shapes = [local_shape(header.objects[i].footprint, header.tile_size)
                        for i in self.indices]
+        self.robot_shape = local_shape(header.robot.footprint, header.tile_size)
 
-    def clearance(self, scan: LaserScan, edges: np.ndarray,
-                  robot_pose: tuple[float, float, float], poses: np.ndarray,
-                  distance: np.ndarray) -> float:
-        """The smallest clearance (range minus edge) of the beams ahead that end on a
-        hazard's footprint; ``NONE_SEEN`` when none does."""
+    def clearance(self, scan: LaserScan, robot_pose: tuple[float, float, float],
+                  poses: np.ndarray, distance: np.ndarray) -> float:
+        """The smallest distance from the robot's footprint to the end point of a beam
+        ahead that ends on a hazard's footprint; ``NONE_SEEN`` when no beam does."""
         near = [k for k, i in enumerate(self.indices) if distance[i] < LOOK_WITHIN]
         if not near:
             return NONE_SEEN
@@ -64,11 +68,13 @@ class HazardSensor:
         if not use.any():
             return NONE_SEEN
         r, a = ranges[use], angles[use]
+        # the end points in the robot's frame, then in the world
+        local_ends = np.stack((self.mount[0] + r * np.cos(a), self.mount[1] + r * np.sin(a)),
+                              axis=1)
         x, y, yaw = robot_pose
         c, s = math.cos(yaw), math.sin(yaw)
-        mx = x + c * self.mount[0] - s * self.mount[1]
-        my = y + s * self.mount[0] + c * self.mount[1]
-        ends = np.stack((mx + r * np.cos(yaw + a), my + r * np.sin(yaw + a)), axis=1)
+        ends = np.stack((x + c * local_ends[:, 0] - s * local_ends[:, 1],
+                         y + s * local_ends[:, 0] + c * local_ends[:, 1]), axis=1)
         seen = np.zeros(len(r), dtype=bool)
         pose_array = np.asarray(poses, dtype=np.float64)
         for k in near:
@@ -84,7 +90,11 @@ class HazardSensor:
             seen |= _polygon_distance(local, poly) <= HIT_TOLERANCE
         if not seen.any():
             return NONE_SEEN
-        return float((r - edges[use])[seen].min())
+        points = local_ends[seen]
+        poly, radius = self.robot_shape
+        if poly is None:
+            return float(max(0.0, float((np.hypot(points[:, 0], points[:, 1]) - radius).min())))
+        return float(_polygon_distance(points, poly).min())
 
 
 def _polygon_distance(points: np.ndarray, poly: np.ndarray) -> np.ndarray:

@@ -292,8 +292,8 @@ class RuntimeModel:
             edges = self.beam_edges.of(scan)
             self.laser_clearance = clearance(scan, edges)
             if self.hazards.indices:
-                self.hazard_clearance = self.hazards.clearance(scan, edges, s.robot_pose,
-                                                               s.poses, distance)
+                self.hazard_clearance = self.hazards.clearance(scan, s.robot_pose, s.poses,
+                                                               distance)
         ox, oy, _ = s.belief.odom
         return QueryInputs(
             distance, self.kind_masks, self._robot_floor(x, y), self.task_codes,

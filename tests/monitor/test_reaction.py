@@ -26,7 +26,6 @@ from rei.runtime.messages import (
     StreamHeader,
 )
 from rei.runtime.monitor.hazard import NONE_SEEN, HazardSensor
-from rei.runtime.monitor.laser import BeamEdges
 from rei.runtime.results import Verdict
 from tests.monitor.helpers import monitor
 from tests.monitor.streams import ROBOT, human, wall
@@ -150,16 +149,23 @@ def test_no_people_or_moving_objects_is_not_applicable(tmp_path: Path) -> None:
     assert v.status == "not_applicable" and v.margin is None
 
 
-def test_the_sensor_measures_from_the_footprint_edge() -> None:
+def test_the_sensor_measures_from_the_footprint_to_the_beams_end() -> None:
     header = StreamHeader(SCHEMA_VERSION, "s", "s", 0, RATE, ROBOT, (PERSON[0][0],), 1.0)
     sensor = HazardSensor(header)
     s = scan(1.0)
-    edges = BeamEdges(ROBOT.footprint, (0.0, 0.0)).of(s)
     poses = np.array([[1.25, 0.0, 0.0]])
-    got = sensor.clearance(s, edges, (0.0, 0.0, 0.0), poses, np.array([0.86]))
+    got = sensor.clearance(s, (0.0, 0.0, 0.0), poses, np.array([0.86]))
     assert got == pytest.approx(1.0 - HALF)
+    # a beam 45 degrees to the left ending 1 m from the centre: 1 m along the beam, but its
+    # end point is nearer the footprint's corner than that
+    left = LaserScan(-math.pi, math.pi / 4, 0.12, 3.5, np.array([3.5] * 5 + [1.0, 3.5, 3.5]))
+    end = (math.cos(math.pi / 4), math.sin(math.pi / 4))
+    corner = math.hypot(end[0] - HALF, end[1] - 0.153)  # ROBOT's box: 0.281 x 0.306
+    got = sensor.clearance(left, (0.0, 0.0, 0.0), np.array([[end[0] + 0.25, end[1], 0.0]]),
+                           np.array([0.6]))
+    assert got == pytest.approx(corner) and corner < 1.0 - HALF
     # the same person out of reach of every beam: nothing seen
-    assert sensor.clearance(s, edges, (0.0, 0.0, 0.0), np.array([[1.25, 0.6, 0.0]]),
+    assert sensor.clearance(s, (0.0, 0.0, 0.0), np.array([[1.25, 0.6, 0.0]]),
                             np.array([0.9])) == NONE_SEEN
 
 
@@ -167,10 +173,9 @@ def test_a_beam_sees_a_box_hazard_within_the_tolerance_of_its_face() -> None:
     cart = ObservedObject("cart", "dynamic", "cart", Box(0.6, 0.4), 0.9)
     header = StreamHeader(SCHEMA_VERSION, "s", "s", 0, RATE, ROBOT, (cart,), 1.0)
     sensor = HazardSensor(header)
-    edges = BeamEdges(ROBOT.footprint, (0.0, 0.0)).of(scan(1.0))
     # the cart's face (turned 90 degrees: its 0.4 m side faces the robot) 3 cm or 10 cm
     # beyond where the forward beam ends
     for beyond, seen in ((0.03, True), (0.10, False)):
         poses = np.array([[1.0 + beyond + 0.2, 0.0, math.pi / 2]])
-        got = sensor.clearance(scan(1.0), edges, (0.0, 0.0, 0.0), poses, np.array([0.9]))
+        got = sensor.clearance(scan(1.0), (0.0, 0.0, 0.0), poses, np.array([0.9]))
         assert (got == pytest.approx(1.0 - HALF)) if seen else got == NONE_SEEN
