@@ -41,9 +41,11 @@ class BlindSector(ReferenceNavigator):
     Imitates: a laser angular-bounds filter configured for another mounting (meant to cut out
     a mast), or a scanner window blocked by a cable on one side.
 
-    Expected catcher: the collision requirements (MISSION_SIMPLE, GEOM_COLLISION_LASER_CORRECT,
-    NO_ROBOT_COLLISION) when the robot turns left next to an obstacle; HUMAN_SLOW_ZONE when a
-    person passes on its left.
+    Expected catcher: REACTION_TIME when a person or a moving object shows up ahead on its
+    left (60-90 degrees: ahead, and in the dropped sector); HUMAN_SLOW_ZONE when a person
+    passes on its left; the collision requirements (MISSION_SIMPLE,
+    GEOM_COLLISION_LASER_CORRECT, NO_ROBOT_COLLISION) when the robot turns left next to an
+    obstacle.
     """
 
     name = "blind-sector"

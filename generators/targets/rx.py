@@ -52,6 +52,7 @@ KEPT_READS = {
     "neighbouring_goals": "neighbouring_goals", "speed_limit": "speed_limit",
     "turn_limit": "turn_limit", "robot_inradius": "robot_inradius",
     "robot_circumradius": "robot_circumradius", "laser_clearance": "laser_clearance",
+    "hazard_clearance": "hazard_clearance",
 }
 """Inputs that stay the same objects over many samples: a query reading nothing else (and
 finding only such queries) keeps its matches from the previous step while they are the

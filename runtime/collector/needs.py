@@ -20,6 +20,7 @@ from rei.lang.vepl import model as m
 MEASURE_DATA = {
     "laser_min": "laser",
     "laser_clearance": "laser",
+    "hazard_clearance": "laser",  # the scan's beams, matched with the ground-truth footprints
     "odom_error": "odometry",
     "cmd_speed": "nav_state",
     "cmd_turn": "nav_state",

@@ -64,6 +64,11 @@ RULES: dict[str, MarginRule] = {
     "NO_SPIN_AT_GOAL": MarginRule(
         "rad", "max_goal_spin minus the most a task turned in place near its goal (none "
                "if no task succeeded)"),
+    "REACTION_TIME": MarginRule(
+        "s", "the requirement's window minus the slowest reaction: for every moment the "
+             "robot commanded more than slow_speed + speed_tolerance while its laser showed "
+             "a hazard ahead nearer than react_zone, the time to the nearest command at the "
+             "slow speed before or after it (none if that never happened)"),
     "SETTLE": MarginRule(
         "m", "settle_tolerance minus the most the robot's own motion covered in a settle "
              "period"),
@@ -109,9 +114,37 @@ class MarginTracker:
         self.goal_time_left = math.inf
         self.goal_failed = False
         self.heading_left = math.inf
+        self.react_window = 0.0
+        if "REACTION_TIME" in self.defined:
+            clause = _default_requirements()["REACTION_TIME"].clauses[0]
+            self.react_window = getattr(clause, "window", None) or 0.0
+        self.last_slow = -math.inf
+        self.fast_at_hazard = False
+        self.reacting: list[tuple[float, float]] = []
+        """(time the robot was fast with a hazard ahead, seconds since it was last slow)."""
+        self.slowest_reaction = -math.inf
+        self.last_time = 0.0
+
+    def _reaction(self, w: QueryInputs) -> None:
+        """REACTION_TIME's reaction times, step by step as its queries see them."""
+        p = self.p
+        slow = w.cmd_speed <= p.get("slow_speed", 0.15) + p.get("speed_tolerance", 0.0)
+        fast_at_hazard = not slow and w.hazard_clearance < p.get("react_zone", 1.05)
+        if fast_at_hazard and not self.fast_at_hazard:
+            self.reacting.append((w.time, w.time - self.last_slow))
+        self.fast_at_hazard = fast_at_hazard
+        if slow:
+            for start, before in self.reacting:
+                self.slowest_reaction = max(self.slowest_reaction,
+                                            min(before, w.time - start))
+            self.reacting = []
+            self.last_slow = w.time
+        self.last_time = w.time
 
     def observe(self, w: QueryInputs) -> None:
         p = self.p
+        if "REACTION_TIME" in self.defined:
+            self._reaction(w)
         if "MISSION_WITH_HUMAN_TRAJECTORY" in self.defined or "HUMAN_SLOW_ZONE" in self.defined:
             humans = w.kind("human")
             if humans.size and humans.any():
@@ -170,8 +203,25 @@ class MarginTracker:
             if self.time_ratio > 0 else None,
             "NO_SPIN_AT_GOAL": lambda: _finite(p.get("max_goal_spin", 4.7) - self.spin),
             "SETTLE": lambda: p.get("settle_tolerance", 0.1) - self.settle,
+            "REACTION_TIME": self._reaction_margin,
         }
         return compute[name]()
+
+    def _reaction_margin(self) -> float | None:
+        """The window minus the slowest reaction. A reaction still awaited when the run
+        ended counts from its start to the last step (a slow command within the window
+        before it answered it already); one awaited for less than the window has no
+        number to give (the verdict fails: the run ended before the robot slowed)."""
+        slowest = self.slowest_reaction
+        for start, before in self.reacting:
+            waited = self.last_time - start
+            if before <= self.react_window:
+                slowest = max(slowest, before)
+            elif waited > self.react_window:
+                slowest = max(slowest, waited)
+            else:
+                return None
+        return _finite(self.react_window - slowest)
 
     def annotate(self, verdicts: tuple[Verdict, ...]) -> tuple[Verdict, ...]:
         """The verdicts with their margins (only pass and fail get one)."""

@@ -111,6 +111,11 @@ class QueryInputs:
     own_turn_rate: float = 0.0
     own_yaw_rate: float = 0.0
     """Likewise |angular velocity| and signed angular velocity (rad/s)."""
+    hazard_clearance: float = 1e3
+    """Of the latest scan: over the beams ahead (within 90 degrees of the heading) that end
+    on a person's or a moving object's footprint, the smallest distance from the robot's
+    footprint to a beam's end point (m); 1000 when no such beam (and before the first scan).
+    Kept between scans (rei.runtime.monitor.hazard)."""
     settle_travel: float = 0.0
     """Metres the robot's own motion covered since its last task ended, while no task runs
     (the mission's settle period); 0 while a task runs and once the mission ended."""

@@ -26,6 +26,7 @@ from rei.runtime.messages import MissionEvent, Sample, StreamHeader
 from rei.runtime.monitor.automata import QueryInputs
 from rei.runtime.monitor.efficiency import FloorGraph, TaskEfficiency, TaskProgress, judge_task
 from rei.runtime.monitor.geometry import FootprintSet
+from rei.runtime.monitor.hazard import HazardSensor
 from rei.runtime.monitor.laser import BeamEdges, clearance
 
 FAR_AWAY = 1e3
@@ -168,6 +169,10 @@ class RuntimeModel:
         self.beam_edges = BeamEdges(header.robot.footprint, header.laser_mount)
         self.laser_clearance = FAR_AWAY
         """Of the latest scan a sample carried; scans come only when new, so it is kept."""
+        self.hazards = HazardSensor(header)
+        self.hazard_clearance = FAR_AWAY
+        """Of the latest scan: the nearest beam ahead that ends on a person or a moving
+        object (rei.runtime.monitor.hazard), kept between scans like laser_clearance."""
         self.circumradius = self.footprints.robot_bound
         self.tasks: list[TaskRecord] = []
         self.task_codes = np.zeros(0, dtype=np.int64)
@@ -284,7 +289,11 @@ class RuntimeModel:
             self._task.observe((x, y), step, own.speed, own.yaw_rate, dt)
         scan = s.belief.scan
         if scan is not None:
-            self.laser_clearance = clearance(scan, self.beam_edges.of(scan))
+            edges = self.beam_edges.of(scan)
+            self.laser_clearance = clearance(scan, edges)
+            if self.hazards.indices:
+                self.hazard_clearance = self.hazards.clearance(scan, s.robot_pose, s.poses,
+                                                               distance)
         ox, oy, _ = s.belief.odom
         return QueryInputs(
             distance, self.kind_masks, self._robot_floor(x, y), self.task_codes,
@@ -295,7 +304,7 @@ class RuntimeModel:
             cmd_speed=abs(s.belief.cmd[0]), cmd_turn=abs(s.belief.cmd[1]),
             turn_rate=abs(s.robot_twist[2]), yaw_rate=s.robot_twist[2], yaw=s.robot_pose[2],
             own_speed=own.speed, own_turn_rate=abs(own.yaw_rate), own_yaw_rate=own.yaw_rate,
-            pushed=1.0 if own.pushed else 0.0,
+            pushed=1.0 if own.pushed else 0.0, hazard_clearance=self.hazard_clearance,
             settle_travel=self.idle_travel if self._idle else 0.0,
             path_ratio=self._judged.path_ratio, time_ratio=self._judged.time_ratio,
             goal_spin=self._judged.spin,

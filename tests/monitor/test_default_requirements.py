@@ -115,6 +115,7 @@ def test_a_clean_run_passes_and_absent_premises_are_not_applicable(tmp_path: Pat
     assert status.pop("MISSION_WITH_HUMAN_TRAJECTORY") == "not_applicable"
     assert status.pop("HUMAN_SLOW_ZONE") == "not_applicable"
     assert status.pop("GOAL_HEADING") == "not_applicable"
+    assert status.pop("REACTION_TIME") == "not_applicable"  # no people, nothing moving
     assert set(status.values()) == {"pass"}, status
     assert judge(summary_of(result)) == "pass"
 

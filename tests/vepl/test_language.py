@@ -49,7 +49,7 @@ def test_default_specification_has_table_3_and_the_5_1_2_requirements() -> None:
         "MISSION_SEQUENCE", "MISSION_SEQUENCE_CYCLE", "MISSION_WITH_HUMAN_TRAJECTORY",
         "MISSION_GOALS_REACHED", "GOAL_HEADING", "SPEED_LIMIT", "HUMAN_SLOW_ZONE",
         "NO_ROBOT_COLLISION", "EFFICIENT_PATH", "TIME_TO_GOAL", "NO_SPIN_AT_GOAL", "SETTLE",
-        "SMOOTH_MOTION"]
+        "SMOOTH_MOTION", "REACTION_TIME"]
     assert spec.parameters["N_COLLISION"] == 1
     by_name = {r.name: r for r in spec.requirements}
     human = by_name["MISSION_WITH_HUMAN_TRAJECTORY"]
@@ -57,6 +57,10 @@ def test_default_specification_has_table_3_and_the_5_1_2_requirements() -> None:
     # the 5.1.2 set is kept as written; premises only make absent scenarios not applicable
     assert human.premise == "humansPresent"
     assert by_name["GOAL_HEADING"].premise == "missionHasHeadings"
+    # issue 22: reacting to a hazard the laser shows is asked only where there can be one
+    assert by_name["REACTION_TIME"].premise == "hazardsPresent"
+    assert by_name["REACTION_TIME"].clauses == (
+        m.Whenever("hazardSensedFast", ("commandsSlow",), 0.3),)
     # thesis 5.1.2's GIVEN: a pair of neighbouring goals; a back-and-forth cycle (g1, g2)*
     assert by_name["MISSION_SIMPLE"].premise == "neighbouringGoalPair"
     assert by_name["MISSION_SEQUENCE_CYCLE"].premise == "backAndForth"
