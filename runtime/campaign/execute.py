@@ -121,7 +121,6 @@ def execute_run(spec: RunSpec, work_dir: Path, *, timeout: float | None = None,
     work_dir.mkdir(parents=True, exist_ok=True)
     limit = default_timeout(spec) if timeout is None else timeout
     argv = [*runner, *spec.run_argv(str(work_dir))]
-    started = time.monotonic()
     with open_output(work_dir / "campaign-stdout.txt", binary=True) as out, \
             open_output(work_dir / "campaign-stderr.txt", binary=True) as err:
         # Its own process group and death with this thread (rei.runtime.processes): Ctrl-C
@@ -130,6 +129,9 @@ def execute_run(spec: RunSpec, work_dir: Path, *, timeout: float | None = None,
         env = run_environment(cache)
         process = _start(argv, env, out, err, warm if tuple(runner) == DEFAULT_RUNNER
                          and warm_enabled(env) else None)
+        # The watchdog counts from here: starting (or replacing) a worker's fork server is
+        # the campaign's cost, not the run's, and must not make a run look hung.
+        started = time.monotonic()
         try:
             code = process.status()
             while code is None:

@@ -68,7 +68,9 @@ RULES: dict[str, MarginRule] = {
         "s", "the requirement's window minus the slowest reaction: for every moment the "
              "robot commanded more than slow_speed + speed_tolerance while its laser showed "
              "a hazard ahead nearer than react_zone, the time to the nearest command at the "
-             "slow speed before or after it (none if that never happened)"),
+             "slow speed before or after it; one still awaited when the run ends counts to the "
+             "last sample once that exceeds the window, and leaves no margin within it (none "
+             "if that never happened)"),
     "SETTLE": MarginRule(
         "m", "settle_tolerance minus the most the robot's own motion covered in a settle "
              "period"),

@@ -45,9 +45,26 @@ def threads_alive() -> int:
 
 def can_fork(env: Mapping[str, str] | None = None) -> bool:
     """Whether a warm child may be forked here: Linux (where the rest of ``start_child``'s
-    guarantees hold), warm processes not turned off, and this process single-threaded."""
-    return (sys.platform.startswith("linux") and warm_enabled(env)
+    guarantees hold) with ``pidfd_open`` (a forked child is waited for through it: Linux
+    5.3, and not refused by a container's seccomp profile), warm processes not turned off,
+    and this process single-threaded."""
+    return (sys.platform.startswith("linux") and warm_enabled(env) and pidfd_supported()
             and threads_alive() == 1)
+
+
+_PIDFD: list[bool] = []
+"""pidfd_supported's answer, found once per process."""
+
+
+def pidfd_supported() -> bool:
+    """Whether ``os.pidfd_open`` works here (tried on this process itself, once)."""
+    if not _PIDFD:
+        try:
+            os.close(os.pidfd_open(os.getpid()))
+            _PIDFD.append(True)
+        except (AttributeError, OSError):
+            _PIDFD.append(False)
+    return _PIDFD[0]
 
 
 class ForkedChild:
@@ -117,6 +134,8 @@ def fork_child(entry: Callable[[], int | None], *, stdin: Stream = subprocess.DE
     status); call only when ``can_fork()``. Streams are as ``subprocess.Popen``'s (None:
     inherited, DEVNULL, PIPE, a descriptor or a file); ``die_with_parent`` is the
     ``preexec_fn`` of ``rei.runtime.processes.die_with_parent``, resolved by the caller."""
+    if stderr == subprocess.PIPE:
+        raise ValueError("fork_child: stderr=PIPE is not supported (nobody reads it)")
     opened: list[int] = []
     parent_ends: list[int | None] = []
     try:
@@ -129,9 +148,16 @@ def fork_child(entry: Callable[[], int | None], *, stdin: Stream = subprocess.DE
         for text in (sys.stdout, sys.stderr):  # or the child would write it a second time
             with contextlib.suppress(Exception):
                 text.flush()
+        # Garbage with unflushed buffers is collected (and flushed) here, once, not in the
+        # child into descriptors it still shares with this process.
+        gc.collect()
         pid = os.fork()
         if pid == 0:
             _child(entry, child_fds, cwd, tuple(pass_fds), die_with_parent)  # never returns
+        # Both sides set the child's process group (the child does it too): when this call
+        # returns, stop_child's killpg reaches the child even if it has not run yet.
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.setpgid(pid, pid)
     except BaseException:
         for end in parent_ends:
             if end is not None:
@@ -141,8 +167,6 @@ def fork_child(entry: Callable[[], int | None], *, stdin: Stream = subprocess.DE
         for fd in opened:
             os.close(fd)
     stdin_end, stdout_end = parent_ends[0], parent_ends[1]
-    if parent_ends[2] is not None:
-        os.close(parent_ends[2])  # nobody asks for stderr=PIPE here; never leak it
     return ForkedChild(pid, os.fdopen(stdin_end, "wb") if stdin_end is not None else None,
                        os.fdopen(stdout_end, "rb") if stdout_end is not None else None)
 

@@ -129,7 +129,6 @@ class ForkServer:
         finally:
             theirs.close()
         self.env = dict(env)
-        self.busy = False
         try:
             ready = _receive(ours, READY_LIMIT)
         except WarmUnavailable:
@@ -162,7 +161,6 @@ class ForkServer:
             self.close()
             why = answer.get("refused") if answer is not None else "it ended"
             raise WarmUnavailable(f"the fork server did not start the run ({why})")
-        self.busy = True
         return WarmRun(self, answer["pid"])
 
     def close(self) -> None:
@@ -220,7 +218,6 @@ class WarmRun:
             self.server.close()
         elif isinstance(message.get("exit"), int):
             self.returncode = message["exit"]
-        self.server.busy = self.returncode is None
 
 
 class WarmWorkers:
@@ -231,11 +228,19 @@ class WarmWorkers:
         self._local = threading.local()
         self._servers: list[ForkServer] = []
         self._lock = threading.Lock()
+        self._cold: dict[tuple[tuple[str, str], ...], str] = {}
+        """Why a server could not start, per environment: its runs then start cold at once
+        instead of paying for a server's imports again on every run."""
 
     def start(self, args: Sequence[str], env: Mapping[str, str], cwd: str, stdout: int,
               stderr: int) -> tuple[WarmRun | None, str]:
         """The run forked by this thread's server (started or replaced as needed), or
         (None, why) when it must start cold."""
+        key = tuple(sorted(env.items()))
+        with self._lock:
+            known = self._cold.get(key)
+        if known is not None:
+            return None, known
         why = ""
         for _ in range(2):
             server: ForkServer | None = getattr(self._local, "server", None)
@@ -246,6 +251,8 @@ class WarmWorkers:
                 try:
                     server = ForkServer(env)
                 except (OSError, WarmUnavailable) as exc:
+                    with self._lock:
+                        self._cold[key] = str(exc)
                     return None, str(exc)
                 self._local.server = server
                 with self._lock:
@@ -309,6 +316,8 @@ def serve(sock: socket.socket, fingerprint: str) -> None:
             return
         try:
             request = json.loads(data)
+            if isinstance(request, dict) and request.get("kill") and not fds:
+                continue  # a stop that crossed the end of the run it was meant for
             refused = ""
             if code_fingerprint.__wrapped__() != fingerprint:
                 refused = "stale: REI's code changed since the server imported it"
@@ -362,7 +371,13 @@ def main(argv: list[str]) -> int:
             _send(sock, {"error": f"{type(exc).__name__}: {exc}"})
         return 1
     from rei.runtime.cache import code_fingerprint  # noqa: PLC0415
+    from rei.runtime.warm.fork import can_fork  # noqa: PLC0415
 
+    if not can_fork():  # e.g. OMP_NUM_THREADS > 1 left a math thread alive after the imports
+        with contextlib.suppress(OSError):
+            _send(sock, {"error": "this server cannot fork (a thread is alive after its "
+                                  "imports, or the kernel lacks pidfd_open)"})
+        return 1
     _send(sock, {"ready": os.getpid()})
     serve(sock, code_fingerprint())
     return 0

@@ -168,3 +168,26 @@ def test_with_a_thread_alive_or_warm_off_the_child_is_executed(tmp_path: Path) -
     warm_off = in_fresh_process(code, tmp_path,
                                 **{WARM_VARIABLE: "off"})
     assert warm_off == {"executed": True, "status": 4}
+
+
+def test_a_child_stopped_at_once_after_the_fork_is_killed_not_waited_for(tmp_path: Path) -> None:
+    # The child sets its own process group when it first runs; until then a killpg by the
+    # parent found no group (ESRCH, ignored) and stop_child waited for the child's whole life,
+    # then reported its normal exit. The parent now sets the group as well, before returning.
+    result = in_fresh_process("""
+        statuses = []
+        for _ in range(10):
+            child = start_child(["false"], stderr=subprocess.DEVNULL,
+                                warm=lambda: time.sleep(30) or 0)
+            stop_child(child)
+            statuses.append(child.returncode)
+        result["statuses"] = statuses
+    """, tmp_path)
+    assert result["statuses"] == [-signal.SIGKILL] * 10, result["statuses"]
+
+
+def test_stderr_pipe_is_refused_rather_than_broken() -> None:
+    from rei.runtime.warm.fork import fork_child
+
+    with pytest.raises(ValueError, match="stderr=PIPE"):
+        fork_child(lambda: 0, stderr=subprocess.PIPE)
