@@ -107,6 +107,8 @@ def _check(args: argparse.Namespace) -> None:
         raise RunError(f"--seed: expected seeds from 0 to 2**64-1, found {args.seed}")
     if args.vepl is not None and not args.vepl.is_file():
         raise RunError(f"--vepl: file '{args.vepl}' does not exist")
+    if args.output.exists() and not args.output.is_dir():
+        raise RunError(f"-o {args.output}: expected a folder (new or existing), found a file")
     if args.output.resolve() == args.mission.resolve().parent:
         raise RunError(f"-o {args.output}: expected a folder other than the case's own (the "
                        f"shrunk files would replace the originals)")
@@ -186,7 +188,7 @@ def _print(report: object, out: Path, quiet: bool) -> int:
         print(f"  replay: {summary['replay']}")
     print(f"verdict: FAIL ({report.requirement}, shrunk {before['elements']} -> "
           f"{after['elements']} elements); outputs in {out}")
-    return EXIT_FAILED if report.stopped != "interrupted" else EXIT_INTERRUPTED
+    return EXIT_FAILED
 
 
 __all__ = ["register", "run"]

@@ -70,6 +70,9 @@ class Reproducer:
 @dataclass(frozen=True)
 class Cluster:
     requirement: str
+    status: str
+    """How its runs ended on the requirement (fail, inconclusive, ...): never mixed, so the
+    reproducer's replay shows the cluster's failure."""
     kind: str
     phase: str
     lead: tuple[str, ...]
@@ -165,25 +168,26 @@ def failures(records: Sequence[RunRecord], run_dir: Callable[[RunRecord], Path]
 
 def clusters(found: Sequence[Failure], rerun: Mapping[str, str] | None = None,
              root: Path | None = None) -> list[Cluster]:
-    """Failures grouped by (requirement, kind of object, phase kind, lead-up signals), largest
-    first. The phase is compared by its task's position, not its name, so the same goal of
-    different rooms clusters together. With ``rerun`` (run id → its `rei run` command) each
-    cluster gets its smallest reproducer; with ``root`` (the campaign folder) shrink results
-    in ``root/shrunk/`` are used."""
-    groups: dict[tuple[str, str, str, tuple[str, ...]], list[Failure]] = {}
+    """Failures grouped by (requirement, its status, kind of object, phase kind, lead-up
+    signals), largest first. The phase is compared by its task's position, not its name, so
+    the same goal of different rooms clusters together. With ``rerun`` (run id → its `rei
+    run` command) each cluster gets its smallest reproducer; with ``root`` (the campaign
+    folder) shrink results in ``root/shrunk/`` are used."""
+    groups: dict[tuple[str, str, str, str, tuple[str, ...]], list[Failure]] = {}
     for f in found:
         phase = f.phase.split(":")[0]
-        groups.setdefault((f.requirement, ", ".join(f.kinds) or "—", phase, f.lead),
+        groups.setdefault((f.requirement, f.status, ", ".join(f.kinds) or "—", phase, f.lead),
                           []).append(f)
     shrunk = shrink_results(root) if root is not None else []
     sizes: dict[str, int | None] = {}
     out = []
-    for (req, kind, phase, lead), items in groups.items():
+    for (req, status, kind, phase, lead), items in groups.items():
         reproducer = None
         if rerun is not None:
             reproducer = smallest_reproducer(items, rerun, sizes, shrunk)
-        out.append(Cluster(req, kind, phase, lead, tuple(items), reproducer))
-    out.sort(key=lambda c: (-len(c.failures), c.requirement, c.kind, c.phase, c.lead))
+        out.append(Cluster(req, status, kind, phase, lead, tuple(items), reproducer))
+    out.sort(key=lambda c: (-len(c.failures), c.requirement, c.status, c.kind, c.phase,
+                            c.lead))
     return out
 
 
@@ -236,9 +240,10 @@ def smallest_reproducer(items: Sequence[Failure], rerun: Mapping[str, str],
                         sizes: dict[str, int | None], shrunk: Sequence[ShrinkResult]
                         ) -> Reproducer:
     """The failure of ``items`` with the smallest case (then the shortest run, then the run
-    id); a shrink of one of their missions for the same requirement beats every run."""
+    id); a shrink of one of their missions for the same failed requirement beats every run
+    (a shrunk case fails it: no reproducer of an inconclusive one)."""
     missions = {f.record.spec.mission_file for f in items}
-    for result in shrunk:
+    for result in shrunk if items[0].status == "fail" else ():
         if result.mission_file in missions and result.requirement == items[0].requirement:
             failure = next(f for f in items if f.record.spec.mission_file == result.mission_file)
             return Reproducer(failure, result.size, result.replay, result.mission)
@@ -256,7 +261,7 @@ def smallest_reproducer(items: Sequence[Failure], rerun: Mapping[str, str],
 def clusters_json(found: Sequence[Cluster]) -> dict[str, Any]:
     """clusters.json: every cluster with its runs and its reproducer."""
     return {"version": CLUSTERS_VERSION, "clusters": [
-        {"requirement": c.requirement, "objects": c.kind, "phase": c.phase,
+        {"requirement": c.requirement, "status": c.status, "objects": c.kind, "phase": c.phase,
          "lead": list(c.lead), "runs": [f.record.spec.run_id for f in c.failures],
          "missions": list(c.missions),
          "reproducer": None if c.reproducer is None else {

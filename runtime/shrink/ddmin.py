@@ -41,6 +41,4 @@ def ddmin(items: Sequence[T], fails: Callable[[list[T]], bool]) -> list[T]:
             if chunks >= len(current):
                 break
             chunks = min(chunks * 2, len(current))
-    if len(current) == 1 and fails([]):
-        return []
-    return current
+    return current  # [] was the first test: a single item left is 1-minimal already

@@ -25,22 +25,29 @@ from rei.runtime.shrink.case import ScenarioCase
 @dataclass(frozen=True)
 class SeedOutcome:
     """One run of a candidate: its seed, the run's verdict (``judge``; ``invalid`` when
-    `rei run` refused its input) and the requirements that failed in it (earliest first)."""
+    `rei run` refused its input), the requirements that failed in it (earliest first; none
+    when the run broke: a run error is no failure of a requirement) and every requirement
+    it judged."""
 
     seed: int
     verdict: str
     failed: tuple[str, ...]
     message: str = ""
     """Why the run broke (run error, crash, hang); empty when it ran."""
+    judged: tuple[str, ...] = ()
+    """The requirements the run has verdicts for (empty: unknown, e.g. journaled by an older
+    REI or a run that broke before judging)."""
 
     def to_json(self) -> dict[str, Any]:
         return {"seed": self.seed, "verdict": self.verdict, "failed": list(self.failed),
-                **({"message": self.message} if self.message else {})}
+                **({"message": self.message} if self.message else {}),
+                **({"judged": list(self.judged)} if self.judged else {})}
 
     @staticmethod
     def from_json(data: dict[str, Any]) -> SeedOutcome:
         return SeedOutcome(int(data["seed"]), str(data["verdict"]),
-                           tuple(str(r) for r in data["failed"]), str(data.get("message", "")))
+                           tuple(str(r) for r in data["failed"]), str(data.get("message", "")),
+                           tuple(str(r) for r in data.get("judged", ())))
 
 
 @dataclass(frozen=True)
@@ -79,11 +86,14 @@ class FailureOracle:
     journal: Path
     """JSON lines {digest, settings, outcomes}: what earlier sessions found."""
     runs: int = 0
-    """Runs judged: every candidate's seeds, whether they ran now or came from the journal
-    (so a resumed shrink reports and budgets exactly as an uninterrupted one)."""
+    """Runs judged: every distinct candidate's seeds once per session, whether they ran now
+    or came from the journal (so a resumed shrink reports and budgets exactly as an
+    uninterrupted one)."""
     started: int = 0
     """Runs this session actually started."""
     known: dict[str, tuple[SeedOutcome, ...]] = field(default_factory=dict)
+    charged: set[str] = field(default_factory=set)
+    """Digests already counted in ``runs`` this session: judging one again costs nothing."""
 
     def __post_init__(self) -> None:
         self.work.mkdir(parents=True, exist_ok=True)
@@ -101,10 +111,16 @@ class FailureOracle:
             except (ValueError, KeyError, TypeError, AttributeError):
                 continue  # a line cut short by an interruption: that candidate runs again
 
+    def cost(self, case: ScenarioCase) -> int:
+        """The runs judging ``case`` adds to ``runs``: none when this session judged it."""
+        return 0 if case.digest() in self.charged else len(self.settings.seeds)
+
     def outcomes(self, case: ScenarioCase) -> tuple[SeedOutcome, ...]:
         """The candidate's outcome on every seed (from the journal when known)."""
         digest = case.digest()
-        self.runs += len(self.settings.seeds)
+        if digest not in self.charged:
+            self.charged.add(digest)
+            self.runs += len(self.settings.seeds)
         if digest in self.known:
             return self.known[digest]
         folder = self.work / digest[:16]
@@ -141,11 +157,19 @@ def _outcome(seed: int, status: str, summary: dict[str, Any] | None, message: st
             return SeedOutcome(seed, "invalid", (), message)
         return SeedOutcome(seed, "error", (), message or f"the run {status}")
     run = RunSummary.from_json(summary)
+    judged = tuple(dict.fromkeys(v.requirement for v in run.verdicts))
+    if run.verdict in ("error", "interrupted"):  # verdicts of an abandoned mission: no failure
+        return SeedOutcome(seed, run.verdict, (), run.reason, judged)
     failed = tuple(v.requirement for v in failed_verdicts(run) if v.status == "fail")
-    note = run.reason if run.verdict in ("error", "interrupted") else ""
-    return SeedOutcome(seed, run.verdict, failed, note)
+    return SeedOutcome(seed, run.verdict, failed, "", judged)
+
+
+BROKEN = ("error", "interrupted", "invalid")
+"""Verdicts of a run that broke: whatever it says of a requirement, it did not fail it."""
 
 
 def fails_everywhere(outcomes: Sequence[SeedOutcome], requirement: str) -> bool:
-    """The acceptance rule of a shrinking step: ``requirement`` failed on every seed."""
-    return bool(outcomes) and all(requirement in o.failed for o in outcomes)
+    """The acceptance rule of a shrinking step: ``requirement`` failed on every seed, each
+    of them a run that did not break."""
+    return bool(outcomes) and all(o.verdict not in BROKEN and requirement in o.failed
+                                  for o in outcomes)

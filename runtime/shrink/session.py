@@ -14,6 +14,7 @@ import shutil
 from collections.abc import Callable
 from pathlib import Path
 
+from rei.runtime.errors import RunError
 from rei.runtime.shrink.case import ScenarioCase, load_case, sizes
 from rei.runtime.shrink.oracle import FailureOracle, RunSettings
 from rei.runtime.shrink.shrinker import (
@@ -26,6 +27,7 @@ from rei.runtime.shrink.shrinker import (
     choose_requirement,
     replay_command,
     summary_json,
+    unknown_requirement,
     write_case_atomically,
     write_json_atomically,
 )
@@ -39,7 +41,9 @@ def shrink_into(mission: Path, out: Path, settings: RunSettings, *,
                 keep: frozenset[str] = frozenset(),
                 progress: Callable[[str], None] = lambda line: None) -> ShrinkReport:
     """Shrink ``mission`` into ``out``; the report (also in OUT/shrink.json). LanguageError
-    when the mission does not check clean; KeyboardInterrupt after writing the best case."""
+    when the mission does not check clean; RunError when ``requirement`` is none of the
+    case's (after the original's runs, which are journaled); KeyboardInterrupt after writing
+    the best case."""
     case = load_case(mission)
     out.mkdir(parents=True, exist_ok=True)
     oracle = FailureOracle(settings, out / WORK, out / JOURNAL)
@@ -57,6 +61,9 @@ def _shrink(mission: Path, case: ScenarioCase, out: Path, oracle: FailureOracle,
     before = sizes(case)
     progress(f"running the original on seeds {', '.join(map(str, oracle.settings.seeds))}")
     original = oracle.outcomes(case)
+    unknown = unknown_requirement(original, requirement)
+    if unknown is not None:
+        raise RunError(unknown)
     result, chosen = choose_requirement(original, requirement)
     report = ShrinkReport(str(mission), result, chosen, original, oracle.settings.describe(),
                           before, case)

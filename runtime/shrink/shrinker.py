@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
+from rei.lang.suggest import did_you_mean
 from rei.runtime.campaign.plan import RunSpec
 from rei.runtime.shrink.case import (
     ELEMENT_KINDS,
@@ -99,7 +100,7 @@ class Shrinker:
         if case.problems():
             self.rejected_by_check += 1
             return False
-        if self.oracle.runs + len(self.oracle.settings.seeds) > self.max_runs:
+        if self.oracle.runs + self.oracle.cost(case) > self.max_runs:
             raise BudgetSpent
         return fails_everywhere(self.oracle.outcomes(case), self.requirement)
 
@@ -177,6 +178,16 @@ def _labels(gone: Sequence[Element]) -> str:
     return ", ".join(names[:4]) + (f" and {len(names) - 4} more" if len(names) > 4 else "")
 
 
+def unknown_requirement(outcomes: Sequence[SeedOutcome], wanted: str | None) -> str | None:
+    """Why ``wanted`` (--requirement) names no requirement of the case, in one line, or None:
+    None too when no run judged anything (a broken run, or a journal without the names)."""
+    judged = list(dict.fromkeys(r for o in outcomes for r in o.judged))
+    if wanted is None or not judged or wanted in judged:
+        return None
+    return (f"--requirement: expected one of the requirements the case's runs judged "
+            f"({', '.join(judged)}), found '{wanted}'{did_you_mean(wanted, judged)}")
+
+
 def choose_requirement(outcomes: Sequence[SeedOutcome], wanted: str | None
                        ) -> tuple[ShrinkResult, str | None]:
     """The requirement to keep failing and what the original case does: ``wanted`` (or the
@@ -251,4 +262,4 @@ def write_case_atomically(case: ScenarioCase, folder: Path) -> Path:
 
 __all__ = ["ELEMENT_KINDS", "JOURNAL", "PICTURE", "STAGES", "SUMMARY", "BudgetSpent",
            "ShrinkReport", "Shrinker", "choose_requirement", "replay_command", "sizes",
-           "summary_json", "write_case_atomically", "write_json_atomically"]
+           "summary_json", "unknown_requirement", "write_case_atomically", "write_json_atomically"]

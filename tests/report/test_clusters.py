@@ -35,7 +35,9 @@ def _failing(mission: str) -> tuple[str, tuple[str, ...]] | None:
             "medium_sparse": ("NO_ROBOT_COLLISION", BUMPING)}.get(mission)
 
 
-def _campaign(root: Path, passing: bool = False) -> None:
+def _campaign(root: Path, passing: bool = False, undecided: frozenset[str] = frozenset()
+              ) -> None:
+    """``undecided``: runs whose requirement is inconclusive instead of failed."""
     plan = example_plan(repeat=2)
     with CampaignStore.open(root, plan, {"command": ["rei", "campaign", "examples"]}) as store:
         for spec in plan.runs:
@@ -45,7 +47,9 @@ def _campaign(root: Path, passing: bool = False) -> None:
             if failing is not None:
                 requirement, signals = failing
                 summary = replace(summary, outcome="completed", verdicts=(
-                    Verdict(requirement, "fail", 0.5 * len(signals), f"{requirement} broken"),
+                    Verdict(requirement,
+                            "inconclusive" if spec.run_id in undecided else "fail",
+                            0.5 * len(signals), f"{requirement} broken"),
                     Verdict("MISSION_GOALS_REACHED", "pass", None, "")))
             result = RunResult(spec.run_id, "ran", 1 if failing else 0, 1.0, summary.to_json(),
                                "", {"events.csv": _events(failing[1] if failing else ())})
@@ -138,3 +142,27 @@ def test_a_passing_campaign_has_no_clusters(tmp_path: Path) -> None:
     page = etree.HTML((root / "report.html").read_text(encoding="utf-8"))
     assert not page.xpath("//table[@id='failure-clusters']")
     assert page.xpath("string(//p[@id='no-failures'])").startswith("No failures")
+
+
+def test_an_inconclusive_requirement_is_not_clustered_with_its_failures(tmp_path: Path) -> None:
+    root = tmp_path / "campaign"
+    _campaign(root, undecided=frozenset({"simple_wall.r00"}))
+    # a shrink of simple_wall for SPEED_LIMIT reproduces its failure, not the undecided run
+    shrunk = root / "shrunk" / "simple_wall"
+    shrunk.mkdir(parents=True)
+    (shrunk / "shrink.json").write_text(json.dumps({
+        "result": "shrunk", "requirement": "SPEED_LIMIT",
+        "mission_file": str((EXAMPLES / "simple_wall" / "simple_wall.mission").resolve()),
+        "files": {"mission": "simple_wall.mission"}, "sizes": {"after": {"elements": 2}},
+        "replay": "rei run shrunk/simple_wall/simple_wall.mission -o replay"}),
+        encoding="utf-8")
+    build_report(root, html=False)
+    found = _clusters(root)
+    assert [(c["requirement"], c["status"], c["runs"]) for c in found] == [
+        ("NO_ROBOT_COLLISION", "fail",
+         ["medium_sparse.r00", "medium_sparse.r01", "small_dense.r00", "small_dense.r01"]),
+        ("SPEED_LIMIT", "fail", ["navigation.r00", "navigation.r01", "simple_wall.r01"]),
+        ("SPEED_LIMIT", "inconclusive", ["simple_wall.r00"])]
+    failed, undecided = found[1]["reproducer"], found[2]["reproducer"]
+    assert failed["run"] == "simple_wall.r01" and failed["shrunk"] is True  # type: ignore[index]
+    assert undecided["run"] == "simple_wall.r00" and undecided["shrunk"] is False  # type: ignore[index]

@@ -4,6 +4,8 @@ layout, and ddmin finds a 1-minimal subset (tests/shrink/test_shrink_command.py 
 
 from __future__ import annotations
 
+import json
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -21,8 +23,15 @@ from rei.runtime.shrink.case import (
     without,
 )
 from rei.runtime.shrink.ddmin import ddmin
-from rei.runtime.shrink.oracle import SeedOutcome, fails_everywhere
-from rei.runtime.shrink.shrinker import choose_requirement
+from rei.runtime.shrink.oracle import (
+    FailureOracle,
+    RunSettings,
+    SeedOutcome,
+    _outcome,
+    fails_everywhere,
+)
+from rei.runtime.shrink.shrinker import Shrinker, choose_requirement, unknown_requirement
+from tests.campaign.records import summary_for
 
 CASES = Path(__file__).parent / "cases"
 CLUTTERED = CASES / "cluttered.mission"
@@ -129,6 +138,57 @@ def test_a_step_is_kept_only_when_the_requirement_fails_on_every_seed() -> None:
     assert not fails_everywhere([_seed(0, "SPEED_LIMIT"), _seed(1)], "SPEED_LIMIT")
     assert not fails_everywhere([_seed(0, "X"), _seed(1, "X")], "SPEED_LIMIT")
     assert not fails_everywhere([], "SPEED_LIMIT")
+
+
+def test_a_broken_run_never_fails_the_requirement() -> None:
+    # the mission was abandoned (run error) but its verdicts were still evaluated: one fails
+    failing = summary_for("m", "r", 0, False, 5.0)
+    assert _outcome(0, "ran", failing.to_json(), "").failed == ("all_tasks_succeed",)
+    crashed = replace(failing, outcome="error", reason="controller raised")
+    outcome = _outcome(0, "ran", crashed.to_json(), "")
+    assert (outcome.verdict, outcome.failed, outcome.message) == (
+        "error", (), "controller raised")
+    assert "all_tasks_succeed" in outcome.judged
+    # nor does an outcome that says otherwise (e.g. journaled by an older REI)
+    for verdict in ("error", "interrupted", "invalid"):
+        assert not fails_everywhere([SeedOutcome(0, verdict, ("A",))], "A")
+
+
+def test_a_requirement_no_run_judged_is_refused_with_the_names_they_did() -> None:
+    judged = [SeedOutcome(s, "fail", ("SPEED_LIMIT",), "", ("SPEED_LIMIT", "NO_COLLISION"))
+              for s in (0, 1)]
+    assert unknown_requirement(judged, "SPEED_LIMT") == (
+        "--requirement: expected one of the requirements the case's runs judged "
+        "(SPEED_LIMIT, NO_COLLISION), found 'SPEED_LIMT'; did you mean 'SPEED_LIMIT'?")
+    assert unknown_requirement(judged, "FOO") is not None
+    assert "did you mean" not in str(unknown_requirement(judged, "FOO"))
+    assert unknown_requirement(judged, "NO_COLLISION") is None
+    assert unknown_requirement(judged, None) is None
+    assert unknown_requirement([SeedOutcome(0, "error", (), "crashed")], "FOO") is None
+
+
+def test_a_candidate_judged_again_in_a_session_is_charged_once(tmp_path: Path) -> None:
+    case = load_case(CLUTTERED)
+    settings = RunSettings(seeds=(0, 1, 2))
+    journal = tmp_path / "shrink-runs.jsonl"  # an earlier session judged the case
+    journal.write_text(json.dumps({"digest": case.digest(), "settings": settings.describe(),
+                                   "outcomes": [_seed(s, "A").to_json() for s in (0, 1, 2)]})
+                       + "\n", encoding="utf-8")
+    oracle = FailureOracle(settings, tmp_path / "work", journal)
+    shrinker = Shrinker(oracle, "A", max_runs=3)  # room for the three seeds once
+    assert shrinker.still_fails(case) and shrinker.still_fails(case)  # no BudgetSpent
+    assert (oracle.runs, oracle.started) == (3, 0)  # remembered: counted once, nothing ran
+
+
+def test_ddmin_never_tests_the_empty_subset_twice() -> None:
+    tried: list[list[int]] = []
+
+    def fails(kept: list[int]) -> bool:
+        tried.append(kept)
+        return 3 in kept
+
+    assert ddmin(list(range(6)), fails) == [3]
+    assert tried.count([]) == 1
 
 
 def test_the_requirement_is_chosen_from_what_the_original_does() -> None:

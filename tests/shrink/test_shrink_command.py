@@ -124,6 +124,11 @@ def test_bad_input_is_refused_in_one_line(tmp_path: Path,
         assert "expected a positive finite number" in capsys.readouterr().err
     assert main(["shrink", str(CLUTTERED), "-o", str(CASES)]) == 2  # would replace the case
     assert "expected a folder other than the case's own" in capsys.readouterr().err
+    (tmp_path / "a_file").write_text("", encoding="utf-8")
+    assert main(["shrink", str(CLUTTERED), "-o", str(tmp_path / "a_file")]) == 2
+    err = capsys.readouterr().err
+    assert "a_file: expected a folder (new or existing), found a file" in err
+    assert len(err.splitlines()) == 1
     assert main(["shrink", str(CLUTTERED), "-o", str(tmp_path / "refused"), "--controller",
                  "no_such_module:Navigator", "--seeds", "1", "--duration", "1", "-q"]) == 2
     assert "cannot import module 'no_such_module'" in capsys.readouterr().err
