@@ -301,7 +301,8 @@ def run_search(config: SearchConfig, root: Path, engine: CampaignEngine,
                 results.append(CandidateResult(candidate, record,
                                                objective(record, config.requirement)))
             strategy.tell(points, [Told(r.objective, (r.candidate.descriptor(config.measures[0]),
-                                                      r.candidate.descriptor(config.measures[1])))
+                                                      r.candidate.descriptor(config.measures[1])),
+                                        built=r.candidate.pair is not None)
                                    for r in results[-len(fresh):]])
             progress.update(results)
             if config.stop_on_failure and any(r.failed for r in results):

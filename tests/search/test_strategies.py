@@ -159,3 +159,24 @@ def test_the_objective_is_the_margin_and_never_hides_a_failure() -> None:
     assert objective(None, None) == NO_EVIDENCE
     far = Verdict("SPEED_LIMIT", "fail", 1.0, "", margin=-1e9)
     assert objective(record(far), None) == -10.0  # bounded, still the lowest
+
+
+def test_map_elites_keeps_unbuilt_candidates_out_of_the_archive() -> None:
+    # An unbuilt candidate has no room, so its objective and descriptors (NO_EVIDENCE at
+    # (0, 0)) describe nothing; told as an elite it would seed the emitter from an edge cell.
+    from rei.runtime.search.run import NO_EVIDENCE  # noqa: PLC0415
+
+    def run(seed: int) -> tuple[object, list[list[float]]]:
+        strategy = make_strategy("map-elites", _dims(), seed, 4)
+        points = strategy.ask(4)
+        strategy.tell(points, [Told(NO_EVIDENCE, (0.0, 0.0), built=False),
+                               Told(0.3, (1.9, 2.4)), Told(NO_EVIDENCE, (0.0, 0.0), built=False),
+                               Told(0.4, (1.0, 1.5))])
+        return strategy, [list(p) for p in strategy.ask(4)]
+
+    strategy, asked = run(3)
+    data = strategy.archive.data()  # type: ignore[attr-defined]
+    assert len(strategy.archive) == 2  # type: ignore[attr-defined,arg-type]
+    assert sorted(-float(v) for v in data["objective"]) == [0.3, 0.4]
+    assert all(float(m[0]) > 0.0 for m in data["measures"])  # no elite at (0, 0)
+    assert asked == run(3)[1]  # still deterministic for a seed
