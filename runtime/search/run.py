@@ -186,6 +186,19 @@ class CandidateResult:
         return self.record is not None and self.record.verdict == "fail"
 
 
+def fail_line(result: CandidateResult, requirement: str | None) -> str:
+    """What a failing candidate's line says after its file: the requirements it failed, then
+    the margin the search minimised, labelled with its requirement (the smallest of any
+    without --requirement). A candidate fails by any requirement, so the margin shown may be
+    another requirement's and positive: the names say why it failed."""
+    summary = result.record.summary if result.record is not None else None
+    failed = sorted({v.requirement for v in summary.verdicts if v.status == "fail"}
+                    ) if summary is not None else []
+    which = f"{requirement} margin" if requirement is not None else "smallest margin"
+    names = ", ".join(failed) if failed else "a verdict without a requirement"
+    return f"failed {names}; {which} {result.objective:.3g}"
+
+
 @dataclass
 class SearchProgress:
     """The progress line of a search: simulations of the budget, failing runs and the best

@@ -180,3 +180,24 @@ def test_map_elites_keeps_unbuilt_candidates_out_of_the_archive() -> None:
     assert sorted(-float(v) for v in data["objective"]) == [0.3, 0.4]
     assert all(float(m[0]) > 0.0 for m in data["measures"])  # no elite at (0, 0)
     assert asked == run(3)[1]  # still deterministic for a seed
+
+
+def test_a_fail_line_names_the_failed_requirements_and_labels_the_margin() -> None:
+    from dataclasses import replace  # noqa: PLC0415
+
+    from rei.runtime.campaign import RunRecord, RunSpec  # noqa: PLC0415
+    from rei.runtime.results import Verdict  # noqa: PLC0415
+    from rei.runtime.search.run import CandidateResult, fail_line, objective  # noqa: PLC0415
+    from tests.campaign.records import summary_for  # noqa: PLC0415
+
+    spec = RunSpec("m.r00", "/m.mission", "x/m.mission", "x", 0, 1)
+    speed = Verdict("SPEED_LIMIT", "pass", None, "", margin=0.04)
+    hit = Verdict("NO_ROBOT_COLLISION", "fail", 2.0, "", margin=-0.1)
+    summary = replace(summary_for("m", "r", 1, True, 10.0), verdicts=(speed, hit))
+    record = RunRecord(spec, "ran", 0, 1.0, "", summary)
+    # The run fails by NO_ROBOT_COLLISION while the chosen requirement's margin is positive.
+    result = CandidateResult(None, record, objective(record, "SPEED_LIMIT"))  # type: ignore[arg-type]
+    assert fail_line(result, "SPEED_LIMIT") == ("failed NO_ROBOT_COLLISION; SPEED_LIMIT "
+                                                "margin 0.04")
+    result = CandidateResult(None, record, objective(record, None))  # type: ignore[arg-type]
+    assert fail_line(result, None) == "failed NO_ROBOT_COLLISION; smallest margin -0.1"
