@@ -201,3 +201,21 @@ def test_a_fail_line_names_the_failed_requirements_and_labels_the_margin() -> No
                                                 "margin 0.04")
     result = CandidateResult(None, record, objective(record, None))  # type: ignore[arg-type]
     assert fail_line(result, None) == "failed NO_ROBOT_COLLISION; smallest margin -0.1"
+
+
+@pytest.mark.parametrize(("text", "low", "high"), [
+    ("0.0004:0.3", 0.001, 0.3), ("0.05:0.2999", 0.05, 0.299), ("0.1:0.3", 0.1, 0.3),
+])
+def test_range_ends_are_rounded_inwards_to_the_level_precision(text: str, low: float,
+                                                               high: float) -> None:
+    interval = parse_interval("max_speed", text)
+    assert (interval.low, interval.high) == (low, high)
+    assert interval.level(0.0) == f"{low:g}" and interval.level(1.0) == f"{high:g}"
+
+
+def test_a_range_that_rounds_to_nothing_is_refused_naming_what_was_typed() -> None:
+    with pytest.raises(ParameterError, match=r"--max-speed: .*rounded inwards to 3 decimals.*"
+                                             r"found '0\.0001:0\.0004'"):
+        parse_interval("max_speed", "0.0001:0.0004")
+    with pytest.raises(ParameterError, match="found '0.0011:0.0019'"):
+        parse_interval("max_speed", "0.0011:0.0019")  # 0.002 > 0.001 after rounding
