@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
+from decimal import ROUND_CEILING, ROUND_FLOOR, Decimal
 
 from rei.generators.errors import GenerationError
 from rei.lang.room.model import BEHAVIOURS, WALKING_SPEEDS
@@ -274,6 +275,23 @@ def parse_row(levels: Mapping[str, str], static_names: tuple[str, ...]) -> RoomP
     )
 
 
+def check_level(name: str, text: str, reference: Mapping[str, str],
+                static_names: tuple[str, ...]) -> None:
+    """Refuse a level ``parse_row`` would refuse for its own factor (``--humans abc``), with
+    the same ParameterError. The level is parsed in the ``reference`` row (one level per
+    factor); a refusal naming another option is a combination (e.g. an L shape in a 3x3
+    room), not a bad level, and is left to the generator."""
+    option = name.replace("_", "-")
+    row = {**reference, name: text}
+    if name == "size":
+        row["shape"] = "rect"  # the shape allowing every size parse_row accepts
+    try:
+        parse_row(row, static_names)
+    except ParameterError as exc:
+        if exc.option == option:
+            raise
+
+
 def floor_count(params: RoomParameters) -> int:
     """Floors of the shape; the shapes are sized deterministically so this is exact."""
     w, h = params.width, params.height
@@ -366,4 +384,16 @@ def parse_interval(name: str, text: str) -> Interval:
     high = _float(option, parts[1].strip(), low_limit, high_limit, low_open)
     if not low < high:
         raise ParameterError(option, "a range LOW:HIGH with LOW below HIGH", f"'{text}'")
+    # Levels are written with LEVEL_DECIMALS: the ends are rounded inwards to that precision
+    # (low up, high down), so every level drawn is inside what was typed and parseable.
+    low, high = _rounded(low, ROUND_CEILING), _rounded(high, ROUND_FLOOR)
+    if not low < high:
+        raise ParameterError(option, f"a range LOW:HIGH with LOW below HIGH once both are "
+                                     f"rounded inwards to {LEVEL_DECIMALS} decimals (levels "
+                                     f"are written with {LEVEL_DECIMALS})", f"'{text}'")
     return Interval(name, low, high)
+
+
+def _rounded(value: float, rounding: str) -> float:
+    step = Decimal(1).scaleb(-LEVEL_DECIMALS)
+    return float(Decimal(repr(value)).quantize(step, rounding=rounding))

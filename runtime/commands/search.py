@@ -142,7 +142,7 @@ def run(args: argparse.Namespace) -> int:
         finish,
     )
     from rei.runtime.search import run_search  # noqa: PLC0415
-    from rei.runtime.search.run import check_config  # noqa: PLC0415
+    from rei.runtime.search.run import check_config, fail_line  # noqa: PLC0415
 
     config = config_of(args)
     check_config(config)  # bad options stop here, before the folder or an engine exists
@@ -171,7 +171,7 @@ def run(args: argparse.Namespace) -> int:
         for r in sorted(failing, key=lambda r: r.objective)[:10]:
             pair = r.candidate.pair
             assert pair is not None
-            print(f"  FAIL  {args.output / 'candidates' / pair.mission_file}: margin "
-                  f"{r.objective:.3g}", file=sys.stderr)
+            print(f"  FAIL  {args.output / 'candidates' / pair.mission_file}: "
+                  f"{fail_line(r, config.requirement)}", file=sys.stderr)
     return finish(args.output, no_report=args.no_report, complete=result.complete,
                   pass_rate=1.0, quiet=True)

@@ -26,12 +26,19 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, TextIO
 
+from rei.catalogue import default_catalogue
 from rei.generators.output import write_atomic
-from rei.generators.rooms.design import SearchDimension, decode_point, search_dimensions
+from rei.generators.rooms.design import (
+    LAYOUT_SEEDS,
+    SearchDimension,
+    decode_point,
+    search_dimensions,
+)
 from rei.generators.rooms.space import (
     FACTOR_NAMES,
     Interval,
     ParameterSpace,
+    check_level,
     is_interval,
     parse_interval,
     preset_space,
@@ -138,7 +145,18 @@ def check_config(config: SearchConfig) -> tuple[ParameterSpace, tuple[SearchDime
     for name, _ in config.levels:
         if name not in FACTOR_NAMES:
             raise ParameterError(name, f"a factor ({', '.join(FACTOR_NAMES)})", f"'{name}'")
+    if config.layout is not None and not 0 <= config.layout < LAYOUT_SEEDS:
+        raise SearchError(f"--layout: expected a construction seed from 0 to "
+                          f"{LAYOUT_SEEDS - 1}, found {config.layout}")
     space, dims = config.dimensions()
+    # Every level given is checked with the generator's own parser now, so a bad one stops
+    # the search before any run (an impossible combination is still a candidate 'not built').
+    static_names = tuple(default_catalogue().names("static"))
+    reference = {f.name: f.levels[0] for f in space.factors}
+    for name, text in config.levels:
+        if not is_interval(text):
+            for level in text.split(","):
+                check_level(name, level, reference, static_names)
     if not dims:
         raise SearchError("nothing to search: every factor has one level and --layout fixes "
                           "the room's construction; give a factor several levels or a "
@@ -184,6 +202,19 @@ class CandidateResult:
     @property
     def failed(self) -> bool:
         return self.record is not None and self.record.verdict == "fail"
+
+
+def fail_line(result: CandidateResult, requirement: str | None) -> str:
+    """What a failing candidate's line says after its file: the requirements it failed, then
+    the margin the search minimised, labelled with its requirement (the smallest of any
+    without --requirement). A candidate fails by any requirement, so the margin shown may be
+    another requirement's and positive: the names say why it failed."""
+    summary = result.record.summary if result.record is not None else None
+    failed = sorted({v.requirement for v in summary.verdicts if v.status == "fail"}
+                    ) if summary is not None else []
+    which = f"{requirement} margin" if requirement is not None else "smallest margin"
+    names = ", ".join(failed) if failed else "a verdict without a requirement"
+    return f"failed {names}; {which} {result.objective:.3g}"
 
 
 @dataclass
@@ -301,7 +332,8 @@ def run_search(config: SearchConfig, root: Path, engine: CampaignEngine,
                 results.append(CandidateResult(candidate, record,
                                                objective(record, config.requirement)))
             strategy.tell(points, [Told(r.objective, (r.candidate.descriptor(config.measures[0]),
-                                                      r.candidate.descriptor(config.measures[1])))
+                                                      r.candidate.descriptor(config.measures[1])),
+                                        built=r.candidate.pair is not None)
                                    for r in results[-len(fresh):]])
             progress.update(results)
             if config.stop_on_failure and any(r.failed for r in results):

@@ -47,6 +47,9 @@ class Told:
     """The value to minimise (a margin; finite)."""
     measures: tuple[float, float]
     """The point's two difficulty descriptors (map-elites' grid; the others ignore them)."""
+    built: bool = True
+    """False when the generator could not build the point's room: its objective and
+    descriptors describe no room (map-elites keeps it out of the archive)."""
 
 
 @runtime_checkable
@@ -199,6 +202,12 @@ class OptunaStrategy:
             self._study.tell(trial, answer.objective)
 
 
+ARCHIVE_FLOOR = -1e6
+"""map-elites' archive admits only (negated) objectives above this; every real one is."""
+UNBUILT = 2 * ARCHIVE_FLOOR
+"""What map-elites tells pyribs for a candidate that was not built: below ARCHIVE_FLOOR."""
+
+
 @dataclass
 class MapElitesStrategy:
     """MAP-Elites (pyribs): a grid archive over two difficulty descriptors keeps the lowest
@@ -219,8 +228,11 @@ class MapElitesStrategy:
         emitters = import_optional("ribs.emitters", self.name)
         schedulers = import_optional("ribs.schedulers", self.name)
         self._np = np
+        # A finite threshold_min (with learning_rate 1, i.e. plain MAP-Elites) lets every
+        # told objective above it in, and keeps out the points told UNBUILT below it.
         self.archive = archives.GridArchive(solution_dim=self.dims, dims=[self.bins] * 2,
-                                            ranges=list(self.ranges), seed=self.seed)
+                                            ranges=list(self.ranges), seed=self.seed,
+                                            learning_rate=1.0, threshold_min=ARCHIVE_FLOOR)
         emitter = emitters.GaussianEmitter(self.archive, sigma=self.sigma,
                                            x0=np.full(self.dims, 0.5),
                                            bounds=[(0.0, 1.0)] * self.dims,
@@ -238,8 +250,10 @@ class MapElitesStrategy:
         if len(told) < len(self._asked):
             return  # the search's last, shortened batch: nothing comes after it
         np = self._np
-        # pyribs maximises: the objective is the negated margin.
-        self._scheduler.tell(np.array([-t.objective for t in told]),
+        # pyribs maximises: the objective is the negated margin. An unbuilt candidate is
+        # still told (the emitter's batch must stay whole) but below the archive's floor,
+        # so it never becomes an elite the emitter mutates from.
+        self._scheduler.tell(np.array([-t.objective if t.built else UNBUILT for t in told]),
                              np.array([list(t.measures) for t in told]))
 
 

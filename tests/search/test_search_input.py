@@ -50,6 +50,20 @@ def _refused(capsys: pytest.CaptureFixture[str], out: Path, *argv: str) -> str:
     (["--max-speed", "0.05:0.3", "--engine", "dask"], "--engine dask: expected --scheduler"),
     (["--max-speed", "0.05:0.3", "--scheduler", "tcp://127.0.0.1:1"],
      "--scheduler is only used with --engine dask"),
+    # Every level given is checked up front, as `rei-gen rooms` does, not found later as a
+    # candidate 'not built' after part of the budget ran.
+    (["--max-speed", "0.05:0.3", "--humans", "0,abc"],
+     "--humans: expected a whole number from 0 to 20, found 'abc'"),
+    (["--max-speed", "0.05:0.3", "--mix", "furniture,sofa+lamp"], "--mix: expected a named mix"),
+    (["--max-speed", "0.05:0.3", "--behaviour", "yielding,rude"], "--behaviour: expected one of"),
+    (["--max-speed", "0.05:0.3", "--size", "5x3,5x"], "--size: expected a whole number"),
+    (["--max-speed", "0.0001:0.0004"], "--max-speed: expected a range LOW:HIGH with LOW below "
+                                       "HIGH once both are rounded inwards to 3 decimals"),
+    (["--max-speed", "0.05:0.3", "--layout", "100000000000000000000000"],
+     "--layout: expected a construction seed from 0 to 2147483647, found "
+     "100000000000000000000000"),
+    (["--max-speed", "0.05:0.3", "--layout", "-1"],
+     "--layout: expected a construction seed from 0 to 2147483647, found -1"),
 ])
 def test_bad_options_exit_2_with_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str],
                                           argv: list[str], expected: str) -> None:
@@ -105,3 +119,11 @@ def test_rei_campaign_refuses_the_same_engine_options(tmp_path: Path,
         code = main(["campaign", str(examples), "-o", str(tmp_path / "out"), *extra])
         assert code == EXIT_BAD_INPUT and expected in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
+
+
+def test_an_impossible_combination_of_good_levels_is_not_refused_up_front() -> None:
+    # An L shape needs 4x4 tiles: 3x3 with L is a combination the generator refuses per
+    # candidate ('not built'), while each level alone is good, so the search may start.
+    from rei.runtime.search.run import check_config  # noqa: PLC0415
+
+    check_config(SearchConfig(levels=(("shape", "rect,L"), ("size", "3x3,5x4"))))

@@ -159,3 +159,63 @@ def test_the_objective_is_the_margin_and_never_hides_a_failure() -> None:
     assert objective(None, None) == NO_EVIDENCE
     far = Verdict("SPEED_LIMIT", "fail", 1.0, "", margin=-1e9)
     assert objective(record(far), None) == -10.0  # bounded, still the lowest
+
+
+def test_map_elites_keeps_unbuilt_candidates_out_of_the_archive() -> None:
+    # An unbuilt candidate has no room, so its objective and descriptors (NO_EVIDENCE at
+    # (0, 0)) describe nothing; told as an elite it would seed the emitter from an edge cell.
+    from rei.runtime.search.run import NO_EVIDENCE  # noqa: PLC0415
+
+    def run(seed: int) -> tuple[object, list[list[float]]]:
+        strategy = make_strategy("map-elites", _dims(), seed, 4)
+        points = strategy.ask(4)
+        strategy.tell(points, [Told(NO_EVIDENCE, (0.0, 0.0), built=False),
+                               Told(0.3, (1.9, 2.4)), Told(NO_EVIDENCE, (0.0, 0.0), built=False),
+                               Told(0.4, (1.0, 1.5))])
+        return strategy, [list(p) for p in strategy.ask(4)]
+
+    strategy, asked = run(3)
+    data = strategy.archive.data()  # type: ignore[attr-defined]
+    assert len(strategy.archive) == 2  # type: ignore[attr-defined,arg-type]
+    assert sorted(-float(v) for v in data["objective"]) == [0.3, 0.4]
+    assert all(float(m[0]) > 0.0 for m in data["measures"])  # no elite at (0, 0)
+    assert asked == run(3)[1]  # still deterministic for a seed
+
+
+def test_a_fail_line_names_the_failed_requirements_and_labels_the_margin() -> None:
+    from dataclasses import replace  # noqa: PLC0415
+
+    from rei.runtime.campaign import RunRecord, RunSpec  # noqa: PLC0415
+    from rei.runtime.results import Verdict  # noqa: PLC0415
+    from rei.runtime.search.run import CandidateResult, fail_line, objective  # noqa: PLC0415
+    from tests.campaign.records import summary_for  # noqa: PLC0415
+
+    spec = RunSpec("m.r00", "/m.mission", "x/m.mission", "x", 0, 1)
+    speed = Verdict("SPEED_LIMIT", "pass", None, "", margin=0.04)
+    hit = Verdict("NO_ROBOT_COLLISION", "fail", 2.0, "", margin=-0.1)
+    summary = replace(summary_for("m", "r", 1, True, 10.0), verdicts=(speed, hit))
+    record = RunRecord(spec, "ran", 0, 1.0, "", summary)
+    # The run fails by NO_ROBOT_COLLISION while the chosen requirement's margin is positive.
+    result = CandidateResult(None, record, objective(record, "SPEED_LIMIT"))  # type: ignore[arg-type]
+    assert fail_line(result, "SPEED_LIMIT") == ("failed NO_ROBOT_COLLISION; SPEED_LIMIT "
+                                                "margin 0.04")
+    result = CandidateResult(None, record, objective(record, None))  # type: ignore[arg-type]
+    assert fail_line(result, None) == "failed NO_ROBOT_COLLISION; smallest margin -0.1"
+
+
+@pytest.mark.parametrize(("text", "low", "high"), [
+    ("0.0004:0.3", 0.001, 0.3), ("0.05:0.2999", 0.05, 0.299), ("0.1:0.3", 0.1, 0.3),
+])
+def test_range_ends_are_rounded_inwards_to_the_level_precision(text: str, low: float,
+                                                               high: float) -> None:
+    interval = parse_interval("max_speed", text)
+    assert (interval.low, interval.high) == (low, high)
+    assert interval.level(0.0) == f"{low:g}" and interval.level(1.0) == f"{high:g}"
+
+
+def test_a_range_that_rounds_to_nothing_is_refused_naming_what_was_typed() -> None:
+    with pytest.raises(ParameterError, match=r"--max-speed: .*rounded inwards to 3 decimals.*"
+                                             r"found '0\.0001:0\.0004'"):
+        parse_interval("max_speed", "0.0001:0.0004")
+    with pytest.raises(ParameterError, match="found '0.0011:0.0019'"):
+        parse_interval("max_speed", "0.0011:0.0019")  # 0.002 > 0.001 after rounding
