@@ -305,6 +305,11 @@ def test_malformed_or_non_finite_commands_are_refused_at_the_edge(
     try:
         wait_for(lambda: False, 0.3)
         robot.step(observation(0.1, (0.0, 0.0, 0.0)))
+        # The stand-in answers that tick's /odom with one /cmd_vel; on a loaded machine it
+        # may arrive after the step's cmd-wait: count from after it, so only the bad
+        # messages below can change the counts.
+        assert wait_for(lambda: robot.cmd_sub.received.messages
+                        == standin.counts["cmd_vel"] >= 1, 5)
         before = robot.cmd_sub.received.messages
         # no attachment, and a truncated payload: dropped and counted, never a crash
         standin.cmd_pub.put(twist(0.1))
