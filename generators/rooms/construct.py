@@ -317,7 +317,8 @@ def construct(params: RoomParameters, facts: CatalogueFacts, rng: random.Random,
         reserved |= layout.keep_free | row_cells
         if layout.mover is not None:
             taken |= set(layout.mover.vertices)
-        taken |= set(layout.bystander)
+        if layout.bystander is not None:
+            taken.add(layout.bystander)
     for k in range(params.humans):
         human, swept = _human(params, k, floors, outside, taken, robot, base, rng)
         humans.append(human)
@@ -367,9 +368,8 @@ def construct(params: RoomParameters, facts: CatalogueFacts, rng: random.Random,
             stressor = time_layout(layout, route, params, facts.bodies)
         except StressorFailed as exc:
             raise AttemptFailed("stressor", str(exc)) from None
-        if layout.bystander:
-            scene = replace(scene, trajectories=(*scene.trajectories,
-                                                 (layout.bystander, False)))
+        if layout.bystander is not None:
+            scene = replace(scene, humans=scene.humans + 1)
         if stressor.mover is not None:
             scene = replace(scene, trajectories=(
                 *scene.trajectories, (tuple(c for c, _ in stressor.mover.vertices), False)),

@@ -88,22 +88,16 @@ SIDES = ("left", "right")
 """The side of the robot's route (looking along it) a stressor's mover ends up beside."""
 MOVER_KINDS = ("emerge", "crossing", "oncoming")
 """The stressors with a mover (the gap has none)."""
-BYSTANDER = "passing_cart"
-"""The name of the cart every stressor room pushes past the robot as it sets off."""
-BYSTANDER_SPEED = 0.3
-"""m/s the passing cart moves at: a little faster than the robot's top speed (0.26 m/s), so
-it draws ahead of a robot driving fast beside it slowly, staying level with it a while."""
-BYSTANDER_STEPS = 2
-"""Tiles the passing cart moves, beside the robot's first straight steps, then stops."""
+BYSTANDER = "bystander"
+"""The name of the person every stressor room stands beside the robot's start."""
 SLOW_SPEED = 0.12
-"""m/s the planned robot drives at while the passing cart is near: a careful navigator's
-slow speed near people and moving objects (the reference's, below the default .vepl's
-slow_speed of 0.15)."""
-BYSTANDER_PASS = 2.5
-"""m of the route the planned robot drives at ``SLOW_SPEED`` because of the passing cart
-(which stops two tiles ahead, one across): until it is about a metre (REACTION_TIME's
-react_zone, 1.05 m) behind the robot's footprint, and the while a navigator's slow zone
-lingers after (the reference's 3 s, 0.36 m)."""
+"""m/s the planned robot drives at while the bystander is near: a careful navigator's slow
+speed near people (the reference's, below the default .vepl's slow_speed of 0.15)."""
+BYSTANDER_PASS = 1.5
+"""m of the route the planned robot drives at ``SLOW_SPEED`` past the bystander: until the
+person is about a metre (REACTION_TIME's react_zone, 1.05 m) behind its footprint, about
+1.1 m of driving, and the while a navigator's slow zone lingers after (the reference's 3 s,
+0.36 m)."""
 
 
 def side_of(seed: int, ordinal: int) -> str:
@@ -193,9 +187,9 @@ class StressorLayout:
     """The gap's two tiles whose objects leave the slot between them."""
     slot_width: float = 0.0
     side: str = ""
-    """The side of the route (SIDES) the passing cart moves on and the mover ends up beside."""
-    bystander: tuple[Cell, ...] = ()
-    """The tiles the passing cart moves along, beside the robot's first straight steps."""
+    """The side of the route (SIDES) the bystander stands on and the mover ends up beside."""
+    bystander: Cell | None = None
+    """The tile right beside the robot's start (across its first step) a person stands on."""
 
 
 @dataclass(frozen=True)
@@ -290,29 +284,23 @@ def plan_layout(params: RoomParameters, floors: set[Cell], goals: Sequence[Cell]
 
 def _with_bystander(layout: StressorLayout, floors: set[Cell], leg: list[Cell],
                     rng: random.Random, side: str | None) -> StressorLayout:
-    """The layout with a cart (a scripted dynamic object) starting on the tile beside the
-    robot's start, on ``side``, and moving beside its first straight steps a little faster
-    than the robot can: level with the robot and 0.65 m from its footprint, in the laser's
-    sight from the first scan, so a navigator must set off slowly. A robot that sets off
-    fast keeps it 60-120 degrees off its heading for seconds, the sector a laser filter set
-    up for another mounting (or a blocked scanner window) hides. It never enters the
-    robot's lane: a careful robot only has to be slow."""
-    steps = BYSTANDER_STEPS
+    """The layout with a person standing on the tile beside the robot's start, across its
+    first step, on ``side``: in the laser's sight from the first scan, about 0.6 m from the
+    robot's footprint and level with it, so a navigator must set off slowly; one that does
+    not sense that side sets off fast."""
     d = _sub(leg[1], leg[0])
-    if len(leg) < steps + 2 or abs(d[0]) + abs(d[1]) != 1 or \
-            any(_sub(leg[k + 1], leg[k]) != d for k in range(steps + 1)):
-        raise StressorFailed("the robot's first leg does not start straight for the passing "
-                             "cart")
+    if abs(d[0]) + abs(d[1]) != 1:
+        raise StressorFailed("the robot's first step is diagonal: no tile right beside its "
+                             "start for the bystander")
     n = _perpendiculars(d, rng, side)[0]
-    path = tuple(_add(c, n) for c in leg[:steps + 1])
+    cell = _add(leg[0], n)
     taken = layout.keep_free | layout.walls | {o.cell for o in layout.row}
     if layout.mover is not None:
         taken |= set(layout.mover.vertices)
-    if any(c not in floors or c in taken for c in path):
-        raise StressorFailed("no free floor beside the robot's first steps for the passing "
-                             "cart")
-    return dataclasses.replace(layout, bystander=path, keep_free=layout.keep_free | set(path),
-                               side=side_cell(leg[0], d, path[0]))
+    if cell not in floors or cell in taken:
+        raise StressorFailed("no free floor right beside the robot's start for the bystander")
+    return dataclasses.replace(layout, bystander=cell, keep_free=layout.keep_free | {cell},
+                               side=side_cell(leg[0], d, cell))
 
 
 def _meeting_points(leg: list[Cell], rng: random.Random, side: str | None
@@ -474,16 +462,12 @@ def time_layout(layout: StressorLayout, route: Sequence[Cell], params: RoomParam
                 bodies: Bodies) -> StressorPlan:
     """The mover's vertex times from the final route; StressorFailed when the final route
     no longer meets the stressor where it was laid out, or the timing cannot be met."""
-    if layout.bystander:
-        steps = len(layout.bystander) - 1
-        d = _sub(route[1], route[0]) if len(route) > steps + 1 else (0, 0)
-        n = _sub(layout.bystander[0], route[0])
-        if abs(d[0]) + abs(d[1]) != 1 or \
-                any(_sub(route[k + 1], route[k]) != d for k in range(steps)) or \
-                layout.bystander != tuple(_add(c, n) for c in route[:steps + 1]) or \
-                side_cell(route[0], d, layout.bystander[0]) != layout.side:
-            raise StressorFailed("the objects moved the robot's first steps away from the "
-                                 "passing cart")
+    if layout.bystander is not None:
+        d = _sub(route[1], route[0]) if len(route) > 1 else (0, 0)
+        if side_cell(route[0], d, layout.bystander) != layout.side or \
+                abs(d[0]) + abs(d[1]) != 1:
+            raise StressorFailed("the objects turned the robot's first step away from the "
+                                 "bystander")
     if layout.kind == "gap":
         return StressorPlan(layout, None, 0.0, 0.0)
     mover = layout.mover
@@ -496,7 +480,7 @@ def time_layout(layout: StressorLayout, route: Sequence[Cell], params: RoomParam
     final = cells[:at + len(layout.approach)]
     limit = params.max_speed if params.max_speed is not None else bodies.top_speed
     nominal, top = min(NOMINAL_SPEED, limit), min(bodies.top_speed, limit)
-    slow_for = BYSTANDER_PASS if layout.bystander else 0.0
+    slow_for = BYSTANDER_PASS if layout.bystander is not None else 0.0
     arrival = planned_arrival(final, layout.point, nominal, slow_for)
     meeting = arrival - mover.lead / nominal
     walk = route_lengths(mover.vertices)

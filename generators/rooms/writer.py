@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 from rei.generators.rooms.construct import GRID, ROBOT_TYPE, RoomPlan, cell_name
 from rei.generators.rooms.descriptors import format_number
-from rei.generators.rooms.stressors import BYSTANDER, BYSTANDER_SPEED, CART_TYPE
+from rei.generators.rooms.stressors import BYSTANDER
 
 GOAL_TOLERANCE = 0.3
 ROBOT_SPEED = 0.26
@@ -93,19 +93,15 @@ def _stressor_comment(plan: RoomPlan) -> list[str]:
 
 
 def _bystander_lines(plan: RoomPlan) -> list[str]:
-    """The stressor's passing cart beside the robot's first steps, its long side along them."""
+    """The stressor's bystander: a person standing beside the robot's start, facing it."""
     stress = plan.stressor
-    if stress is None or not stress.layout.bystander:
+    if stress is None or stress.layout.bystander is None:
         return []
-    path = stress.layout.bystander
-    lines = ["", f"    // stressor: a cart passing the robot as it sets off, on its "
-                 f"{stress.layout.side} (see docs/rooms.md)",
-             f"    dynamic {BYSTANDER} : {CART_TYPE} on {cell_name(path[0])} "
-             f"heading {_fmt(plan.robot_heading)} trajectory stop {{"]
-    lines += [f"        {cell_name(c)} at {_fmt(round(k / BYSTANDER_SPEED, 2))}"
-              for k, c in enumerate(path)]
-    lines.append("    }")
-    return lines
+    at = stress.layout.bystander
+    heading = math.degrees(math.atan2(plan.robot[1] - at[1], plan.robot[0] - at[0]))
+    return ["", f"    // stressor: a person standing beside the robot's start, on its "
+                f"{stress.layout.side} (see docs/rooms.md)",
+            f"    human {BYSTANDER} on {cell_name(at)} heading {_fmt(float(round(heading) % 360))}"]
 
 
 def _mover_lines(plan: RoomPlan) -> list[str]:
