@@ -317,8 +317,6 @@ def construct(params: RoomParameters, facts: CatalogueFacts, rng: random.Random,
         reserved |= layout.keep_free | row_cells
         if layout.mover is not None:
             taken |= set(layout.mover.vertices)
-        if layout.bystander is not None:
-            taken.add(layout.bystander)
     for k in range(params.humans):
         human, swept = _human(params, k, floors, outside, taken, robot, base, rng)
         humans.append(human)
@@ -368,8 +366,6 @@ def construct(params: RoomParameters, facts: CatalogueFacts, rng: random.Random,
             stressor = time_layout(layout, route, params, facts.bodies)
         except StressorFailed as exc:
             raise AttemptFailed("stressor", str(exc)) from None
-        if layout.bystander is not None:
-            scene = replace(scene, humans=scene.humans + 1)
         if stressor.mover is not None:
             scene = replace(scene, trajectories=(
                 *scene.trajectories, (tuple(c for c, _ in stressor.mover.vertices), False)),

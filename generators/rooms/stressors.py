@@ -41,7 +41,6 @@ never imports the runtime, and never changes a room without keeping its floor co
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import random
 from collections.abc import Iterator, Sequence
@@ -88,22 +87,12 @@ SIDES = ("left", "right")
 """The side of the robot's route (looking along it) a stressor's mover ends up beside."""
 MOVER_KINDS = ("emerge", "crossing", "oncoming")
 """The stressors with a mover (the gap has none)."""
-BYSTANDER = "bystander"
-"""The name of the person every stressor room stands beside the robot's start."""
-SLOW_SPEED = 0.12
-"""m/s the planned robot drives at while the bystander is near: a careful navigator's slow
-speed near people (the reference's, below the default .vepl's slow_speed of 0.15)."""
-BYSTANDER_PASS = 1.5
-"""m of the route the planned robot drives at ``SLOW_SPEED`` past the bystander: until the
-person is about a metre (REACTION_TIME's react_zone, 1.05 m) behind its footprint, about
-1.1 m of driving, and the while a navigator's slow zone lingers after (the reference's 3 s,
-0.36 m)."""
 
 
 def side_of(seed: int, ordinal: int) -> str:
-    """The side for a suite's ``ordinal``-th stressor room (0-based, in room order): the
-    sides alternate, and the seed picks which comes first, so over seeds each kind meets
-    the robot on each side."""
+    """The side for a suite's ``ordinal``-th mover room (0-based, in room order): the sides
+    alternate, and the seed picks which comes first, so over seeds each kind meets the
+    robot from each side."""
     return SIDES[(seed + ordinal) % 2]
 
 
@@ -187,9 +176,7 @@ class StressorLayout:
     """The gap's two tiles whose objects leave the slot between them."""
     slot_width: float = 0.0
     side: str = ""
-    """The side of the route (SIDES) the bystander stands on and the mover ends up beside."""
-    bystander: Cell | None = None
-    """The tile right beside the robot's start (across its first step) a person stands on."""
+    """The side of the route (SIDES) the mover ends up beside; '' for the gap."""
 
 
 @dataclass(frozen=True)
@@ -268,39 +255,16 @@ def plan_layout(params: RoomParameters, floors: set[Cell], goals: Sequence[Cell]
     route (one of SIDES; None: either); StressorFailed when nowhere fits."""
     leg = first_leg(floors, goals)
     kind = params.stressor
-    blocked = set(goals) | set(leg)
     if kind == "gap":
-        layout = _gap(floors, goals, leg, row_half_extent, rng)
-    elif kind == "emerge":
-        layout = _emerge(floors, leg, blocked, rng, side)
-    elif kind == "crossing":
-        layout = _crossing(floors, leg, blocked, rng, side)
-    elif kind == "oncoming":
-        layout = _oncoming(floors, leg, blocked, rng, side)
-    else:
-        raise ValueError(kind)
-    return _with_bystander(layout, floors, leg, rng, side or layout.side or None)
-
-
-def _with_bystander(layout: StressorLayout, floors: set[Cell], leg: list[Cell],
-                    rng: random.Random, side: str | None) -> StressorLayout:
-    """The layout with a person standing on the tile beside the robot's start, across its
-    first step, on ``side``: in the laser's sight from the first scan, about 0.6 m from the
-    robot's footprint and level with it, so a navigator must set off slowly; one that does
-    not sense that side sets off fast."""
-    d = _sub(leg[1], leg[0])
-    if abs(d[0]) + abs(d[1]) != 1:
-        raise StressorFailed("the robot's first step is diagonal: no tile right beside its "
-                             "start for the bystander")
-    n = _perpendiculars(d, rng, side)[0]
-    cell = _add(leg[0], n)
-    taken = layout.keep_free | layout.walls | {o.cell for o in layout.row}
-    if layout.mover is not None:
-        taken |= set(layout.mover.vertices)
-    if cell not in floors or cell in taken:
-        raise StressorFailed("no free floor right beside the robot's start for the bystander")
-    return dataclasses.replace(layout, bystander=cell, keep_free=layout.keep_free | {cell},
-                               side=side_cell(leg[0], d, cell))
+        return _gap(floors, goals, leg, row_half_extent, rng)
+    blocked = set(goals) | set(leg)
+    if kind == "emerge":
+        return _emerge(floors, leg, blocked, rng, side)
+    if kind == "crossing":
+        return _crossing(floors, leg, blocked, rng, side)
+    if kind == "oncoming":
+        return _oncoming(floors, leg, blocked, rng, side)
+    raise ValueError(kind)
 
 
 def _meeting_points(leg: list[Cell], rng: random.Random, side: str | None
@@ -449,25 +413,15 @@ def route_lengths(route: Sequence[Cell]) -> list[float]:
     return out
 
 
-def planned_arrival(route: Sequence[Cell], point: Cell, speed: float,
-                    slow_for: float = 0.0) -> float:
-    """Seconds until the planned robot reaches ``point`` on ``route``, driving its first
-    ``slow_for`` metres at ``SLOW_SPEED`` (past the bystander)."""
-    along = route_lengths(route)[list(route).index(point)]
-    slow = min(along, slow_for)
-    return START_DELAY + slow / min(SLOW_SPEED, speed) + (along - slow) / speed
+def planned_arrival(route: Sequence[Cell], point: Cell, speed: float) -> float:
+    """Seconds until the planned robot reaches ``point`` on ``route``."""
+    return START_DELAY + route_lengths(route)[list(route).index(point)] / speed
 
 
 def time_layout(layout: StressorLayout, route: Sequence[Cell], params: RoomParameters,
                 bodies: Bodies) -> StressorPlan:
     """The mover's vertex times from the final route; StressorFailed when the final route
     no longer meets the stressor where it was laid out, or the timing cannot be met."""
-    if layout.bystander is not None:
-        d = _sub(route[1], route[0]) if len(route) > 1 else (0, 0)
-        if side_cell(route[0], d, layout.bystander) != layout.side or \
-                abs(d[0]) + abs(d[1]) != 1:
-            raise StressorFailed("the objects turned the robot's first step away from the "
-                                 "bystander")
     if layout.kind == "gap":
         return StressorPlan(layout, None, 0.0, 0.0)
     mover = layout.mover
@@ -480,8 +434,7 @@ def time_layout(layout: StressorLayout, route: Sequence[Cell], params: RoomParam
     final = cells[:at + len(layout.approach)]
     limit = params.max_speed if params.max_speed is not None else bodies.top_speed
     nominal, top = min(NOMINAL_SPEED, limit), min(bodies.top_speed, limit)
-    slow_for = BYSTANDER_PASS if layout.bystander is not None else 0.0
-    arrival = planned_arrival(final, layout.point, nominal, slow_for)
+    arrival = planned_arrival(final, layout.point, nominal)
     meeting = arrival - mover.lead / nominal
     walk = route_lengths(mover.vertices)
     speed = params.speed

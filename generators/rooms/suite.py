@@ -27,14 +27,13 @@ from rei.generators.rooms.descriptors import DESCRIPTOR_NAMES
 from rei.generators.rooms.design import Strategy, SuiteDesign, derived_seed, design_suite
 from rei.generators.rooms.space import (
     FACTOR_NAMES,
-    NO_STRESSOR,
     ParameterError,
     ParameterSpace,
     RoomParameters,
     parse_row,
     refuse_impossible,
 )
-from rei.generators.rooms.stressors import side_of
+from rei.generators.rooms.stressors import MOVER_KINDS, side_of
 from rei.generators.rooms.writer import Provenance, mission_text, room_text
 from rei.lang.errors import Diagnostic
 from rei.lang.workspace import Workspace
@@ -130,13 +129,13 @@ def generate(request: SuiteRequest, out_dir: Path, times: StageTimes | None = No
     facts = CatalogueFacts.of(default_catalogue())
     width = max(4, len(str(len(rows))))
     pairs = []
-    stressed = 0  # stressor rooms so far: their sides alternate (stressors.side_of)
+    movers = 0  # mover rooms so far: their sides alternate (stressors.side_of)
     for index, (row_index, params) in enumerate(rows):
         name = f"{request.prefix}_{index + 1:0{width}d}"
         side = None
-        if params.stressor != NO_STRESSOR:
-            side = side_of(request.seed, stressed)
-            stressed += 1
+        if params.stressor in MOVER_KINDS:
+            side = side_of(request.seed, movers)
+            movers += 1
         room_file, mission_file = f"{name}.room", f"{name}.mission"
         rejected = 0
         reasons: dict[tuple[str, str], int] = {}

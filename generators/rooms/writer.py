@@ -13,7 +13,6 @@ from dataclasses import dataclass
 
 from rei.generators.rooms.construct import GRID, ROBOT_TYPE, RoomPlan, cell_name
 from rei.generators.rooms.descriptors import format_number
-from rei.generators.rooms.stressors import BYSTANDER
 
 GOAL_TOLERANCE = 0.3
 ROBOT_SPEED = 0.26
@@ -69,7 +68,6 @@ def room_text(name: str, plan: RoomPlan, provenance: Provenance) -> str:
                      f"total {_fmt(human.total_time)} {end} {{")
         lines += [f"        {cell_name(v)}" for v in human.vertices]
         lines.append(f"    }} behaviour {human.behaviour}")
-    lines += _bystander_lines(plan)
     lines += _mover_lines(plan)
     lines.append("}")
     return "\n".join(lines) + "\n"
@@ -84,24 +82,12 @@ def _stressor_comment(plan: RoomPlan) -> list[str]:
     if layout.slot is not None:
         a, b = layout.slot
         return [f"// stressor: kind={layout.kind} slot={cell_name(a)},{cell_name(b)} "
-                f"slot_width_m={_fmt(layout.slot_width)} side={layout.side}"]
+                f"slot_width_m={_fmt(layout.slot_width)}"]
     assert stress.mover is not None and layout.mover is not None
     return [f"// stressor: kind={layout.kind} mover={stress.mover.name} "
             f"point={cell_name(layout.point)} arrival_s={_fmt(stress.arrival_s)} "
             f"meeting_s={_fmt(stress.meeting_s)} lead_m={_fmt(layout.mover.lead)} "
             f"side={layout.side}"]
-
-
-def _bystander_lines(plan: RoomPlan) -> list[str]:
-    """The stressor's bystander: a person standing beside the robot's start, facing it."""
-    stress = plan.stressor
-    if stress is None or stress.layout.bystander is None:
-        return []
-    at = stress.layout.bystander
-    heading = math.degrees(math.atan2(plan.robot[1] - at[1], plan.robot[0] - at[0]))
-    return ["", f"    // stressor: a person standing beside the robot's start, on its "
-                f"{stress.layout.side} (see docs/rooms.md)",
-            f"    human {BYSTANDER} on {cell_name(at)} heading {_fmt(float(round(heading) % 360))}"]
 
 
 def _mover_lines(plan: RoomPlan) -> list[str]:
