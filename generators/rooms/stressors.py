@@ -18,10 +18,9 @@ Sides (the first three): each mover ends up standing on a tile beside the robot'
 the emerging person where it stepped aside, the parked cart, the oncoming person past the
 corridor's near end — so the robot passes it within a metre, on its left or on its right.
 The caller says which (``side``, ``SIDES``): ``side_of`` alternates it over a suite's mover
-rooms, so a suite with two of them has an encounter on each side of the route and a
-navigator that does not sense one side (a blind laser sector, a filter meant for another
-mounting) meets it in the default campaign; the mover comes from the other side, so it
-crosses in front of the robot either way. None leaves the side to the random stream.
+rooms, so a suite with two of them has an encounter on each side of the route; the mover
+comes from the other side, so it crosses in front of the robot either way. None leaves the
+side to the random stream.
 
 Timing (the first three): the encounter is timed from the robot's *planned* arrival — its
 route on the static map (the inflated floor graph, as the descriptors walk it) driven at

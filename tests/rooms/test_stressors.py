@@ -115,8 +115,7 @@ def _passing_side(pair: GeneratedPair) -> str:
 def test_each_demo_suite_has_a_mover_stand_beside_the_route_on_each_side(seed: int) -> None:
     """`rei demo`'s stress rooms (the first three systematic rows) bring one mover to stand
     beside the robot's route on its left and the other on its right, the side that comes
-    first alternating with the seed (so a navigator that does not sense one side meets a
-    person or a cart there on every seed)."""
+    first alternating with the seed (over seeds, each kind on each side)."""
     suite = generate(SuiteRequest(preset_space("stress"), "systematic", 3, seed),
                      Path("unused"))
     sides = {p.params.stressor: _passing_side(p) for p in suite.pairs
