@@ -284,8 +284,10 @@ def behaviour_of(params: RoomParameters, index: int) -> str:
     return params.behaviour
 
 
-def construct(params: RoomParameters, facts: CatalogueFacts, rng: random.Random) -> RoomPlan:
-    """One attempt; AttemptFailed when a step cannot be done with this random stream."""
+def construct(params: RoomParameters, facts: CatalogueFacts, rng: random.Random,
+              side: str | None = None) -> RoomPlan:
+    """One attempt; AttemptFailed when a step cannot be done with this random stream.
+    ``side``: the side of the route a stressor's mover ends up beside (None: either)."""
     floors = floor_plan(params, rng)
     w, h = params.width, params.height
     box = {(c, -r) for r in range(-1, h + 3) for c in range(-1, w + 3)}
@@ -297,7 +299,8 @@ def construct(params: RoomParameters, facts: CatalogueFacts, rng: random.Random)
     if params.stressor != NO_STRESSOR:
         try:
             layout = plan_layout(params, floors, goals,
-                                 max(facts.types[ROW_TYPE].footprint.half_extents()), rng)
+                                 max(facts.types[ROW_TYPE].footprint.half_extents()), rng,
+                                 side)
         except StressorFailed as exc:
             raise AttemptFailed("stressor", str(exc)) from None
         floors -= layout.walls

@@ -7,11 +7,20 @@ perception, or planning without its footprint, runs into — and a careful one p
   both sides for ``CORRIDOR_LENGTH`` tiles); a person walks it towards the robot and steps
   aside past its near end.
 * ``crossing``: a cart (a scripted dynamic object) crosses the route at a right angle from
-  two tiles off it to two tiles beyond, and stays there.
+  two tiles off it and is parked on the tile beside the route on the other side, where the
+  robot passes it.
 * ``gap``: a row of tables across the first leg, turned so two neighbours leave a slot
   narrower than the robot where the straight line between the goals crosses the row, and one
   open tile at least two tiles from the slot: the shortest way for a point goes through the
   slot, the robot's goes round through the opening.
+
+Sides (the first three): each mover ends up standing on a tile beside the robot's route —
+the emerging person where it stepped aside, the parked cart, the oncoming person past the
+corridor's near end — so the robot passes it within a metre, on its left or on its right.
+The caller says which (``side``, ``SIDES``): ``side_of`` alternates it over a suite's mover
+rooms, so a suite with two of them has an encounter on each side of the route; the mover
+comes from the other side, so it crosses in front of the robot either way. None leaves the
+side to the random stream.
 
 Timing (the first three): the encounter is timed from the robot's *planned* arrival — its
 route on the static map (the inflated floor graph, as the descriptors walk it) driven at
@@ -73,6 +82,17 @@ ROW_TYPE = "table"
 """The catalogue type of the gap's row: 0.8 m along the row leaves a 0.2 m slot."""
 CART_TYPE = "cart"
 """The catalogue type of the crossing cart."""
+SIDES = ("left", "right")
+"""The side of the robot's route (looking along it) a stressor's mover ends up beside."""
+MOVER_KINDS = ("emerge", "crossing", "oncoming")
+"""The stressors with a mover (the gap has none)."""
+
+
+def side_of(seed: int, ordinal: int) -> str:
+    """The side for a suite's ``ordinal``-th mover room (0-based, in room order): the sides
+    alternate, and the seed picks which comes first, so over seeds each kind meets the
+    robot from each side."""
+    return SIDES[(seed + ordinal) % 2]
 
 
 @dataclass(frozen=True)
@@ -154,6 +174,8 @@ class StressorLayout:
     slot: tuple[Cell, Cell] | None = None
     """The gap's two tiles whose objects leave the slot between them."""
     slot_width: float = 0.0
+    side: str = ""
+    """The side of the route (SIDES) the mover ends up beside; '' for the gap."""
 
 
 @dataclass(frozen=True)
@@ -176,10 +198,32 @@ def _add(a: Cell, b: Cell, k: int = 1) -> Cell:
     return (a[0] + k * b[0], a[1] + k * b[1])
 
 
-def _perpendiculars(d: Cell, rng: random.Random) -> list[Cell]:
-    sides = [(-d[1], d[0]), (d[1], -d[0])]
-    rng.shuffle(sides)
-    return sides
+def _left(d: Cell) -> Cell:
+    """The unit step to the left of a route running along d (x east, y north)."""
+    return (-d[1], d[0])
+
+
+def side_cell(route_cell: Cell, d: Cell, beside: Cell) -> str:
+    """Which side of a route running along d through ``route_cell`` the cell ``beside`` is
+    on: 'left', 'right', or '' when it lies on the route's line."""
+    left = _left(d)
+    dot = (beside[0] - route_cell[0]) * left[0] + (beside[1] - route_cell[1]) * left[1]
+    return "" if dot == 0 else ("left" if dot > 0 else "right")
+
+
+def _perpendiculars(d: Cell, rng: random.Random, side: str | None = None,
+                    flip: bool = False) -> list[Cell]:
+    """The unit steps n across a route running along d: both in a random order, or with
+    ``side`` the one pointing to that side (to the other side when ``flip``: a mover that
+    comes from n and ends up on ``side``)."""
+    left, right = _left(d), (d[1], -d[0])
+    if side is None:
+        sides = [left, right]
+        rng.shuffle(sides)
+        return sides
+    if side not in SIDES:
+        raise ValueError(side)
+    return [left if (side == "left") != flip else right]
 
 
 def _straight_runs(route: Sequence[Cell], before: int, after: int) -> list[tuple[int, Cell]]:
@@ -204,36 +248,39 @@ def first_leg(floors: set[Cell], goals: Sequence[Cell]) -> list[Cell]:
 
 
 def plan_layout(params: RoomParameters, floors: set[Cell], goals: Sequence[Cell],
-                row_half_extent: float, rng: random.Random) -> StressorLayout:
-    """Where the stressor goes in this floor plan; StressorFailed when nowhere fits."""
+                row_half_extent: float, rng: random.Random, side: str | None = None
+                ) -> StressorLayout:
+    """Where the stressor goes in this floor plan, its mover ending up on ``side`` of the
+    route (one of SIDES; None: either); StressorFailed when nowhere fits."""
     leg = first_leg(floors, goals)
     kind = params.stressor
     if kind == "gap":
         return _gap(floors, goals, leg, row_half_extent, rng)
     blocked = set(goals) | set(leg)
     if kind == "emerge":
-        return _emerge(floors, leg, blocked, rng)
+        return _emerge(floors, leg, blocked, rng, side)
     if kind == "crossing":
-        return _crossing(floors, leg, blocked, rng)
+        return _crossing(floors, leg, blocked, rng, side)
     if kind == "oncoming":
-        return _oncoming(floors, leg, blocked, rng)
+        return _oncoming(floors, leg, blocked, rng, side)
     raise ValueError(kind)
 
 
-def _meeting_points(leg: list[Cell], rng: random.Random
+def _meeting_points(leg: list[Cell], rng: random.Random, side: str | None
                     ) -> Iterator[tuple[int, Cell, Cell, Cell]]:
     """(k, p, d, n) in a random order: a cell p = leg[k] that the route approaches straight
-    along d for three cells and leaves along d, and a side n across the route there."""
+    along d for three cells and leaves along d, and the side n across the route there the
+    mover comes from (it ends up on the other, ``side``)."""
     runs = _straight_runs(leg, 3, 1)
     rng.shuffle(runs)
     for k, d in runs:
-        for n in _perpendiculars(d, rng):
+        for n in _perpendiculars(d, rng, side, flip=True):
             yield k, leg[k], d, n
 
 
-def _emerge(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: random.Random
-            ) -> StressorLayout:
-    for k, p, d, n in _meeting_points(leg, rng):
+def _emerge(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: random.Random,
+            side: str | None) -> StressorLayout:
+    for k, p, d, n in _meeting_points(leg, rng, side):
         stub, hide = _add(_sub(p, d), n), _add(p, n)
         toward = _sub(p, d)
         aside = _sub(toward, n)
@@ -244,15 +291,17 @@ def _emerge(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: random.
         mover = MoverPath("emerging_person", "human", "human", (hide, p, toward, aside),
                           anchor=1, lead=PERSON_LEAD)
         return StressorLayout("emerge", frozenset({stub}), (), mover, p,
-                              tuple(leg[k - 3:k + 2]), frozenset(leg) | {hide, aside})
+                              tuple(leg[k - 3:k + 2]), frozenset(leg) | {hide, aside},
+                              side=side_cell(toward, d, aside))
     raise StressorFailed("no straight stretch of the first leg with room for a wall stub "
                          "and a person behind it")
 
 
-def _crossing(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: random.Random
-              ) -> StressorLayout:
-    for k, p, _d, n in _meeting_points(leg, rng):
-        way = [_add(p, n, 2), _add(p, n, 1), p, _add(p, n, -1), _add(p, n, -2)]
+def _crossing(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: random.Random,
+               side: str | None) -> StressorLayout:
+    for k, p, d, n in _meeting_points(leg, rng, side):
+        # Parked on the tile beside the route, where the robot passes it.
+        way = [_add(p, n, 2), _add(p, n, 1), p, _add(p, n, -1)]
         if any(t not in floors or (t != p and t in blocked) for t in way):
             continue
         # The cart faces where it goes, so its length lies along its way.
@@ -260,13 +309,14 @@ def _crossing(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: rando
         mover = MoverPath("crossing_cart", "dynamic", CART_TYPE, tuple(way), anchor=2,
                           lead=CART_LEAD, heading=heading)
         return StressorLayout("crossing", frozenset(), (), mover, p,
-                              tuple(leg[k - 3:k + 2]), frozenset(leg) | set(way))
+                              tuple(leg[k - 3:k + 2]), frozenset(leg) | set(way),
+                              side=side_cell(p, d, way[-1]))
     raise StressorFailed("no straight stretch of the first leg with two free tiles on "
-                         "either side for a crossing cart")
+                         "one side and one on the other for a crossing cart")
 
 
-def _oncoming(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: random.Random
-              ) -> StressorLayout:
+def _oncoming(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: random.Random,
+              side: str | None) -> StressorLayout:
     length = CORRIDOR_LENGTH
     # One straight cell before the corridor and the corridor, whose far end (the person's
     # start) must not be the goal.
@@ -278,7 +328,7 @@ def _oncoming(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: rando
     for a, d in runs:
         corridor = leg[a:a + length]
         entrance = leg[a - 1]
-        for n in _perpendiculars(d, rng):
+        for n in _perpendiculars(d, rng, side):
             walls = {_add(c, n, s) for c in corridor for s in (1, -1)} & floors
             aside = _add(entrance, n)
             if aside not in floors or aside in blocked or walls & blocked:
@@ -289,7 +339,8 @@ def _oncoming(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: rando
             mover = MoverPath("oncoming_person", "human", "human", path,
                               anchor=len(corridor) - 1, lead=ONCOMING_LEAD)
             return StressorLayout("oncoming", frozenset(walls), (), mover, corridor[0],
-                                  tuple(leg[a - 1:a + length]), frozenset(leg) | {aside})
+                                  tuple(leg[a - 1:a + length]), frozenset(leg) | {aside},
+                                  side=side_cell(entrance, d, aside))
     raise StressorFailed(f"no straight stretch of {length + 1} tiles on the first leg for a "
                          f"one-tile corridor")
 

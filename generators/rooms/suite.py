@@ -33,6 +33,7 @@ from rei.generators.rooms.space import (
     parse_row,
     refuse_impossible,
 )
+from rei.generators.rooms.stressors import MOVER_KINDS, side_of
 from rei.generators.rooms.writer import Provenance, mission_text, room_text
 from rei.lang.errors import Diagnostic
 from rei.lang.workspace import Workspace
@@ -128,8 +129,13 @@ def generate(request: SuiteRequest, out_dir: Path, times: StageTimes | None = No
     facts = CatalogueFacts.of(default_catalogue())
     width = max(4, len(str(len(rows))))
     pairs = []
+    movers = 0  # mover rooms so far: their sides alternate (stressors.side_of)
     for index, (row_index, params) in enumerate(rows):
         name = f"{request.prefix}_{index + 1:0{width}d}"
+        side = None
+        if params.stressor in MOVER_KINDS:
+            side = side_of(request.seed, movers)
+            movers += 1
         room_file, mission_file = f"{name}.room", f"{name}.mission"
         rejected = 0
         reasons: dict[tuple[str, str], int] = {}
@@ -137,7 +143,7 @@ def generate(request: SuiteRequest, out_dir: Path, times: StageTimes | None = No
             rng = random.Random(derived_seed(request.seed, "room", index, attempt))
             t0 = time.perf_counter()
             try:
-                plan = construct(params, facts, rng)
+                plan = construct(params, facts, rng, side)
             except AttemptFailed as exc:
                 times.construct += time.perf_counter() - t0
                 key = (exc.option, exc.reason)

@@ -86,7 +86,8 @@ def _stressor_comment(plan: RoomPlan) -> list[str]:
     assert stress.mover is not None and layout.mover is not None
     return [f"// stressor: kind={layout.kind} mover={stress.mover.name} "
             f"point={cell_name(layout.point)} arrival_s={_fmt(stress.arrival_s)} "
-            f"meeting_s={_fmt(stress.meeting_s)} lead_m={_fmt(layout.mover.lead)}"]
+            f"meeting_s={_fmt(stress.meeting_s)} lead_m={_fmt(layout.mover.lead)} "
+            f"side={layout.side}"]
 
 
 def _mover_lines(plan: RoomPlan) -> list[str]:

@@ -31,6 +31,7 @@ from rei.generators.rooms.stressors import (
     START_DELAY,
     route_lengths,
 )
+from rei.generators.rooms.suite import GeneratedPair
 from rei.lang.room.checks import blocking_objects, rotated_half_extents
 from rei.lang.workspace import Workspace, load_mission
 
@@ -91,6 +92,48 @@ def test_the_stress_preset_lists_every_stressor_first_in_its_systematic_design()
     suite = generate(SuiteRequest(preset_space("stress"), "systematic", 4, 0), Path("unused"))
     assert [p.params.stressor for p in suite.pairs] == ["emerge", "crossing", "gap",
                                                         "oncoming"]
+
+
+def _passing_side(pair: GeneratedPair) -> str:
+    """The side of the robot's route (looking along it) the mover ends up standing on, from
+    the plan's geometry: its last tile must be next to a tile of the straight approach the
+    route keeps, across the route (else it does not stand beside the robot's way)."""
+    stress = pair.plan.stressor
+    assert stress is not None and stress.mover is not None
+    approach = stress.layout.approach
+    d = (approach[1][0] - approach[0][0], approach[1][1] - approach[0][1])
+    last = stress.mover.vertices[-1][0]
+    for c in approach:
+        off = (last[0] - c[0], last[1] - c[1])
+        if abs(off[0]) + abs(off[1]) == 1 and off[0] * d[0] + off[1] * d[1] == 0:
+            cross = d[0] * off[1] - d[1] * off[0]  # > 0: to the left (x east, y north)
+            return "left" if cross > 0 else "right"
+    return "not beside the route"
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3, 4])
+def test_each_demo_suite_has_a_mover_stand_beside_the_route_on_each_side(seed: int) -> None:
+    """`rei demo`'s stress rooms (the first three systematic rows) bring one mover to stand
+    beside the robot's route on its left and the other on its right, the side that comes
+    first alternating with the seed (over seeds, each kind on each side)."""
+    suite = generate(SuiteRequest(preset_space("stress"), "systematic", 3, seed),
+                     Path("unused"))
+    sides = {p.params.stressor: _passing_side(p) for p in suite.pairs
+             if p.params.stressor != "gap"}
+    assert sorted(sides.values()) == ["left", "right"], sides
+    assert sides["emerge"] == ("right" if seed % 2 else "left")
+    for pair in suite.pairs:
+        stress = pair.plan.stressor
+        assert stress is not None
+        assert stress.layout.side == (sides.get(pair.params.stressor) or "")
+        assert f"side={stress.layout.side}" in pair.room_text or stress.layout.side == ""
+
+
+def test_the_stress_preset_alternates_the_side_over_its_mover_rooms() -> None:
+    suite = generate(SuiteRequest(preset_space("stress"), "systematic", 8, 0), Path("unused"))
+    movers = [p for p in suite.pairs if p.params.stressor != "gap"]
+    assert [p.params.stressor for p in movers] == ["emerge", "crossing", "oncoming"] * 2
+    assert [_passing_side(p) for p in movers] == ["left", "right"] * 3
 
 
 def _mover_times(room_text: str, name: str) -> list[tuple[str, float]]:
