@@ -11,7 +11,11 @@ as often as a human-blind one; reactive humans make the test fair.
   robot is out of its way (at most ``give_way_time``: the robot's goal may be where the
   human stands), and returns to its path. Without that, a human standing in a one-tile
   passage and a robot waiting for it to move would wait for each other until the goal
-  times out.
+  times out. A human that stands because it has nowhere to walk (before its start, at the
+  end of an open path) gives way the same way to a robot waiting within ``slow_gap`` of it
+  on any side (``gap_beside``): a path that ends on the robot's goal otherwise keeps the
+  human on the goal for ever, and any navigator fails that goal (issue 22: a medium-preset
+  walker stood on goal_2 from 31 s until the reference aborted it at 227 s).
 * ``social``: the social force model of Helbing and Molnár (Phys. Rev. E 51, 4282, 1995):
   a driving force relaxes the human's velocity towards its desired velocity (towards a
   target point moving along its spline) over the relaxation time; the robot and the other
@@ -108,6 +112,15 @@ def gap_in_the_way(rule: YieldRule, x: float, y: float, radius: float, direction
     if ahead <= -reach or side > math.tan(rule.cone_half_angle) * max(ahead, 0.0) + reach:
         return None
     return math.hypot(dx, dy) - reach
+
+
+def gap_beside(rule: YieldRule, x: float, y: float, radius: float, robot: Agent) -> float | None:
+    """The gap (m) between the footprints when the robot is within ``give_way_gap`` of a
+    standing human on any side, None when it is farther: a human with nowhere to walk is in
+    the way of a robot whichever side it comes from (the robot waits on it within
+    ``slow_gap``; a human giving way steps back to ``give_way_gap``)."""
+    gap = math.hypot(robot.x - x, robot.y - y) - radius - robot.radius
+    return gap if gap < max(rule.slow_gap, rule.give_way_gap) else None
 
 
 def speed_share(rule: YieldRule, gap: float | None) -> float:
