@@ -32,6 +32,7 @@ from rei.runtime.animator.reactive import (
     YieldRule,
     gap_beside,
     gap_in_the_way,
+    keep_clear,
     limit_speed,
     social_acceleration,
     speed_share,
@@ -289,8 +290,9 @@ class Animator:
         desired = limit_speed(scale * px + cx, scale * py + cy, v_max)
         vx, vy = self._velocity[k]
         ax, ay = social_acceleration(model, pose[0], pose[1], vx, vy, item.radius, desired,
-                                     others)
+                                     others, self._path_speed[k])
         vx, vy = limit_speed(vx + ax * dt, vy + ay * dt, v_max)
+        vx, vy = keep_clear(model, pose[0], pose[1], vx, vy, item.radius, others)
         self._velocity[k] = (vx, vy)
         self._feedback[k] = (0.0, 0.0, _turn(item.face_motion, vx, vy, pose[2], FACING_SPEED))
 
