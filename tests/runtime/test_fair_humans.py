@@ -85,6 +85,13 @@ def test_a_person_standing_on_the_goal_steps_aside_for_a_robot_that_waits(
     assert off_goal[arrived:].max() > 0.6
 
 
+def test_giving_way_is_the_same_bit_for_bit_with_the_same_seed(tmp_path: Path) -> None:
+    a_rec, a = _run(tmp_path / "a", "reference")
+    b_rec, b = _run(tmp_path / "b", "reference")
+    assert a.tobytes() == b.tobytes()
+    assert a_rec.measurements == b_rec.measurements
+
+
 def test_a_person_on_the_goal_never_moves_for_a_robot_that_never_comes(
         tmp_path: Path) -> None:
     """Giving way answers a robot waiting next to the person: a navigator that never
