@@ -32,20 +32,22 @@ from rei.runtime.collector import SampleList, load_monitor_config
 from rei.runtime.run import RunConfig, RunRecord, generate_world, run_mission
 from rei.runtime.world.manifest import load_manifest
 from tests.runtime.faulty import Idle
+from tests.runtime.test_humans import ROOM as ROOM_TEMPLATE
+
+
+def _corridor(name: str, robot_tile: str, human: str) -> str:
+    """A 9 x 3 tile hall with the robot on ``robot_tile`` and the walker line ``human``
+    (the same hall as tests/runtime/test_humans.py's, from which it is built)."""
+    hall = ROOM_TEMPLATE.replace("room corridor", f"room {name}")
+    hall = hall.replace("r : turtlebot3_waffle on g_2_5", f"r : turtlebot3_waffle on {robot_tile}")
+    return hall.replace(
+        "human walker on g_2_1 trajectory stop { g_2_1 at 0  g_2_9 at 8 }BEHAVIOUR", human)
+
 
 # A corridor; the walker comes from the far end and stops on the robot's goal tile.
-ROOM = """room hall {
-    grid g {
-        "###########"
-        "#.........#"
-        "#.........#"
-        "#.........#"
-        "###########"
-    }
-    robot r : turtlebot3_waffle on g_2_1 heading 0
-    human walker on g_2_9 trajectory stop { g_2_9 at 0  g_2_5 at 4 } behaviour yielding
-}
-"""
+ROOM = _corridor("hall", "g_2_1 heading 0",
+                 "human walker on g_2_9 trajectory stop { g_2_9 at 0  g_2_5 at 4 } "
+                 "behaviour yielding")
 MISSION = """mission meet in "hall.room" {
     goal start at g_2_1 tolerance 0.3 timeout 10
     goal spot at g_2_5 tolerance 0.3 timeout 60
@@ -105,18 +107,8 @@ def test_a_person_on_the_goal_never_moves_for_a_robot_that_never_comes(
 
 # A social human walks to and fro along the wall, through a robot standing in its way: the
 # force turns it to its right, into the wall, on one of the two legs.
-WALL_ROOM = """room wall {
-    grid g {
-        "###########"
-        "#.........#"
-        "#.........#"
-        "#.........#"
-        "###########"
-    }
-    robot r : turtlebot3_waffle on g_1_5
-    human walker on g_1_1 trajectory total TOTAL loop { g_1_1 g_1_9 } behaviour social
-}
-"""
+WALL_ROOM = _corridor("wall", "g_1_5", "human walker on g_1_1 trajectory total TOTAL loop "
+                     "{ g_1_1 g_1_9 } behaviour social")
 WALL_MISSION = """mission stand in "wall.room" {
     goal here at g_1_5 tolerance 0.3 timeout 60
     goal there at g_1_6 tolerance 0.3 timeout 60
