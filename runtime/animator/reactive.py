@@ -69,8 +69,9 @@ class SocialForce:
     relaxation_time: float = 0.5
     """s: how fast the velocity relaxes to the desired one (Helbing and Molnár: 0.5 s)."""
     strength: float = 6.0
-    """A, m/s^2: repulsion per unit mass at touching footprints (Helbing and Molnár's
-    V0/sigma is 7 m/s^2 between pedestrians' centres)."""
+    """A, m/s^2: repulsion per unit mass at touching footprints for a human walking at
+    ``reference_speed`` or slower (Helbing and Molnár's V0/sigma is 7 m/s^2 between
+    pedestrians' centres); scaled up in proportion for a faster one."""
     range: float = 0.5
     """B, m: the repulsion's decay length. Helbing and Molnár's sigma is 0.3 m between
     pedestrians; a robot is avoided from farther away, so a human at walking speed starts
