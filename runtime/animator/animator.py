@@ -30,7 +30,9 @@ from rei.runtime.animator.reactive import (
     Agent,
     SocialForce,
     YieldRule,
+    gap_beside,
     gap_in_the_way,
+    keep_clear,
     limit_speed,
     social_acceleration,
     speed_share,
@@ -200,21 +202,33 @@ class Animator:
             vx, vy = item.spline.velocity(s)
             if item.behaviour == "yielding":
                 walking = step / self.rate >= item.variation.phase_s
+                # Before its start and at the end of an open path the human stands: then
+                # the robot waits on it when it is near on any side (its goal may be where
+                # the human stands), not only ahead.
+                standing = not walking or math.hypot(vx, vy) < 1e-9
                 # "In its way" along where it actually goes: its path's direction plus the
                 # pull back to the path (returning from a step aside must not walk into it)
                 going = (vx * item.variation.speed_scale + cx,
                          vy * item.variation.speed_scale + cy)
-                gap = None if robot is None or not walking else gap_in_the_way(
-                    self.reactions.yielding, pose[0], pose[1], item.radius, going, robot)
-                self._advance[k] = self._yield(k, gap, dt) if walking else 0.0
+                rule = self.reactions.yielding
+                if robot is None:
+                    gap = None
+                elif standing:
+                    gap = gap_beside(rule, pose[0], pose[1], item.radius, robot)
+                else:
+                    gap = gap_in_the_way(rule, pose[0], pose[1], item.radius, going, robot)
+                share = self._yield(k, gap, dt, standing)
+                self._advance[k] = share if walking else 0.0
                 if self._giving_way[k] and robot is not None:
                     cx, cy = self._step_away(pose, robot, gap, robot_pose)
                 else:
-                    cx, cy = cx * self._advance[k], cy * self._advance[k]
+                    cx, cy = cx * share, cy * share
             self._feedback[k] = (cx, cy, _turn(item.face_motion, vx, vy, pose[2], 1e-3))
 
-    def _yield(self, k: int, gap: float | None, dt: float) -> float:
-        """The share of path speed a yielding human walks at; 0 while it gives way."""
+    def _yield(self, k: int, gap: float | None, dt: float, standing: bool = False) -> float:
+        """The share of path speed a yielding human walks at; 0 while it gives way.
+        ``standing``: the human has nowhere to walk (before its start, at its path's end),
+        so a robot anywhere within ``gap_beside`` is waiting on it."""
         rule = self.reactions.yielding
         if self._giving_way[k]:
             self._aside[k] += dt
@@ -226,7 +240,8 @@ class Animator:
         share = speed_share(rule, gap)
         # The share falls off with the gap, so a human closes in on stop_gap ever slower:
         # one creeping at a tenth of its speed is waiting as much as one standing.
-        self._stood[k] = self._stood[k] + dt if share < 0.1 else 0.0
+        waited_on = share < 0.1 or (standing and gap is not None and gap < rule.slow_gap)
+        self._stood[k] = self._stood[k] + dt if waited_on else 0.0
         if self._stood[k] >= rule.patience:
             self._giving_way[k], self._stood[k], self._aside[k] = True, 0.0, 0.0
             return 0.0
@@ -275,8 +290,9 @@ class Animator:
         desired = limit_speed(scale * px + cx, scale * py + cy, v_max)
         vx, vy = self._velocity[k]
         ax, ay = social_acceleration(model, pose[0], pose[1], vx, vy, item.radius, desired,
-                                     others)
+                                     others, self._path_speed[k])
         vx, vy = limit_speed(vx + ax * dt, vy + ay * dt, v_max)
+        vx, vy = keep_clear(model, pose[0], pose[1], vx, vy, item.radius, others)
         self._velocity[k] = (vx, vy)
         self._feedback[k] = (0.0, 0.0, _turn(item.face_motion, vx, vy, pose[2], FACING_SPEED))
 

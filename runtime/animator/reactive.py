@@ -11,7 +11,11 @@ as often as a human-blind one; reactive humans make the test fair.
   robot is out of its way (at most ``give_way_time``: the robot's goal may be where the
   human stands), and returns to its path. Without that, a human standing in a one-tile
   passage and a robot waiting for it to move would wait for each other until the goal
-  times out.
+  times out. A human that stands because it has nowhere to walk (before its start, at the
+  end of an open path) gives way the same way to a robot waiting within ``slow_gap`` of it
+  on any side (``gap_beside``): a path that ends on the robot's goal otherwise keeps the
+  human on the goal for ever, and any navigator fails that goal (issue 22: a medium-preset
+  walker stood on goal_2 from 31 s until the reference aborted it at 227 s).
 * ``social``: the social force model of Helbing and Molnár (Phys. Rev. E 51, 4282, 1995):
   a driving force relaxes the human's velocity towards its desired velocity (towards a
   target point moving along its spline) over the relaxation time; the robot and the other
@@ -21,6 +25,12 @@ as often as a human-blind one; reactive humans make the test fair.
   measured with Helbing and Molnár's elliptical distance b, which accounts for the other's
   step v * step_time, so a robot driving towards a human repels it earlier than one
   standing or driving away.
+  Two additions keep a fair human from walking into a robot at any walking speed
+  (rei_lang's WALKING_SPEEDS, 0.5-1.4 m/s): the repulsion is scaled by the human's path
+  speed over ``reference_speed`` (its driving force grows with that speed, so a fixed
+  strength let a human at 1.3 m/s settle against the robot's footprint), and a human never
+  closes the gap to another body faster than (gap - clearance_margin) / clearance_time
+  (``keep_clear``): it stops short of the robot instead of pressing into it.
   Walls are not part of the force: the spline keeps clear of them, and a pushed human
   meets them as real contacts.
 
@@ -59,8 +69,9 @@ class SocialForce:
     relaxation_time: float = 0.5
     """s: how fast the velocity relaxes to the desired one (Helbing and Molnár: 0.5 s)."""
     strength: float = 6.0
-    """A, m/s^2: repulsion per unit mass at touching footprints (Helbing and Molnár's
-    V0/sigma is 7 m/s^2 between pedestrians' centres)."""
+    """A, m/s^2: repulsion per unit mass at touching footprints for a human walking at
+    ``reference_speed`` or slower (Helbing and Molnár's V0/sigma is 7 m/s^2 between
+    pedestrians' centres); scaled up in proportion for a faster one."""
     range: float = 0.5
     """B, m: the repulsion's decay length. Helbing and Molnár's sigma is 0.3 m between
     pedestrians; a robot is avoided from farther away, so a human at walking speed starts
@@ -75,6 +86,19 @@ class SocialForce:
     step_time: float = 1.0
     """s: the others' step v * step_time that shapes the elliptical distance (Helbing and
     Molnár use 2 s between pedestrians; 1 s keeps a robot crossing far ahead harmless)."""
+    reference_speed: float = 0.8
+    """m/s: the walking speed ``strength`` is set for. A faster human's driving force is
+    larger in proportion, (v0 - v) / relaxation_time, so its repulsion is scaled by
+    v0 / reference_speed (never below 1): the gap it keeps from the robot is then the same
+    at every walking speed, where a fixed strength let a human at 1.3 m/s settle against
+    the robot's footprint and touch it."""
+    clearance_time: float = 0.5
+    """s: a human closes the gap to another body at most at (gap - clearance_margin) /
+    clearance_time, so it slows to a stop before touching (people do not walk into a robot
+    they see); its motion across is kept, so it slides round."""
+    clearance_margin: float = 0.05
+    """m: the gap at which a human stops closing in (pybullet reports a contact a little
+    before the footprints meet)."""
     cutoff: float = 3.0
     """m between footprints beyond which another agent exerts no force (cheap, and smooth
     enough: A exp(-3/0.5) is 0.015 m/s^2)."""
@@ -110,6 +134,15 @@ def gap_in_the_way(rule: YieldRule, x: float, y: float, radius: float, direction
     return math.hypot(dx, dy) - reach
 
 
+def gap_beside(rule: YieldRule, x: float, y: float, radius: float, robot: Agent) -> float | None:
+    """The gap (m) between the footprints when the robot is within ``give_way_gap`` of a
+    standing human on any side, None when it is farther: a human with nowhere to walk is in
+    the way of a robot whichever side it comes from (the robot waits on it within
+    ``slow_gap``; a human giving way steps back to ``give_way_gap``)."""
+    gap = math.hypot(robot.x - x, robot.y - y) - radius - robot.radius
+    return gap if gap < max(rule.slow_gap, rule.give_way_gap) else None
+
+
 def speed_share(rule: YieldRule, gap: float | None) -> float:
     """1 to walk at full path speed, 0 to stand, for the robot ``gap`` metres ahead."""
     if gap is None or gap >= rule.slow_gap:
@@ -126,8 +159,12 @@ def yield_factor(rule: YieldRule, x: float, y: float, radius: float, direction: 
 
 
 def social_acceleration(model: SocialForce, x: float, y: float, vx: float, vy: float,
-                        radius: float, desired: Vec, others: list[Agent]) -> Vec:
-    """dv/dt of a human at (x, y) with velocity (vx, vy) that wants to walk at ``desired``."""
+                        radius: float, desired: Vec, others: list[Agent],
+                        walking_speed: float = 0.0) -> Vec:
+    """dv/dt of a human at (x, y) with velocity (vx, vy) that wants to walk at ``desired``
+    along a path walked at ``walking_speed`` (m/s; the repulsion's scale, see
+    ``SocialForce.reference_speed``)."""
+    strength = model.strength * max(1.0, walking_speed / model.reference_speed)
     ax = (desired[0] - vx) / model.relaxation_time
     ay = (desired[1] - vy) / model.relaxation_time
     speed = math.hypot(vx, vy)
@@ -145,7 +182,7 @@ def social_acceleration(model: SocialForce, x: float, y: float, vx: float, vy: f
         # cos of the angle between where the human heads and where the other is.
         cos_phi = -(nx * hx + ny * hy)
         weight = model.anisotropy + (1.0 - model.anisotropy) * (1.0 + cos_phi) / 2.0
-        push = model.strength * math.exp(-gap / model.range) * weight
+        push = strength * math.exp(-gap / model.range) * weight
         ax += push * nx
         ay += push * ny
         if cos_phi > 0.0:  # only what is ahead deflects the human sideways, to its right
@@ -153,6 +190,26 @@ def social_acceleration(model: SocialForce, x: float, y: float, vx: float, vy: f
             ax += turn * hy
             ay += turn * -hx
     return ax, ay
+
+
+def keep_clear(model: SocialForce, x: float, y: float, vx: float, vy: float, radius: float,
+               others: list[Agent]) -> Vec:
+    """The velocity (vx, vy) with its component towards each other body limited to
+    (gap - clearance_margin) / clearance_time (none at all closer than the margin); the
+    component across is kept, so the human slides round rather than stands."""
+    for other in others:
+        dx, dy = other.x - x, other.y - y
+        dist = math.hypot(dx, dy)
+        if dist < 1e-9:
+            continue
+        nx, ny = dx / dist, dy / dist
+        closing = vx * nx + vy * ny
+        gap = dist - radius - other.radius - model.clearance_margin
+        allowed = max(gap, 0.0) / model.clearance_time
+        if closing > allowed:
+            vx -= (closing - allowed) * nx
+            vy -= (closing - allowed) * ny
+    return vx, vy
 
 
 def elliptical_distance(dx: float, dy: float, sx: float, sy: float) -> float:

@@ -1,0 +1,200 @@
+"""Fair reactive humans: a correct navigator never fails because of a human model's defect.
+
+Two mechanisms that made the reference navigator fail (issue 22 item 5, issue 25's "0 false
+alarms"), each shown with the real simulator and, where a law holds, with the model alone:
+
+* a yielding human whose open path ends on the robot's goal stood there for ever, since
+  a human with nowhere to walk never saw the robot "in its way" and never gave way;
+* a fast social human settled against a robot beside its path and touched it: the driving
+  force grows with the walking speed, the repulsion did not.
+
+The other side is kept: a robot that drives into a person is still blamed, and a navigator
+that never moves still never reaches a goal a person has stepped away from.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rei.lang.room.model import WALKING_SPEEDS
+from rei.runtime.animator.reactive import (
+    Agent,
+    SocialForce,
+    keep_clear,
+    limit_speed,
+    social_acceleration,
+)
+from rei.runtime.collector import SampleList, load_monitor_config
+from rei.runtime.run import RunConfig, RunRecord, generate_world, run_mission
+from rei.runtime.world.manifest import load_manifest
+from tests.runtime.faulty import Idle
+from tests.runtime.test_humans import ROOM as ROOM_TEMPLATE
+
+
+def _corridor(name: str, robot_tile: str, human: str) -> str:
+    """A 9 x 3 tile hall with the robot on ``robot_tile`` and the walker line ``human``
+    (the same hall as tests/runtime/test_humans.py's, from which it is built)."""
+    hall = ROOM_TEMPLATE.replace("room corridor", f"room {name}")
+    hall = hall.replace("r : turtlebot3_waffle on g_2_5", f"r : turtlebot3_waffle on {robot_tile}")
+    return hall.replace(
+        "human walker on g_2_1 trajectory stop { g_2_1 at 0  g_2_9 at 8 }BEHAVIOUR", human)
+
+
+# A corridor; the walker comes from the far end and stops on the robot's goal tile.
+ROOM = _corridor("hall", "g_2_1 heading 0",
+                 "human walker on g_2_9 trajectory stop { g_2_9 at 0  g_2_5 at 4 } "
+                 "behaviour yielding")
+MISSION = """mission meet in "hall.room" {
+    goal start at g_2_1 tolerance 0.3 timeout 10
+    goal spot at g_2_5 tolerance 0.3 timeout 60
+}
+"""
+
+
+def _run(folder: Path, controller: object, duration: float | None = None
+         ) -> tuple[RunRecord, np.ndarray]:
+    """The run's record and the walker's (x, y) at every sample."""
+    from rei.runtime.robot.select import make_controller  # noqa: PLC0415
+
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "hall.room").write_text(ROOM, encoding="utf-8")
+    (folder / "meet.mission").write_text(MISSION, encoding="utf-8")
+    mission = generate_world(folder / "meet.mission", folder / "world")
+    manifest = load_manifest(folder / "world")
+    samples = SampleList()
+    nav = make_controller("reference") if controller == "reference" else controller
+    record = run_mission(mission, manifest, load_monitor_config(folder / "world"),
+                         nav, [samples],  # type: ignore[arg-type]
+                         RunConfig(seed=0, watchdog=None, duration=duration))
+    walker = len(manifest.walls) + [b.name for b in manifest.objects].index("walker")
+    return record, np.array([s.poses[walker, :2] for s in samples.samples])
+
+
+def test_a_person_standing_on_the_goal_steps_aside_for_a_robot_that_waits(
+        tmp_path: Path) -> None:
+    record, path = _run(tmp_path / "reference", "reference")
+    assert record.outcome == "completed", record.outcome
+    assert record.measurements["collisions"] == 0
+    # It stood on the goal, 4 m ahead of the robot's start (the origin) ...
+    off_goal = np.hypot(path[:, 0] - 4.0, path[:, 1])
+    arrived = int(np.argmax(off_goal < 0.05))
+    assert off_goal[arrived] < 0.05
+    # ... and stepped off it (never pushed: no contact) while the robot waited
+    assert off_goal[arrived:].max() > 0.6
+
+
+def test_giving_way_is_the_same_bit_for_bit_with_the_same_seed(tmp_path: Path) -> None:
+    a_rec, a = _run(tmp_path / "a", "reference")
+    b_rec, b = _run(tmp_path / "b", "reference")
+    assert a.tobytes() == b.tobytes()
+    assert a_rec.measurements == b_rec.measurements
+
+
+def test_a_person_on_the_goal_never_moves_for_a_robot_that_never_comes(
+        tmp_path: Path) -> None:
+    """Giving way answers a robot waiting next to the person: a navigator that never
+    moves leaves the person where it stands and still fails its goal."""
+    record, path = _run(tmp_path / "idle", Idle(), duration=30.0)
+    assert record.outcome != "completed"
+    standing = path[len(path) // 2:]  # from 15 s, long after its walk ended
+    assert np.hypot(standing[0, 0] - 4.0, standing[0, 1]) < 0.05
+    assert np.ptp(standing[:, 0]) < 0.02 and np.ptp(standing[:, 1]) < 0.02
+
+
+# A social human walks to and fro along the wall, through a robot standing in its way: the
+# force turns it to its right, into the wall, on one of the two legs.
+WALL_ROOM = _corridor("wall", "g_1_5", "human walker on g_1_1 trajectory total TOTAL loop "
+                     "{ g_1_1 g_1_9 } behaviour social")
+WALL_MISSION = """mission stand in "wall.room" {
+    goal here at g_1_5 tolerance 0.3 timeout 60
+    goal there at g_1_6 tolerance 0.3 timeout 60
+}
+"""
+
+
+@pytest.mark.parametrize("speed", [0.8, 1.35])
+def test_a_fast_social_human_never_walks_into_a_standing_robot(tmp_path: Path,
+                                                               speed: float) -> None:
+    """16 m a loop; at 1.35 m/s the old model (fixed repulsion, no guard) walked into the
+    robot 9 times in these 30 s, at 0.8 m/s never."""
+    (tmp_path / "wall.room").write_text(WALL_ROOM.replace("TOTAL", f"{16.0 / speed:.2f}"),
+                                        encoding="utf-8")
+    (tmp_path / "stand.mission").write_text(WALL_MISSION, encoding="utf-8")
+    mission = generate_world(tmp_path / "stand.mission", tmp_path / "world")
+    record = run_mission(mission, load_manifest(tmp_path / "world"),
+                         load_monitor_config(tmp_path / "world"), Idle(), [],
+                         RunConfig(seed=0, watchdog=None, duration=30.0))
+    assert record.measurements["collisions"] == 0, record.measurements["collided_with"]
+
+
+def _settle(speed: float, robot_at: tuple[float, float], model: SocialForce,
+            guard: bool = True, wall: float | None = None, steps: int = 300) -> float:
+    """The smallest footprint gap of a social human at the origin walking (+x) at
+    ``speed`` towards a target 1 m behind a robot standing at ``robot_at``, at the control
+    rate (10 Hz) as the animator integrates it; ``wall``: the human cannot go below this y
+    (a wall on its right, the side it passes on, as in a doorway)."""
+    x, y, vx, vy = 0.0, 0.0, 0.0, 0.0
+    robot = Agent(*robot_at, 0.207)
+    target = (robot_at[0] + 1.0, 0.0)
+    dt, smallest = 0.1, math.inf
+    for _ in range(steps):
+        ex, ey = target[0] - x, target[1] - y
+        err = math.hypot(ex, ey)
+        pull = min(err, 0.5) / err if err > 1e-9 else 0.0
+        desired = limit_speed(speed + ex * pull, ey * pull, 1.3 * speed)
+        ax, ay = social_acceleration(model, x, y, vx, vy, 0.25, desired, [robot], speed)
+        vx, vy = limit_speed(vx + ax * dt, vy + ay * dt, 1.3 * speed)
+        if guard:
+            vx, vy = keep_clear(model, x, y, vx, vy, 0.25, [robot])
+        if wall is not None and y + vy * dt < wall:
+            vy = (wall - y) / dt
+        x, y = x + vx * dt, y + vy * dt
+        smallest = min(smallest, math.hypot(robot.x - x, robot.y - y) - 0.25 - robot.radius)
+    return smallest
+
+
+SCENES = [((2.0, 0.0), None), ((2.0, 0.3), None), ((2.0, -0.3), None), ((2.0, 0.2), 0.0),
+          ((2.0, 0.1), -0.05)]
+"""(robot position, wall): head-on, a little to either side in the open, and beside a
+wall that keeps the human from passing on its right."""
+
+
+@pytest.mark.parametrize("speed", [WALKING_SPEEDS[0], 0.8, 1.1, WALKING_SPEEDS[1]])
+def test_a_social_human_keeps_clear_of_a_robot_at_every_walking_speed(speed: float) -> None:
+    """Over the whole declared walking speed range the human keeps at least the clearance
+    margin from a standing robot's footprint, and about the gap it keeps at 0.8 m/s."""
+    model = SocialForce()
+    for robot_at, wall in SCENES:
+        gap = _settle(speed, robot_at, model, wall=wall)
+        assert gap >= model.clearance_margin
+        assert gap >= 0.9 * _settle(0.8, robot_at, model, wall=wall)
+
+
+def test_without_the_speed_scaling_and_the_guard_a_fast_human_touches_the_robot() -> None:
+    """The failing side of the test above: Helbing and Molnár's fixed strength alone (the
+    old model) lets a human at 1.4 m/s beside a wall settle against the robot and touch it,
+    where at 0.8 m/s it keeps 0.3 m."""
+    old = SocialForce(reference_speed=math.inf)
+    assert _settle(WALKING_SPEEDS[1], (2.0, 0.2), old, guard=False, wall=0.0) < 0.0
+    assert _settle(0.8, (2.0, 0.2), old, guard=False, wall=0.0) > 0.25
+    # each of the two changes alone keeps it clear
+    assert _settle(WALKING_SPEEDS[1], (2.0, 0.2), SocialForce(), guard=False, wall=0.0) > 0.25
+    assert _settle(WALKING_SPEEDS[1], (2.0, 0.2), old, guard=True,
+                   wall=0.0) >= old.clearance_margin
+
+
+def test_keep_clear_stops_closing_in_and_keeps_the_motion_across() -> None:
+    model = SocialForce()
+    robot = Agent(1.0, 0.0, 0.2)
+    # 0.55 m gap: closing allowed at (0.55 - 0.05) / 0.5 = 1 m/s
+    assert keep_clear(model, 0.0, 0.0, 0.8, 0.3, 0.25, [robot]) == (0.8, 0.3)
+    vx, vy = keep_clear(model, 0.0, 0.0, 1.4, 0.3, 0.25, [robot])
+    assert math.isclose(vx, 1.0) and vy == 0.3
+    # touching: nothing more towards it, backing off and sliding past stay allowed
+    near = Agent(0.46, 0.0, 0.2)
+    assert keep_clear(model, 0.0, 0.0, 1.0, 0.4, 0.25, [near]) == (0.0, 0.4)
+    assert keep_clear(model, 0.0, 0.0, -0.5, 0.0, 0.25, [near]) == (-0.5, 0.0)
