@@ -170,18 +170,19 @@ class _Linker:
         spans = {p.name: p for i in items if type(i).__name__ == "Parameters" for p in i.params}
         given = dict(self.overrides)
 
-        def origin(name: str) -> str:
-            return f" (set by {PARAM_OPTION})" if name in given else ""
+        def origin(name: str, lead: str = " (") -> str:
+            return f"{lead}set by {PARAM_OPTION}" if name in given else ""
 
         close, collision = params.get("eps_close"), params.get("eps_collision")
         if close is not None and collision is not None and not collision < close:
             self.error(spans["eps_collision"], "VEPL-PARAM",
                        f"expected eps_collision below eps_close ({close:g}"
-                       f"{origin('eps_close')}), found {collision:g}{origin('eps_collision')}")
+                       f"{origin('eps_close', ', ')}), found {collision:g}"
+                       f"{origin('eps_collision', ' (')}{')' if 'eps_collision' in given else ''}")
         if params.get("hysteresis", 0.0) < 0:
             self.error(spans["hysteresis"], "VEPL-PARAM",
                        f"expected a hysteresis band >= 0 m, found {params['hysteresis']:g}"
-                       f"{origin('hysteresis')}")
+                       f"{origin('hysteresis')}{')' if 'hysteresis' in given else ''}")
 
     # ---- queries ---------------------------------------------------------------------------
 
