@@ -297,7 +297,11 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
     manifest = load_manifest(world_dir)
     monitor_config = load_monitor_config(world_dir)
     specification = load_vepl(vepl, parameters) if monitor else None
-    changed = changed_parameters(vepl, parameters) if monitor else ()
+    # checked with --no-monitor too (a name the .vepl lacks is bad input); recorded only
+    # beside the verdicts they were judged with
+    changed = changed_parameters(vepl, parameters)
+    if not monitor:
+        changed = ()
     if specification is not None:
         # Never judge on data the collector will not forward (a false PASS): refuse first.
         check_needs(specification, monitor_config.data, f"the mission '{mission.name}' to "

@@ -100,3 +100,38 @@ def test_a_narrower_protective_field_is_judged_with_the_matching_react_zone(
     err = capfd.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "did you mean 'react_zone'?" in err[0], err
     assert not (tmp_path / "bad" / "summary.json").exists()
+
+
+@pytest.mark.slow
+def test_a_campaign_passes_records_and_keeps_its_values(tmp_path: Path) -> None:
+    """A real campaign (its runs are `rei run` processes) with --param: each run's summary,
+    the plan, the re-run command, junit.xml and the report carry the value; resuming with
+    another value is refused (exit 2) and leaves the folder as it was."""
+    from lxml import etree  # noqa: PLC0415
+
+    out = tmp_path / "campaign"
+    mission = str(REPO / "examples" / "simple_wall" / "simple_wall.mission")
+    common = ["campaign", mission, "-o", str(out), "--duration", "2", "--workers", "1",
+              "--seed", "4"]
+    status = rei([*common, "--param", "react_zone=0.7", "--param", "slow_speed=0.2", "-q"])
+    assert status in (0, 1)  # 2 s of a mission: the verdict is not what this test is about
+    [summary] = list((out / "runs").glob("*/summary.json"))
+    written = json.loads(summary.read_text(encoding="utf-8"))
+    assert written["parameters"] == {"react_zone": 0.7, "slow_speed": 0.2}
+    manifest = json.loads((out / "campaign.json").read_text(encoding="utf-8"))
+    [run] = manifest["plan"]["runs"]
+    assert run["vepl_parameters"] == {"react_zone": 0.7, "slow_speed": 0.2}
+    junit = etree.parse(str(out / "junit.xml"))
+    values = {p.get("name"): p.get("value") for p in junit.iter("property")}
+    assert values["param.react_zone"] == "0.7" and values["param.slow_speed"] == "0.2"
+    assert "--param react_zone=0.7 --param slow_speed=0.2" in values["rerun"]
+    report = (out / "report.html").read_text(encoding="utf-8")
+    assert '<p id="parameters">' in report and "<code>react_zone=0.7</code>" in report
+
+    before = (out / "campaign.json").read_bytes()
+    assert rei([*common, "--param", "react_zone=0.8", "--param", "slow_speed=0.2", "-q"]) == 2
+    assert rei([*common, "-q"]) == 2
+    assert (out / "campaign.json").read_bytes() == before
+    # the same values resume it (nothing left to run)
+    assert rei([*common, "--param", "slow_speed=0.2", "--param", "react_zone=0.7", "-q"]) \
+        == status
