@@ -79,11 +79,15 @@ def run(args: argparse.Namespace) -> int:
         print(f"rei monitor: error: --silence: expected a positive number of seconds, found "
               f"{args.silence}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    parameters = parameter_values(args.param)
+    if parameters:  # every name declared, every rule kept: before the outputs are touched
+        from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
+
+        load_vepl(args.vepl, parameters)
     out: Path = args.output
     out.mkdir(parents=True, exist_ok=True)
     for stale in ("summary.json", TRACE, TRACE + ".partial", EVENTS, "report.html"):
         (out / stale).unlink(missing_ok=True)
-    parameters = parameter_values(args.param)
     automata = generate_automata(args.vepl, out / "automata", replace=True,
                                  parameters=parameters)
     user = load_functions(args.functions, args.vepl)

@@ -423,6 +423,11 @@ def run(args: argparse.Namespace) -> int:
         if not (math.isfinite(args.bus_wait) and args.bus_wait > 0):
             raise RunError(f"--bus-wait: expected a positive number of seconds, found "
                            f"{args.bus_wait}")
+    parameters = parameter_values(args.param)
+    if parameters:  # every name declared, every rule kept: before the outputs are touched
+        from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
+
+        load_vepl(args.vepl, parameters)
     _make_folder(out)
     # Outputs of an earlier run into the same folder go now: a run that dies must not leave
     # them beside its own error summary.
@@ -438,8 +443,7 @@ def run(args: argparse.Namespace) -> int:
         echo_events=args.verbose, functions=args.functions, record=args.record,
         faults=tuple(f.text() for f in args.fault or ()), bus=args.bus,
         bus_credentials=os.path.abspath(args.credentials) if args.credentials else None,
-        bus_wait=args.bus_wait, wait_monitor=args.wait_for_monitor,
-        parameters=parameter_values(args.param))
+        bus_wait=args.bus_wait, wait_monitor=args.wait_for_monitor, parameters=parameters)
     ended = supervise(request)
     summary = _read_summary(out) if ended.status != 2 else None
     if summary is None:

@@ -238,3 +238,31 @@ def test_summary_and_junit_show_the_values_other_than_the_files() -> None:
     assert properties(slow)["param.react_zone"] == "0.7"
     assert not any(k.startswith("param.") for k in properties(plain))
     assert not any(k.startswith("param.") for k in properties(replace(slow, parameters={})))
+
+
+def test_every_command_that_judges_refuses_an_undeclared_name_before_it_starts(
+        tmp_path: Path, capfd: pytest.CaptureFixture[str]) -> None:
+    """Each command has the option and checks it first: one line, exit 2, nothing made."""
+    from rei.runtime.cli import main as rei  # noqa: PLC0415
+
+    mission = str(EXAMPLES / "simple_wall" / "simple_wall.mission")
+    trace = tmp_path / "trace.jsonl"
+    trace.write_text("{}\n", encoding="utf-8")
+    out = tmp_path / "out"
+    commands = {
+        "run": ["run", mission, "-o", str(out)],
+        "replay": ["replay", str(trace), "-o", str(out)],
+        "campaign": ["campaign", mission, "-o", str(out)],
+        "demo": ["demo", "-o", str(out)],
+        "search": ["search", "-o", str(out), "--budget", "1"],
+        "shrink": ["shrink", mission, "-o", str(out)],
+        "monitor": ["monitor", "--bus", "tcp/127.0.0.1:9", "-o", str(out)],
+        "watch": ["watch", "--replay", str(trace), "--plain"],
+    }
+    for name, argv in commands.items():
+        capfd.readouterr()
+        assert rei([*argv, "--param", "react_zon=0.7"]) == 2, name
+        err = capfd.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "--param react_zon: expected a parameter" in err[0] \
+            and err[0].endswith("did you mean 'react_zone'?"), (name, err)
+        assert not out.exists(), name
