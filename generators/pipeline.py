@@ -19,6 +19,8 @@ from rei.generators.output import OutputTree, write_tree
 from rei.generators.targets import GenerationRequest, Target, available_targets, get_target
 from rei.lang.errors import Diagnostic, LanguageError
 from rei.lang.suggest import did_you_mean
+from rei.lang.vepl.document import load_vepl
+from rei.lang.vepl_parameters import PARAM_OPTION, ParameterValues
 from rei.lang.workspace import Workspace
 
 ALL = "all"
@@ -34,8 +36,13 @@ class GenerationPlan:
 
 
 def build_request(source: Path, options: Mapping[str, str] | None = None,
-                  workspace: Workspace | None = None) -> tuple[GenerationRequest, list[Diagnostic]]:
-    """The checked, concretised request for ``source``; LanguageError with every problem."""
+                  workspace: Workspace | None = None, parameters: ParameterValues = ()
+                  ) -> tuple[GenerationRequest, list[Diagnostic]]:
+    """The checked, concretised request for ``source`` (with a .vepl's ``parameters`` from
+    `--param`); LanguageError with every problem."""
+    if parameters and source.suffix != ".vepl":
+        raise GenerationError(f"{PARAM_OPTION}: expected a .vepl file to set parameters of, "
+                              f"found '{source.name}'")
     ws = workspace or Workspace()
     diagnostics = ws.check(source)
     errors = [d for d in diagnostics if d.is_error]
@@ -49,7 +56,9 @@ def build_request(source: Path, options: Mapping[str, str] | None = None,
     if source.suffix == ".mission":
         mission = concretise_mission(ws.mission(source))
         return GenerationRequest(source, mission.world, mission, opts), warnings
-    return GenerationRequest(source, None, None, opts), warnings
+    if parameters:
+        load_vepl(source, parameters)  # each name declared, every rule kept (LanguageError)
+    return GenerationRequest(source, None, None, opts, parameters), warnings
 
 
 def choose_targets(source: Path, name: str) -> list[Target]:
@@ -68,15 +77,17 @@ def choose_targets(source: Path, name: str) -> list[Target]:
 
 
 def plan(source: Path, target: str, options: Mapping[str, str] | None = None,
-         workspace: Workspace | None = None) -> GenerationPlan:
+         workspace: Workspace | None = None, parameters: ParameterValues = ()
+         ) -> GenerationPlan:
     """Every file the generation would write, relative to the output folder.
 
     One target writes into the output folder itself; ``all`` writes each target into a
-    sub-folder named after it.
+    sub-folder named after it. ``parameters`` (`--param`, sorted by name) set a .vepl's
+    parameter values.
     """
     targets = choose_targets(Path(source), target)
     check_options(targets, options or {})
-    request, warnings = build_request(Path(source), options, workspace)
+    request, warnings = build_request(Path(source), options, workspace, parameters)
     tree = render_targets(request, targets, subfolders=target == ALL)
     return GenerationPlan(tree, tuple(t.name for t in targets), tuple(warnings))
 
@@ -116,7 +127,8 @@ def render_targets(request: GenerationRequest, targets: list[Target], *,
 
 
 def generate(source: Path, target: str, out_dir: Path, options: Mapping[str, str] | None = None,
-             workspace: Workspace | None = None) -> tuple[GenerationPlan, list[Path]]:
+             workspace: Workspace | None = None, parameters: ParameterValues = ()
+             ) -> tuple[GenerationPlan, list[Path]]:
     """Plan, then write every file under ``out_dir`` (all or nothing)."""
-    result = plan(source, target, options, workspace)
+    result = plan(source, target, options, workspace, parameters)
     return result, write_tree(result.tree, out_dir)

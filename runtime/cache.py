@@ -6,8 +6,9 @@ An entry holds what generation produced (the files written into a run's ``world/
 ``automata/`` folder, and the checked model the run goes on with) and the inputs it read
 (every file ``rei.lang.source.read_bounded`` was asked for, with the sha256 of its bytes).
 It is found by a key: the kind, REI's version and code (the files of the ``rei`` package, by
-name, size and modification time), the first input's path (as given and absolute) and the
-sha256 of its bytes. It is served only when, read again now, every input has the same
+name, size and modification time), the first input's path (as given and absolute), the
+sha256 of its bytes, and the values generation was given beside the file (a .vepl's
+`--param`). It is served only when, read again now, every input has the same
 bytes and every stored file the hash the entry lists; a changed mission, room, catalogue or
 specification, or a changed REI, is a miss and the entry is made again. Entries are written
 into a private temporary folder and renamed into place in one step, so a reader finds a whole
@@ -135,9 +136,12 @@ class ArtifactCache:
         write_tree(OutputTree(dict(files)), out_dir, replace=True)
         return mission
 
-    def automata(self, vepl: Path | None, out_dir: Path) -> Path:
+    def automata(self, vepl: Path | None, out_dir: Path,
+                 parameters: tuple[tuple[str, float], ...] = ()) -> Path:
         """``rei.runtime.monitor.generate_automata`` (the default specification when
-        ``vepl`` is None), from the cache when its inputs are unchanged."""
+        ``vepl`` is None, with ``parameters`` from `--param`), from the cache when its
+        inputs are unchanged: the parameters are part of the key, so automata generated
+        with other values are never served."""
         from rei.generators.output import OutputTree, write_tree  # noqa: PLC0415
         from rei.lang.vepl.document import DEFAULT_VEPL  # noqa: PLC0415
 
@@ -146,30 +150,33 @@ class ArtifactCache:
         def make() -> tuple[dict[str, bytes], None]:
             from rei.generators.pipeline import plan  # noqa: PLC0415
 
-            return plan(source, "rx").tree.files, None
+            return plan(source, "rx", parameters=parameters).tree.files, None
 
-        files, _ = self.cached("automata", source, make)
+        files, _ = self.cached("automata", source, make,
+                               [[name, repr(value)] for name, value in parameters])
         write_tree(OutputTree(dict(files)), out_dir, replace=True)
         return Path(out_dir) / "automata.py"
 
     # -- the mechanism ---------------------------------------------------------------------
 
-    def key(self, kind: str, source: Path) -> str | None:
-        """The key of ``kind`` made from ``source``; None when the file cannot be read (then
+    def key(self, kind: str, source: Path, extra: list[Any] | None = None) -> str | None:
+        """The key of ``kind`` made from ``source`` (and ``extra``, what else generation was
+        told: a .vepl's `--param` values); None when the file cannot be read (then
         generation reports why, as without a cache)."""
         data = read_bounded(source)
         if not isinstance(data, bytes):
             return None
         # The path as given too: a model may keep it as spelled (a room's path, in messages).
         text = json.dumps([FORMAT, kind, code_fingerprint(), str(source),
-                           os.path.abspath(source), _sha256(data)])
+                           os.path.abspath(source), _sha256(data), *([extra] if extra else [])])
         return _sha256(text.encode("utf-8"))
 
     def cached(self, kind: str, source: Path,
-               make: Callable[[], tuple[dict[str, bytes], T]]) -> tuple[dict[str, bytes], T]:
+               make: Callable[[], tuple[dict[str, bytes], T]],
+               extra: list[Any] | None = None) -> tuple[dict[str, bytes], T]:
         """The files and value ``make`` returns, from a valid entry when there is one; else
         made now (its errors are the caller's, as without a cache) and stored."""
-        key = self.key(kind, source)
+        key = self.key(kind, source, extra)
         if key is not None:
             found = self.lookup(key)
             if found is not None:

@@ -60,9 +60,15 @@ class RunSummary:
     verdicts: tuple[Verdict, ...]
     measurements: dict[str, Any] = field(default_factory=dict)
     """min_distance_to_human, path_length, time_to_goal per task, sample problems, ..."""
+    parameters: dict[str, float] = field(default_factory=dict)
+    """The specification's parameters set with `--param` to a value other than the file's:
+    what the verdicts were judged against beyond the .vepl (summary.json leaves it out when
+    empty, so a run without overrides writes what it always did)."""
 
     def to_json(self) -> dict[str, Any]:
         data = asdict(self)
+        if not self.parameters:
+            del data["parameters"]
         data["verdicts"] = [{**asdict(v), "objects": list(v.objects)} for v in self.verdicts]
         data["verdict"] = judge(self)
         return data

@@ -103,6 +103,8 @@ class RunRequest:
     bus_credentials: str | None = None
     bus_wait: float = 30.0
     wait_monitor: bool = False
+    parameters: tuple[tuple[str, float], ...] = ()
+    """The specification's parameter values of ``--param``, sorted by name."""
 
     def to_json(self) -> str:
         return json.dumps(asdict(self), allow_nan=False)
@@ -111,6 +113,7 @@ class RunRequest:
     def from_json(text: str) -> RunRequest:
         data = json.loads(text)
         data["faults"] = tuple(data.get("faults", ()))
+        data["parameters"] = tuple((str(n), float(v)) for n, v in data.get("parameters", ()))
         return RunRequest(**data)
 
 

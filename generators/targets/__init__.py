@@ -32,6 +32,9 @@ class GenerationRequest:
     """Set for .mission inputs."""
     options: Mapping[str, str] = field(default_factory=dict)
     """Target options from `--option KEY=VALUE` (e.g. seed=7)."""
+    parameters: tuple[tuple[str, float], ...] = ()
+    """A .vepl's parameter values from `--param NAME=VALUE`, sorted by name: the generated
+    automata carry them in place of the file's."""
 
 
 @runtime_checkable

@@ -429,7 +429,7 @@ class RxTarget:
 
     def generate(self, request: GenerationRequest) -> OutputTree:
         try:
-            spec = load_vepl(request.source)
+            spec = load_vepl(request.source, request.parameters)
         except LanguageError as exc:
             raise GenerationError(str(exc)) from None
         tree = OutputTree()

@@ -14,6 +14,7 @@ from pathlib import Path
 
 from rei.generators.errors import GenerationError
 from rei.lang.cli_support import EXIT_OK
+from rei.lang.vepl_parameters import add_parameter_option, parameter_values
 
 
 def _targets_help() -> str:
@@ -28,6 +29,7 @@ HELP_EXAMPLES = """\
 rei-gen generate examples/navigation/navigation.mission -t gazebo -o out/gazebo
 rei-gen generate examples/navigation/navigation.mission -t all -o out/all
 rei-gen generate examples/navigation/human_safety.vepl -t rx -o out/automata
+rei-gen generate rei_lang/vepl/default.vepl -t rx -o out/slow07 --param react_zone=0.7
 """
 
 
@@ -50,6 +52,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                         help="the output folder (created if missing)")
     parser.add_argument("--option", action="append", default=[], metavar="KEY=VALUE",
                         help="a target option, e.g. seed=7 (repeatable)")
+    add_parameter_option(parser, "a .vepl file only (the generated automata carry the "
+                                 "values): ")
     parser.set_defaults(func=run)
 
 
@@ -70,7 +74,8 @@ def run(args: argparse.Namespace) -> int:
     from rei.generators.pipeline import generate  # noqa: PLC0415  (keeps `rei-gen --help` fast)
 
     options = parse_options(args.option)
-    result, written = generate(args.file, args.target, args.output, options)
+    result, written = generate(args.file, args.target, args.output, options,
+                               parameters=parameter_values(args.param))
     for warning in result.warnings:
         print(warning, file=sys.stderr)
     print(f"rei-gen: {args.file}: wrote {len(written)} file(s) of {', '.join(result.targets)} "

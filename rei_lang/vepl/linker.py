@@ -24,6 +24,7 @@ from rei.lang.parsing import span_of
 from rei.lang.source import SourceText
 from rei.lang.suggest import did_you_mean
 from rei.lang.vepl import model as m
+from rei.lang.vepl_parameters import LIMIT, PARAM_OPTION, ParameterValues
 
 MAX_WINDOW_MS = 1e9
 MAX_PATTERN_SIZE = 500
@@ -60,8 +61,9 @@ Kind = str
 
 
 class _Linker:
-    def __init__(self, source: SourceText) -> None:
+    def __init__(self, source: SourceText, overrides: ParameterValues = ()) -> None:
         self.source = source
+        self.overrides = overrides
         self.diagnostics: list[Diagnostic] = []
 
     def span(self, obj: Any) -> Span:
@@ -91,9 +93,11 @@ class _Linker:
         for item in items:
             if type(item).__name__ == "Parameters":
                 for p in item.params:
-                    value = self.number(p.value, p, f"parameter '{p.name}'", low=-1e9, high=1e9)
+                    value = self.number(p.value, p, f"parameter '{p.name}'", low=-LIMIT,
+                                        high=LIMIT)
                     if declare(p, "parameter") and value is not None:
                         parameters[p.name] = value
+        self._override_parameters(tx, items, parameters)
         self._check_parameters(items, parameters)
         functions: dict[str, int] = {}
         function_spans: dict[str, Span] = {}
@@ -148,15 +152,37 @@ class _Linker:
             complex_events=tuple(complex_events), signals=tuple(signals.values()),
             requirements=tuple(requirements), function_spans=function_spans)
 
+    def _override_parameters(self, tx: Any, items: list[Any], params: dict[str, float]) -> None:
+        """The values of ``--param NAME=VALUE`` in place of the file's; a name the file does
+        not declare is an error located at the file's parameters (or its start)."""
+        blocks = [i for i in items if type(i).__name__ == "Parameters"]
+        for name, value in self.overrides:
+            if name in params:
+                params[name] = value
+                continue
+            declared = sorted(params)
+            self.error(blocks[0] if blocks else tx, "VEPL-UNKNOWN",
+                       f"{PARAM_OPTION} {name}: expected a parameter the specification declares "
+                       f"({', '.join(declared) or 'it declares none'}), found '{name}'"
+                       + did_you_mean(name, declared))
+
     def _check_parameters(self, items: list[Any], params: dict[str, float]) -> None:
         spans = {p.name: p for i in items if type(i).__name__ == "Parameters" for p in i.params}
+        given = dict(self.overrides)
+
+        def origin(name: str, lead: str = " (") -> str:
+            return f"{lead}set by {PARAM_OPTION}" if name in given else ""
+
         close, collision = params.get("eps_close"), params.get("eps_collision")
         if close is not None and collision is not None and not collision < close:
             self.error(spans["eps_collision"], "VEPL-PARAM",
-                       f"expected eps_collision below eps_close ({close:g}), found {collision:g}")
+                       f"expected eps_collision below eps_close ({close:g}"
+                       f"{origin('eps_close', ', ')}), found {collision:g}"
+                       f"{origin('eps_collision', ' (')}{')' if 'eps_collision' in given else ''}")
         if params.get("hysteresis", 0.0) < 0:
             self.error(spans["hysteresis"], "VEPL-PARAM",
-                       f"expected a hysteresis band >= 0 m, found {params['hysteresis']:g}")
+                       f"expected a hysteresis band >= 0 m, found {params['hysteresis']:g}"
+                       f"{origin('hysteresis')}{')' if 'hysteresis' in given else ''}")
 
     # ---- queries ---------------------------------------------------------------------------
 
@@ -661,8 +687,11 @@ def _ends_in_unwindowed_not(p: m.Pattern) -> bool:
     return False
 
 
-def link_vepl(tx: Any, source: SourceText) -> tuple[m.Specification, list[Diagnostic]]:
-    linker = _Linker(source)
+def link_vepl(tx: Any, source: SourceText, overrides: ParameterValues = ()
+              ) -> tuple[m.Specification, list[Diagnostic]]:
+    """The typed specification and every diagnostic; ``overrides`` (``--param``) replace the
+    file's parameter values before any rule reads them."""
+    linker = _Linker(source, overrides)
     spec = linker.link(tx)
     return spec, linker.diagnostics
 

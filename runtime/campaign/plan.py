@@ -19,6 +19,8 @@ from pathlib import Path
 from typing import Any
 
 from rei.lang.source import UnreadableInput, bounded_text
+from rei.lang.vepl.document import load_vepl
+from rei.lang.vepl_parameters import parameter_options, parameter_values
 from rei.runtime.campaign.errors import CampaignError
 from rei.runtime.monitor.functions import load_functions
 
@@ -58,6 +60,9 @@ class RunSpec:
     """`rei run --record`: the run also writes recording.mcap."""
     faults: tuple[str, ...] = ()
     """`rei run --fault`: fault entries as written, added to the mission's own."""
+    vepl_parameters: tuple[tuple[str, float], ...] = ()
+    """`rei run --param`: the specification's parameter values in place of the file's, sorted
+    by name (a resume with other values is another campaign)."""
 
     def to_json(self) -> dict[str, Any]:
         data = {"run_id": self.run_id, "mission_file": self.mission_file,
@@ -74,12 +79,16 @@ class RunSpec:
             data["record"] = True
         if self.faults:
             data["faults"] = list(self.faults)
+        if self.vepl_parameters:
+            data["vepl_parameters"] = dict(self.vepl_parameters)
         return data
 
     @staticmethod
     def from_json(data: dict[str, Any]) -> RunSpec:
         if "faults" in data:
             data = {**data, "faults": tuple(data["faults"])}
+        if "vepl_parameters" in data:
+            data = {**data, "vepl_parameters": parameter_values(data["vepl_parameters"])}
         return RunSpec(**data)
 
     def run_argv(self, out_dir: str) -> list[str]:
@@ -99,7 +108,7 @@ class RunSpec:
             argv.append("--record")
         for fault in self.faults:
             argv += ["--fault", fault]
-        return argv
+        return argv + parameter_options(self.vepl_parameters)
 
 
 @dataclass(frozen=True)
@@ -224,12 +233,15 @@ def plan_campaign(inputs: list[Path], *, repeat: int = 1, seed: int = 0,
                   controller: str | None = None, vepl: Path | None = None,
                   duration: float | None = None, static_dir: Path | None = None,
                   variation: bool = True, functions: str | None = None,
-                  record: bool = False, faults: tuple[str, ...] = ()) -> CampaignPlan:
+                  record: bool = False, faults: tuple[str, ...] = (),
+                  vepl_parameters: tuple[tuple[str, float], ...] = ()) -> CampaignPlan:
     """Every mission of the inputs, ``repeat`` times, each with its derived seed.
 
     With ``static_dir`` every run is paired with its static twin (same seed, the mission's
     room without humans and dynamic objects, written into ``static_dir`` by
     ``static_pair.write_static_twins`` before the runs start): ``--pair-static``.
+    ``vepl_parameters`` (``--param``) are checked against the specification now (a name it
+    does not declare stops the plan, LanguageError), not in each run.
     """
     if repeat < 1:
         raise CampaignError(f"--repeat: expected a count of at least 1, found {repeat}")
@@ -247,6 +259,8 @@ def plan_campaign(inputs: list[Path], *, repeat: int = 1, seed: int = 0,
     if not unique:
         raise CampaignError("no missions to run: name .mission files, folders or a suite index")
     vepl_path = str(vepl.resolve()) if vepl is not None else None
+    if vepl_parameters:
+        load_vepl(vepl, vepl_parameters)
     if functions is not None and Path(functions).is_file():
         functions = str(Path(functions).resolve())  # the runs may start elsewhere
     if functions is not None:
@@ -260,7 +274,7 @@ def plan_campaign(inputs: list[Path], *, repeat: int = 1, seed: int = 0,
                 group=entry.group, repeat=k, seed=derive_seed(seed, entry.key, k),
                 controller=controller, vepl=vepl_path, duration=duration,
                 parameters=entry.parameters, variation=variation, functions=functions,
-                record=record, faults=faults)
+                record=record, faults=faults, vepl_parameters=vepl_parameters)
             if static_dir is None:
                 runs.append(run)
                 continue

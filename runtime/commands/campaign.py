@@ -24,6 +24,7 @@ from types import FrameType
 from typing import TYPE_CHECKING
 
 from rei.lang.cli_support import EXIT_INTERRUPTED
+from rei.lang.vepl_parameters import add_parameter_option, parameter_values
 
 if TYPE_CHECKING:
     from rei.runtime.campaign.engines import CampaignEngine
@@ -72,6 +73,7 @@ rei campaign examples/ -o out/campaign --repeat 3 --workers 2
 rei campaign examples/navigation/navigation.mission -o out/nav5 --repeat 5 --pass-rate 0.8
 rei campaign suite/index.csv -o out/suite --controller my_nav:Navigator -v
 rei campaign examples/ -o out/campaign --repeat 3   # again: resumes, runs only what is missing
+rei campaign examples/ -o out/slow07 --param react_zone=0.7   # a robot that slows nearer
 """
 
 
@@ -110,6 +112,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                              "its module's source)")
     parser.add_argument("--vepl", type=Path, default=None, metavar="FILE",
                         help="monitor specification passed to `rei run`")
+    add_parameter_option(parser, "passed to `rei run` and recorded in the plan (a resume "
+                                 "with other values is refused, exit 2): ")
     parser.add_argument("--functions", default=None, metavar="MODULE",
                         help="module of the specification's user functions, passed to `rei run`")
     parser.add_argument("--duration", type=_seconds, default=None, metavar="S",
@@ -195,7 +199,8 @@ def run(args: argparse.Namespace) -> int:
                          controller=args.controller, vepl=args.vepl, duration=args.duration,
                          static_dir=args.output / STATIC if args.pair_static else None,
                          variation=not args.no_variation, functions=args.functions,
-                         record=args.record, faults=_faults(args))
+                         record=args.record, faults=_faults(args),
+                         vepl_parameters=parameter_values(args.param))
     engine = engine_of(args)
     provenance = {**collect(["rei", *sys.argv[1:]] if sys.argv else [], engine.describe(),
                             args.controller, args.controller_version),

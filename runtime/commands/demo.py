@@ -20,6 +20,7 @@ import sys
 from pathlib import Path
 
 from rei.lang.cli_support import EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_OK
+from rei.lang.vepl_parameters import add_parameter_option, parameter_values
 from rei.runtime.commands.campaign import EXIT_STATUS_HELP, positive_int
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
@@ -67,6 +68,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.add_argument("--vepl", type=Path, default=None, metavar="FILE",
                         help="monitoring specification passed to every `rei run` (default: "
                              "REI's default.vepl)")
+    add_parameter_option(parser, "passed to every `rei run`: ")
     add_verbosity(parser, CAMPAIGN_VERBOSE_HELP)  # as `rei campaign`
     parser.set_defaults(func=run)
 
@@ -125,6 +127,11 @@ def run(args: argparse.Namespace) -> int:
     out: Path = args.output
     if args.vepl is not None and not args.vepl.is_file():  # before minutes of generation
         raise CampaignError(f"--vepl: file '{args.vepl}' does not exist")
+    parameters = parameter_values(args.param)
+    if parameters:  # every name declared, every rule kept: before minutes of generation too
+        from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
+
+        load_vepl(args.vepl, parameters)
 
     def say(text: str) -> None:
         if not args.quiet:
@@ -136,7 +143,7 @@ def run(args: argparse.Namespace) -> int:
     say(f"1/3 generating {rooms} rooms into {out / 'suite'}")
     inputs = generate_suite(out / "suite", args.count, args.preset, args.seed)
     plan = plan_campaign(inputs, repeat=args.repeat, seed=args.seed, controller=args.controller,
-                         vepl=args.vepl)
+                         vepl=args.vepl, vepl_parameters=parameters)
     engine = LocalEngine(args.workers or os.cpu_count() or 1)
     who = f" of {args.controller}" if args.controller else ""
     say(f"2/3 running {len(plan.runs)} runs{who} on {engine.workers} worker(s) into "

@@ -20,6 +20,7 @@ from pathlib import Path
 
 from rei.lang.cli_support import EXIT_BAD_INPUT, EXIT_RUN_ERROR
 from rei.lang.errors import printable_lines
+from rei.lang.vepl_parameters import add_parameter_option, parameter_values
 from rei.runtime.commands.robot import add_bus_options, join_bus
 from rei.runtime.commands.run import (
     EVENTS,
@@ -53,6 +54,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                         help="output folder (created if missing)")
     parser.add_argument("--vepl", type=Path, default=None, metavar="FILE",
                         help="the specification (default: REI's default.vepl)")
+    add_parameter_option(parser)
     parser.add_argument("--functions", default=None, metavar="MODULE",
                         help="Python module defining the specification's user functions")
     parser.add_argument("--silence", type=float, default=60.0, metavar="S",
@@ -77,11 +79,17 @@ def run(args: argparse.Namespace) -> int:
         print(f"rei monitor: error: --silence: expected a positive number of seconds, found "
               f"{args.silence}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    parameters = parameter_values(args.param)
+    if parameters:  # every name declared, every rule kept: before the outputs are touched
+        from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
+
+        load_vepl(args.vepl, parameters)
     out: Path = args.output
     out.mkdir(parents=True, exist_ok=True)
     for stale in ("summary.json", TRACE, TRACE + ".partial", EVENTS, "report.html"):
         (out / stale).unlink(missing_ok=True)
-    automata = generate_automata(args.vepl, out / "automata", replace=True)
+    automata = generate_automata(args.vepl, out / "automata", replace=True,
+                                 parameters=parameters)
     user = load_functions(args.functions, args.vepl)
     session = join_bus(args, "monitor")
     if isinstance(session, int):
@@ -104,7 +112,7 @@ def run(args: argparse.Namespace) -> int:
         try:
             summary = judge_stream(header, stream.samples(), stream.read_end, args.vepl, out,
                                    user, automata, f"the run on {session.endpoint}",
-                                   controller="bus",
+                                   controller="bus", parameters=parameters,
                                    measurements=lambda: {
                                        "bus": {**stream.measurements(),
                                                "dropped": session.dropped}})

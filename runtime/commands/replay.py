@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING, Any, cast
 
 from rei.lang.cli_support import EXIT_BAD_INPUT, EXIT_RUN_ERROR
 from rei.lang.errors import printable_lines
+from rei.lang.vepl_parameters import ParameterValues, add_parameter_option, parameter_values
 from rei.runtime.commands.run import (
     REPLAY_VERBOSE_HELP,
     add_verbosity,
@@ -50,6 +51,7 @@ if TYPE_CHECKING:
 HELP_EXAMPLES = """\
 rei replay out/nav/trace.jsonl -o out/nav-strict --vepl examples/navigation/human_safety.vepl
 rei replay out/rec/recording.mcap -o out/rec-again -v     # every requirement, with reasons
+rei replay out/nav/trace.jsonl -o out/nav07 --param react_zone=0.7  # judged as your robot's
 rei replay my_bag/ --mission examples/simple_wall/simple_wall.mission -o out/bag
 rei replay run.mcap --mission m.mission --map rei_bag_map.toml -o out/bag
 """
@@ -92,6 +94,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                         help="the specification (default: REI's default.vepl); its queries "
                              "may read only the data the trace carries (its header's "
                              "\"data\"), else exit 2")
+    add_parameter_option(parser)
     parser.add_argument("--functions", default=None, metavar="MODULE",
                         help="Python module (dotted name or .py file) defining the user "
                              "functions the specification declares with 'function'")
@@ -102,19 +105,21 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 
 def replay(trace: Path, vepl: Path | None, out_dir: Path,
-           functions: str | None = None) -> RunSummary:
-    """Monitor ``trace`` into ``out_dir``; the summary (also written as summary.json)."""
+           functions: str | None = None, parameters: ParameterValues = ()) -> RunSummary:
+    """Monitor ``trace`` into ``out_dir`` (with ``parameters`` from `--param` in place of the
+    specification's values); the summary (also written as summary.json)."""
     from rei.runtime.monitor import generate_automata  # noqa: PLC0415
     from rei.runtime.monitor.functions import load_functions  # noqa: PLC0415
     from rei.runtime.recording import read_stream  # noqa: PLC0415
 
     # The specification is checked and generated before the trace is opened: a bad .vepl
     # is reported without touching the trace.
-    automata = generate_automata(vepl, Path(out_dir) / "automata", replace=True)
+    automata = generate_automata(vepl, Path(out_dir) / "automata", replace=True,
+                                 parameters=parameters)
     user = load_functions(functions, vepl)
     header, samples, read_end = read_stream(trace)
     return judge_stream(header, samples, read_end, vepl, out_dir, user, automata,
-                        f"the trace '{trace}'")
+                        f"the trace '{trace}'", parameters=parameters)
 
 
 def judge_stream(header: StreamHeader, samples: Iterator[Sample],
@@ -123,15 +128,17 @@ def judge_stream(header: StreamHeader, samples: Iterator[Sample],
                  controller: str = "replay",
                  measurements: Callable[[], dict[str, Any]] | None = None,
                  judged: Callable[[Any, Sample], None] | None = None,
-                 trace: TraceWriter | None = None) -> RunSummary:
+                 trace: TraceWriter | None = None,
+                 parameters: ParameterValues = ()) -> RunSummary:
     """Monitor a stream (``replay``'s trace, `rei monitor`'s bus) into ``out_dir``; the
     summary (also written as summary.json). ``source`` names the stream in errors;
     ``measurements`` gives more of the summary's measurements once the stream ended;
     ``judged(sink, sample)`` is told of each sample once the monitor has judged it (`rei
     watch` shows it); ``trace``, when given, gets a copy of the stream (a trace that cannot be
     written is dropped, never the judgement). A stream with ``problems`` (a ROS 2 bag's bad
-    data) has every verdict that would pass made inconclusive."""
-    from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
+    data) has every verdict that would pass made inconclusive. ``parameters`` (`--param`)
+    replace the specification's values; those other than the file's are in the summary."""
+    from rei.lang.vepl.document import changed_parameters, load_vepl  # noqa: PLC0415
     from rei.runtime.collector.needs import check_needs  # noqa: PLC0415
     from rei.runtime.evaluator.summary import merge_summary, write_summary  # noqa: PLC0415
     from rei.runtime.faults.stage import SampledTimeline, fault_measurements  # noqa: PLC0415
@@ -139,7 +146,7 @@ def judge_stream(header: StreamHeader, samples: Iterator[Sample],
 
     try:
         # Never judge on data the recording does not carry (a false PASS): refuse first.
-        check_needs(load_vepl(vepl), header.data, f"{source} to carry",
+        check_needs(load_vepl(vepl, parameters), header.data, f"{source} to carry",
                     "record it again with a mission whose monitor block collects that data, or "
                     "drop the query")
     except BaseException:
@@ -147,7 +154,8 @@ def judge_stream(header: StreamHeader, samples: Iterator[Sample],
         if close is not None:
             close()
         raise
-    sink = MonitorSink(vepl, out_dir, functions=user, automata=automata)
+    changed = changed_parameters(vepl, parameters)
+    sink = MonitorSink(vepl, out_dir, functions=user, automata=automata, parameters=parameters)
     last = 0.0
     seen = SampledTimeline()
     copy = _TraceCopy(trace)
@@ -185,7 +193,7 @@ def judge_stream(header: StreamHeader, samples: Iterator[Sample],
                       cast(Outcome, outcome), reason, sink.result.duration, 0.0, {}, (),
                       {**fault_measurements(header.faults, seen.timeline()),
                        **(measurements() if measurements is not None else {})})
-    summary = merge_summary(base, sink.result)
+    summary = replace(merge_summary(base, sink.result), parameters=dict(changed))
     problems = [p.text() for p in getattr(samples, "problems", ())]  # a bag's bad data
     if problems:
         summary = _doubted(summary, problems)
@@ -241,7 +249,8 @@ def _doubted(summary: RunSummary, problems: list[str]) -> RunSummary:
 
 
 def replay_bag(bag: Path, mission_path: Path, vepl: Path | None, out_dir: Path,
-               functions: str | None = None, topic_map: Path | None = None) -> RunSummary:
+               functions: str | None = None, topic_map: Path | None = None,
+               parameters: ParameterValues = ()) -> RunSummary:
     """Judge the ROS 2 recording ``bag`` (MCAP file or rosbag2 folder) as a run of
     ``mission_path`` into ``out_dir``; the summary (also written as summary.json)."""
     from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
@@ -254,14 +263,16 @@ def replay_bag(bag: Path, mission_path: Path, vepl: Path | None, out_dir: Path,
     from rei.runtime.world import load_manifest  # noqa: PLC0415
 
     out_dir = Path(out_dir)
-    automata = generate_automata(vepl, out_dir / "automata", replace=True)
+    automata = generate_automata(vepl, out_dir / "automata", replace=True,
+                                 parameters=parameters)
     user = load_functions(functions, vepl)
     mapping = load_topic_map(topic_map) if topic_map is not None else None
     world_dir = out_dir / "world"
     mission = generate_world(mission_path, world_dir, replace=True)
     manifest = load_manifest(world_dir)
     header = stream_header(manifest, load_monitor_config(world_dir), mission, 0)
-    check_needs(load_vepl(vepl), header.data, f"the mission '{mission.name}' to collect",
+    check_needs(load_vepl(vepl, parameters), header.data,
+                f"the mission '{mission.name}' to collect",
                 "name that data in the mission's monitor block, or drop the query")
     world = BagWorld(header, mission.tasks(),
                      tuple((b.x, b.y, b.yaw) for b in manifest.observed), mission.settle)
@@ -269,7 +280,7 @@ def replay_bag(bag: Path, mission_path: Path, vepl: Path | None, out_dir: Path,
     (out_dir / "trace.jsonl").unlink(missing_ok=True)
     return judge_stream(header, samples, samples.end, vepl, out_dir, user, automata,
                         f"the mission '{mission.name}'",
-                        trace=TraceWriter(out_dir / "trace.jsonl"))
+                        trace=TraceWriter(out_dir / "trace.jsonl"), parameters=parameters)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -282,9 +293,10 @@ def run(args: argparse.Namespace) -> int:
     try:
         if args.mission is not None:
             summary = replay_bag(args.trace, args.mission, args.vepl, args.output,
-                                 args.functions, args.topic_map)
+                                 args.functions, args.topic_map, parameter_values(args.param))
         else:
-            summary = replay(args.trace, args.vepl, args.output, args.functions)
+            summary = replay(args.trace, args.vepl, args.output, args.functions,
+                             parameter_values(args.param))
     except MonitorError as exc:
         print(f"rei replay: error: {printable_lines(str(exc))}", file=sys.stderr)
         return EXIT_RUN_ERROR

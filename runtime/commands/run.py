@@ -25,6 +25,7 @@ import math
 import os
 import sys
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any, TextIO
 
@@ -35,6 +36,12 @@ from rei.lang.mission.faults import (
     FaultDefinition,
     fault_argument,
     parse_fault_option,
+)
+from rei.lang.vepl_parameters import (
+    ParameterValues,
+    add_parameter_option,
+    parameter_text,
+    parameter_values,
 )
 from rei.runtime.commands.run_config import apply_run_config, defer_defaults
 from rei.runtime.errors import RunError
@@ -91,6 +98,7 @@ rei run examples/navigation/navigation.mission -o out/nav --seed 3 \\
     --vepl examples/navigation/human_safety.vepl                        # your requirements
 rei run examples/navigation/navigation.mission -o out/mine --controller my_nav:Navigator
 rei run examples/navigation/navigation.mission -o out/rec --record -q  # + recording.mcap
+rei run examples/navigation/navigation.mission -o out/n07 --param react_zone=0.7  # your field
 """
 
 
@@ -142,6 +150,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                              "utilities and requirements (default: REI's default.vepl); its "
                              "queries may read only the data the mission collects (its "
                              "monitor block), else exit 2")
+    add_parameter_option(parser)
     parser.add_argument("--functions", default=None, metavar="MODULE",
                         help="Python module (dotted name or .py file) defining the user "
                              "functions the specification declares with 'function'")
@@ -233,7 +242,8 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
              echo: IO[str] | None = None, functions: str | None = None,
              recording: bool = False, faults: Sequence[FaultDefinition] = (),
              bus: str | None = None, bus_credentials: Path | None = None,
-             bus_wait: float = 30.0, wait_monitor: bool = False
+             bus_wait: float = 30.0, wait_monitor: bool = False,
+             parameters: ParameterValues = ()
              ) -> tuple[RunSummary, RunRecord]:
     """Everything `rei run` does, in this process: generate, run, monitor with the .vepl's
     automata (the default specification unless ``vepl``; none when ``monitor`` is False),
@@ -243,13 +253,14 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
     With ``bus`` (an endpoint of `rei bus`) the robot under test is the one answering on the
     bus (`rei robot`, awaited at most ``bus_wait`` seconds, like a monitor with
     ``wait_monitor``) and the trace is published there as it is written
-    (``rei.runtime.bus.run``; closing the robot leaves the bus).
+    (``rei.runtime.bus.run``; closing the robot leaves the bus). ``parameters`` (`--param`)
+    replace the specification's values; those other than the file's are in the summary.
 
     The controller runs in this process: a controller that ends or stalls the process ends
     the caller too. `rei run` supervises it instead (``rei.runtime.supervisor.supervise``).
     """
     from rei.generators.output import open_output  # noqa: PLC0415
-    from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
+    from rei.lang.vepl.document import changed_parameters, load_vepl  # noqa: PLC0415
     from rei.runtime.cache import ArtifactCache  # noqa: PLC0415
     from rei.runtime.collector import TraceWriter, load_monitor_config  # noqa: PLC0415
     from rei.runtime.collector.needs import check_needs  # noqa: PLC0415
@@ -272,11 +283,12 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
     cache = ArtifactCache.from_environment()
     automata = None
     if monitor:
-        automata = (cache.automata(vepl, out_dir / "automata") if cache is not None
-                    else generate_automata(vepl, out_dir / "automata", replace=True))
+        automata = (cache.automata(vepl, out_dir / "automata", parameters) if cache is not None
+                    else generate_automata(vepl, out_dir / "automata", replace=True,
+                                           parameters=parameters))
     user = load_functions(functions, vepl) if monitor else {}
-    monitor_sink = MonitorSink(vepl, out_dir, functions=user, automata=automata) \
-        if monitor else None
+    monitor_sink = MonitorSink(vepl, out_dir, functions=user, automata=automata,
+                               parameters=parameters) if monitor else None
     world_dir = out_dir / "world"
     mission = (cache.world(mission_path, world_dir) if cache is not None
                else generate_world(mission_path, world_dir, replace=True))
@@ -284,7 +296,12 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
         probe.begin(mission.name, mission.world.name)
     manifest = load_manifest(world_dir)
     monitor_config = load_monitor_config(world_dir)
-    specification = load_vepl(vepl) if monitor else None
+    specification = load_vepl(vepl, parameters) if monitor else None
+    # checked with --no-monitor too (a name the .vepl lacks is bad input); recorded only
+    # beside the verdicts they were judged with
+    changed = changed_parameters(vepl, parameters)
+    if not monitor:
+        changed = ()
     if specification is not None:
         # Never judge on data the collector will not forward (a false PASS): refuse first.
         check_needs(specification, monitor_config.data, f"the mission '{mission.name}' to "
@@ -346,6 +363,8 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
 
         log(f"mission {mission.name} in room {mission.world.name}, controller {controller}, "
             f"seed {seed}")
+        if changed:
+            log(f"specification parameters set by --param: {parameter_text(changed)}")
         for fault in injected:
             log(f"fault {fault.name}: {fault.text()}")
         record = run_mission(mission, manifest, monitor_config, robot,
@@ -360,6 +379,7 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
     summary = summary_of(record, mission, controller, seed)
     if monitor_sink is not None and monitor_sink.result is not None:
         summary = merge_summary(summary, monitor_sink.result)
+    summary = replace(summary, parameters=dict(changed))
     write_summary(summary, out_dir)
     return summary, record
 
@@ -379,7 +399,7 @@ def execute_request(request: RunRequest, probe: RunProbe) -> tuple[int, dict[str
         faults=tuple(parse_fault_option(text) for text in request.faults),
         bus=request.bus, bus_credentials=Path(request.bus_credentials)
         if request.bus_credentials is not None else None, bus_wait=request.bus_wait,
-        wait_monitor=request.wait_monitor)
+        wait_monitor=request.wait_monitor, parameters=request.parameters)
     page = write_page(Path(request.output)) if request.monitor else None
     written = (Path(request.output) / SUMMARY).read_bytes()
     return exit_code(summary, request.monitor), {
@@ -403,6 +423,11 @@ def run(args: argparse.Namespace) -> int:
         if not (math.isfinite(args.bus_wait) and args.bus_wait > 0):
             raise RunError(f"--bus-wait: expected a positive number of seconds, found "
                            f"{args.bus_wait}")
+    parameters = parameter_values(args.param)
+    if parameters:  # every name declared, every rule kept: before the outputs are touched
+        from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
+
+        load_vepl(args.vepl, parameters)
     _make_folder(out)
     # Outputs of an earlier run into the same folder go now: a run that dies must not leave
     # them beside its own error summary.
@@ -418,7 +443,7 @@ def run(args: argparse.Namespace) -> int:
         echo_events=args.verbose, functions=args.functions, record=args.record,
         faults=tuple(f.text() for f in args.fault or ()), bus=args.bus,
         bus_credentials=os.path.abspath(args.credentials) if args.credentials else None,
-        bus_wait=args.bus_wait, wait_monitor=args.wait_for_monitor)
+        bus_wait=args.bus_wait, wait_monitor=args.wait_for_monitor, parameters=parameters)
     ended = supervise(request)
     summary = _read_summary(out) if ended.status != 2 else None
     if summary is None:

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from rei.lang.cli_support import EXIT_INTERRUPTED
+from rei.lang.vepl_parameters import add_parameter_option, parameter_values
 
 if TYPE_CHECKING:
     from rei.runtime.search import SearchConfig
@@ -27,6 +28,7 @@ rei search -o out/search --controller my_nav:Navigator --budget 200 --workers 2
 rei search -o out/slow --preset stress --strategy map-elites --requirement HUMAN_SLOW_ZONE
 rei search -o out/limit --max-speed 0.05:0.3 --requirement SPEED_LIMIT --budget 12 --batch 4
 rei search -o out/search --controller my_nav:Navigator --budget 200   # again: resumes
+rei search -o out/slow07 --preset stress --requirement REACTION_TIME --param react_zone=0.7
 """
 
 EXIT_HELP = ("Exit status (the campaign's rule): 0 no run failed (nothing found), 1 a run "
@@ -91,6 +93,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                         help=CONTROLLER_HELP + " (default reference)")
     parser.add_argument("--vepl", type=Path, default=None, metavar="FILE",
                         help="monitor specification passed to `rei run`")
+    add_parameter_option(parser, "passed to every `rei run`: ")
     parser.add_argument("--duration", type=_seconds, default=None, metavar="S",
                         help="simulated seconds per run (runs cut short are inconclusive and "
                              "give no margin: use it for smoke tests only)")
@@ -130,7 +133,8 @@ def config_of(args: argparse.Namespace) -> SearchConfig:
         seed=args.seed, budget=args.budget, batch=args.batch, requirement=args.requirement,
         measures=(measures[0], measures[1]), controller=args.controller,
         vepl=str(args.vepl.resolve()) if args.vepl is not None else None,
-        duration=args.duration, stop_on_failure=args.stop_on_failure, version=__version__)
+        duration=args.duration, stop_on_failure=args.stop_on_failure, version=__version__,
+        vepl_parameters=parameter_values(args.param))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -148,6 +152,10 @@ def run(args: argparse.Namespace) -> int:
     check_config(config)  # bad options stop here, before the folder or an engine exists
     if args.vepl is not None and not args.vepl.is_file():
         raise CampaignError(f"--vepl: file '{args.vepl}' does not exist")
+    if config.vepl_parameters:  # every name declared, every rule kept: before any run
+        from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
+
+        load_vepl(args.vepl, config.vepl_parameters)
     engine = engine_of(args)
     provenance = {**collect(["rei", *sys.argv[1:]] if sys.argv else [], engine.describe(),
                             args.controller, None), "pass_rate": 1.0}

@@ -24,12 +24,14 @@ from rei.lang.cli_support import (
     EXIT_RUN_ERROR,
 )
 from rei.lang.errors import printable_lines
+from rei.lang.vepl_parameters import add_parameter_option, parameter_values
 
 HELP_EXAMPLES = """\
 rei shrink examples/navigation/navigation.mission -o out/shrunk \\
     --controller bench.defects.planning:FootprintTooSmall          # 3 seeds, 2 at once
 rei shrink case.mission -o out/min --requirement SPEED_LIMIT --seeds 5 --workers 4
 rei shrink case.mission -o out/min --keep floors --max-runs 60   # rooms as they are, cheaper
+rei shrink case.mission -o out/min07 --requirement REACTION_TIME --param react_zone=0.7
 """
 
 
@@ -79,6 +81,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                         help=CONTROLLER_HELP + " (default reference)")
     parser.add_argument("--vepl", type=Path, default=None, metavar="FILE",
                         help="monitoring specification passed to `rei run`")
+    add_parameter_option(parser, "passed to `rei run`: ")
     parser.add_argument("--functions", default=None, metavar="MODULE",
                         help="module of the specification's user functions")
     parser.add_argument("--duration", type=float, default=None, metavar="S",
@@ -107,6 +110,10 @@ def _check(args: argparse.Namespace) -> None:
         raise RunError(f"--seed: expected seeds from 0 to 2**64-1, found {args.seed}")
     if args.vepl is not None and not args.vepl.is_file():
         raise RunError(f"--vepl: file '{args.vepl}' does not exist")
+    if args.param:  # every name declared, every rule kept: before any run (LanguageError)
+        from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
+
+        load_vepl(args.vepl, parameter_values(args.param))
     if args.output.exists() and not args.output.is_dir():
         raise RunError(f"-o {args.output}: expected a folder (new or existing), found a file")
     if args.output.resolve() == args.mission.resolve().parent:
@@ -125,7 +132,8 @@ def run(args: argparse.Namespace) -> int:
         seeds=tuple(range(args.seed, args.seed + args.seeds)), controller=args.controller,
         vepl=str(args.vepl.resolve()) if args.vepl is not None else None,
         functions=args.functions, duration=args.duration, variation=not args.no_variation,
-        workers=args.workers, timeout=args.timeout)
+        workers=args.workers, timeout=args.timeout,
+        vepl_parameters=parameter_values(args.param))
 
     def progress(line: str) -> None:
         if not args.quiet:

@@ -24,6 +24,7 @@ from typing import Any
 
 from rei.lang.cli_support import EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_RUN_ERROR
 from rei.lang.errors import printable_lines
+from rei.lang.vepl_parameters import add_parameter_option, parameter_values
 from rei.runtime.commands.robot import add_bus_options
 
 EXAMPLES = """\
@@ -107,6 +108,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                         help="the specification that judges the run (default: REI's "
                              "default.vepl); objects' states need its queries "
                              "findCloseToObject and findCollisionToObject")
+    add_parameter_option(parser)
     parser.add_argument("--functions", default=None, metavar="MODULE",
                         help="Python module defining the user functions the specification "
                              "declares with 'function'")
@@ -162,6 +164,10 @@ def _watch(args: argparse.Namespace) -> int:
               file=sys.stderr)
         return EXIT_BAD_INPUT
     user = load_functions(args.functions, args.vepl)
+    if args.param:  # every name declared, every rule kept: before any view opens
+        from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
+
+        load_vepl(args.vepl, parameter_values(args.param))
     full_screen = not args.plain and sys.stdout.isatty()
     screen = TerminalView() if full_screen else None
     views: list[View] = [screen if screen is not None else LineView()]
@@ -191,7 +197,8 @@ def _watch(args: argparse.Namespace) -> int:
             if args.bus is not None:
                 print(f"rei watch: waiting for a run on the bus at {args.bus}",
                       file=sys.stderr, flush=True)
-            watcher = Watcher(views, args.vepl, Path(work), functions=user)
+            watcher = Watcher(views, args.vepl, Path(work), functions=user,
+                              parameters=parameter_values(args.param))
             summary = watcher.watch(source, stop=quit_pressed)
             interactive = screen is not None or foxglove is not None
             if interactive and not args.exit and summary.reason != "stopped watching":

@@ -23,6 +23,7 @@ from reactivex.scheduler import VirtualTimeScheduler
 from reactivex.subject import Subject
 
 from rei.lang.vepl.document import DEFAULT_VEPL
+from rei.lang.vepl_parameters import ParameterValues
 from rei.runtime.evaluator.margins import MarginTracker
 from rei.runtime.evaluator.signal_log import SignalLog
 from rei.runtime.evaluator.summary import MonitorResult
@@ -45,14 +46,15 @@ FINISHED = ("completed", "failed")
 
 
 def generate_automata(vepl: str | Path | None, out_dir: str | Path,
-                      replace: bool = False) -> Path:
+                      replace: bool = False, parameters: ParameterValues = ()) -> Path:
     """Generate the `rx` target of a .vepl file (the default one when None) into out_dir
-    (with ``replace``, whatever else was in it goes)."""
+    (with ``replace``, whatever else was in it goes), with ``parameters`` (`--param`) in
+    place of the file's values."""
     from rei.generators.output import write_tree  # noqa: PLC0415  (generation is a stage above)
     from rei.generators.pipeline import plan  # noqa: PLC0415
 
     source = Path(vepl) if vepl is not None else DEFAULT_VEPL
-    result = plan(source, "rx")
+    result = plan(source, "rx", parameters=parameters)
     write_tree(result.tree, out_dir, replace=replace)
     return Path(out_dir) / "automata.py"
 
@@ -279,7 +281,8 @@ class AutomataHost:
 class MonitorSink:
     """A sample sink that monitors a run with the automata of a .vepl file.
 
-    ``MonitorSink(vepl, out_dir)``: ``vepl`` None means the default specification; the
+    ``MonitorSink(vepl, out_dir)``: ``vepl`` None means the default specification (with
+    ``parameters`` from `--param` in place of its values); the
     automata are generated into ``out_dir/automata/`` and loaded at ``start``, which refuses
     (``LanguageError``, VEPL-DATA) a specification reading data the header does not name;
     ``finish`` writes ``out_dir/events.csv`` and keeps the result (``self.result``).
@@ -287,8 +290,10 @@ class MonitorSink:
 
     def __init__(self, vepl: str | Path | None, out_dir: str | Path,
                  functions: Mapping[str, UserFunction] | None = None,
-                 automata: str | Path | None = None) -> None:
+                 automata: str | Path | None = None,
+                 parameters: ParameterValues = ()) -> None:
         self.vepl = vepl
+        self.parameters = parameters
         self.out_dir = Path(out_dir)
         self.functions = functions
         self.automata = Path(automata) if automata is not None else None
@@ -309,10 +314,11 @@ class MonitorSink:
 
         # `rei run` and `rei replay` refuse this earlier; a stream from elsewhere is refused
         # here, before any verdict: never judged on data it does not carry.
-        check_needs(load_vepl(self.vepl), header.data, "the stream to carry",
+        check_needs(load_vepl(self.vepl, self.parameters), header.data, "the stream to carry",
                     "collect that data, or drop the query")
         self.out_dir.mkdir(parents=True, exist_ok=True)
-        path = self.automata or generate_automata(self.vepl, self.out_dir / "automata")
+        path = self.automata or generate_automata(self.vepl, self.out_dir / "automata",
+                                                  parameters=self.parameters)
         self.host = AutomataHost(load_generated(path), header, self.functions)
         self.host.listeners.extend(self._listeners)
 

@@ -172,6 +172,9 @@ def render_html(data: CampaignData, rerun: dict[str, str],
         utilities=utility_legend(data),
         maps=maps, more_maps=max(0, len(failed) - MAX_MAPS),
         provenance=data.manifest.get("sessions", []),
+        # what the runs were judged against beyond the .vepl file (`--param`)
+        parameters=sorted({(name, value) for r in records if r.summary is not None
+                           for name, value in r.summary.parameters.items()}),
     )
 
 

@@ -5,8 +5,9 @@ a <failure> with its reason, deciding time and the objects involved; an inconclu
 <failure> too (the run does not pass, so CI must not show it green); a requirement that did not
 apply is <skipped>; a run that crashed, hung or ended in error is an <error> test case named
 "run". Each run's wall time is shared out over its test cases, so the suite's time is the real
-time spent; the seed and the re-run command are properties of every case. This module must
-never read files.
+time spent; the seed, the re-run command and the specification's parameters set with
+`--param` to other values than the file's (``param.NAME``) are properties of every case.
+This module must never read files.
 """
 
 from __future__ import annotations
@@ -28,6 +29,11 @@ def _case(suite: etree._Element, record: RunRecord, name: str, time: float, reru
     for key, value in (("seed", str(record.spec.seed)), ("repeat", str(record.spec.repeat)),
                        ("mission_file", record.spec.mission_file), ("rerun", rerun)):
         etree.SubElement(props, "property", name=key, value=value)
+    # what the verdicts were judged against beyond the .vepl (`--param`, values other than
+    # the file's)
+    parameters = record.summary.parameters if record.summary is not None else {}
+    for key, number in sorted(parameters.items()):
+        etree.SubElement(props, "property", name=f"param.{key}", value=f"{number:g}")
     return case
 
 

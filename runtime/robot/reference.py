@@ -123,6 +123,10 @@ def clearance_field(xs: np.ndarray, ys: np.ndarray, ctx: ControllerContext,
 
 class ReferenceNavigator:
     name = "reference"
+    slow_zone_reach = SLOW_ZONE_RADIUS + SLOW_ZONE_LEAD
+    """Metres from the footprint within which an unmapped laser point slows the robot (its
+    forward protective field; a subclass tuned otherwise sets its own, and the default
+    .vepl's ``react_zone`` is this value, to be set with `--param` for such a robot)."""
 
     def __init__(self) -> None:
         self._tracker = GoalTracker()
@@ -210,7 +214,7 @@ class ReferenceNavigator:
             qx = np.abs(points[:, 0]) - hx
             qy = np.abs(points[:, 1]) - hy
             gap = np.hypot(np.maximum(qx, 0.0), np.maximum(qy, 0.0))
-            self._near_of, self._near = points, points[gap < SLOW_ZONE_RADIUS + SLOW_ZONE_LEAD]
+            self._near_of, self._near = points, points[gap < self.slow_zone_reach]
         return bool(self._unmapped(self._near, pose).any())
 
     def _grid_graph(self, inflate: float) -> GridGraph:

@@ -87,11 +87,17 @@ class SearchConfig:
     duration: float | None = None
     stop_on_failure: bool = False
     version: str = "0"
+    vepl_parameters: tuple[tuple[str, float], ...] = ()
+    """`--param`: the specification's parameter values passed to every run, sorted by name."""
 
     def to_json(self) -> dict[str, Any]:
         data = asdict(self)
         data["levels"] = [list(p) for p in self.levels]
         data["measures"] = list(self.measures)
+        if self.vepl_parameters:  # a search without them keeps the shape it always had
+            data["vepl_parameters"] = dict(self.vepl_parameters)
+        else:
+            del data["vepl_parameters"]
         return {"format": FORMAT, "version": VERSION, "config": data}
 
     @staticmethod
@@ -99,6 +105,9 @@ class SearchConfig:
         config = dict(data["config"])
         config["levels"] = tuple(tuple(p) for p in config["levels"])
         config["measures"] = tuple(config["measures"])
+        if "vepl_parameters" in config:
+            config["vepl_parameters"] = tuple(sorted(
+                (str(n), float(v)) for n, v in dict(config["vepl_parameters"]).items()))
         return SearchConfig(**config)
 
     def space(self) -> tuple[ParameterSpace, dict[str, Interval]]:
@@ -316,7 +325,8 @@ def run_search(config: SearchConfig, root: Path, engine: CampaignEngine,
             if any(c.pair is not None for c in fresh):
                 plan = plan_campaign([index], seed=config.seed, controller=config.controller,
                                      vepl=Path(config.vepl) if config.vepl else None,
-                                     duration=config.duration)
+                                     duration=config.duration,
+                                     vepl_parameters=config.vepl_parameters)
                 replayed = _recorded_batch(root, plan)
                 if replayed is None:
                     extend_plan(root, plan)

@@ -62,18 +62,24 @@ class RunSettings:
     variation: bool = True
     workers: int = 1
     timeout: float | None = None
+    vepl_parameters: tuple[tuple[str, float], ...] = ()
+    """`rei run --param`: the specification's parameter values, sorted by name."""
 
     def spec(self, mission: Path, seed: int, run_id: str) -> RunSpec:
         return RunSpec(run_id=run_id, mission_file=str(mission.resolve()),
                        mission_key=f"{mission.parent.name}/{mission.name}", group="shrink",
                        repeat=self.seeds.index(seed), seed=seed, controller=self.controller,
                        vepl=self.vepl, duration=self.duration, variation=self.variation,
-                       functions=self.functions)
+                       functions=self.functions, vepl_parameters=self.vepl_parameters)
 
     def describe(self) -> dict[str, Any]:
-        return {"seeds": list(self.seeds), "controller": self.controller or "reference",
-                "vepl": self.vepl, "functions": self.functions, "duration": self.duration,
-                "variation": self.variation}
+        described: dict[str, Any] = {
+            "seeds": list(self.seeds), "controller": self.controller or "reference",
+            "vepl": self.vepl, "functions": self.functions, "duration": self.duration,
+            "variation": self.variation}
+        if self.vepl_parameters:  # part of what a journal entry was judged with
+            described["vepl_parameters"] = dict(self.vepl_parameters)
+        return described
 
 
 @dataclass

@@ -214,8 +214,8 @@ def replay_command(mission: Path, output: Path, spec_like: RunSpec) -> str:
     argv = RunSpec(run_id="replay", mission_file=str(mission), mission_key="", group="",
                    repeat=0, seed=spec_like.seed, controller=spec_like.controller,
                    vepl=spec_like.vepl, duration=spec_like.duration,
-                   variation=spec_like.variation, functions=spec_like.functions
-                   ).run_argv(str(output))
+                   variation=spec_like.variation, functions=spec_like.functions,
+                   vepl_parameters=spec_like.vepl_parameters).run_argv(str(output))
     return shlex.join(["rei", *argv])
 
 

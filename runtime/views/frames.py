@@ -185,9 +185,12 @@ class Watcher:
 
     def __init__(self, views: Sequence[View], vepl: Path | None, work_dir: Path,
                  functions: Mapping[str, Callable[..., Any]] | None = None,
-                 clock: Callable[[], float] = wallclock.monotonic) -> None:
+                 clock: Callable[[], float] = wallclock.monotonic,
+                 parameters: tuple[tuple[str, float], ...] = ()) -> None:
         self.views = list(views)
         self.vepl = vepl
+        self.parameters = parameters
+        """`--param`: the specification's parameter values in place of the file's."""
         self.work_dir = work_dir
         self.functions = functions
         self.meter = FactorMeter(clock)
@@ -241,7 +244,7 @@ class Watcher:
             summary = judge_stream(header, until_stopped(samples), read_end, self.vepl,
                                    self.work_dir, self.functions, None, source.where,
                                    controller="watch", measurements=measurements,
-                                   judged=judged)
+                                   judged=judged, parameters=self.parameters)
             if judging:
                 host = judging[0].host
                 rows = host.log.rows
