@@ -86,11 +86,12 @@ def run(args: argparse.Namespace) -> int:
         load_vepl(args.vepl, parameters)
     out: Path = args.output
     out.mkdir(parents=True, exist_ok=True)
-    for stale in ("summary.json", TRACE, TRACE + ".partial", EVENTS, "report.html"):
-        (out / stale).unlink(missing_ok=True)
     automata = generate_automata(args.vepl, out / "automata", replace=True,
                                  parameters=parameters)
     user = load_functions(args.functions, args.vepl)
+    # the inputs are good: an earlier judgement in the folder goes now, not before
+    for stale in ("summary.json", TRACE, TRACE + ".partial", EVENTS, "report.html"):
+        (out / stale).unlink(missing_ok=True)
     session = join_bus(args, "monitor")
     if isinstance(session, int):
         return session

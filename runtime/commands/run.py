@@ -29,7 +29,13 @@ from dataclasses import replace
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any, TextIO
 
-from rei.lang.cli_support import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_RUN_ERROR
+from rei.lang.cli_support import (
+    EXIT_BAD_INPUT,
+    EXIT_FAILED,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+    EXIT_RUN_ERROR,
+)
 from rei.lang.errors import printable_lines
 from rei.lang.mission.faults import (
     FAULT_OPTION_HELP,
@@ -233,6 +239,35 @@ def _make_folder(out_dir: Path) -> None:
         raise RunError(f"cannot create the output folder '{out_dir}': {exc.strerror}") from None
 
 
+EARLIER_OUTPUTS = (SUMMARY, TRACE, TRACE + ".partial", EVENTS, PAGE, RECORDING,
+                   "internal-error.txt")
+"""What a run writes into its folder besides world/ and automata/ (which generation
+replaces only once the inputs are checked)."""
+ASIDE = ".earlier"
+
+
+def _set_aside(out: Path) -> list[Path]:
+    """Rename an earlier run's outputs in ``out`` to NAME.earlier; the renamed files."""
+    moved = []
+    for name in EARLIER_OUTPUTS:
+        path = out / name
+        if path.exists():
+            aside = path.with_name(path.name + ASIDE)
+            path.replace(aside)
+            moved.append(aside)
+    return moved
+
+
+def _settle_earlier(moved: Sequence[Path], restore: bool) -> None:
+    """Put the set-aside outputs back (``restore``: the new run wrote nothing) or drop them."""
+    for aside in moved:
+        original = aside.with_name(aside.name[:-len(ASIDE)])
+        if restore and not original.exists():
+            aside.replace(original)
+        else:
+            aside.unlink(missing_ok=True)
+
+
 def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", seed: int = 0,
              duration: float | None = None, watchdog: float | None = 5.0,
              physics_rate: float = 100.0, odom_drift: float = 0.0,
@@ -429,11 +464,10 @@ def run(args: argparse.Namespace) -> int:
 
         load_vepl(args.vepl, parameters)
     _make_folder(out)
-    # Outputs of an earlier run into the same folder go now: a run that dies must not leave
-    # them beside its own error summary.
-    for stale in (SUMMARY, TRACE, TRACE + ".partial", EVENTS, PAGE, RECORDING,
-                  "internal-error.txt"):
-        (out / stale).unlink(missing_ok=True)
+    # Outputs of an earlier run into the same folder are set aside now (a run that dies must
+    # not leave them beside its own error summary) and come back if the child refuses the
+    # inputs (exit 2): bad input never costs what was already written.
+    earlier = _set_aside(out)
     request = RunRequest(
         # absolute: the process under test may change its working folder
         str(args.mission), os.path.abspath(out), args.controller, args.seed, args.duration,
@@ -444,8 +478,13 @@ def run(args: argparse.Namespace) -> int:
         faults=tuple(f.text() for f in args.fault or ()), bus=args.bus,
         bus_credentials=os.path.abspath(args.credentials) if args.credentials else None,
         bus_wait=args.bus_wait, wait_monitor=args.wait_for_monitor, parameters=parameters)
-    ended = supervise(request)
-    summary = _read_summary(out) if ended.status != 2 else None
+    try:
+        ended = supervise(request)
+    except BaseException:
+        _settle_earlier(earlier, restore=True)
+        raise
+    _settle_earlier(earlier, restore=ended.status == EXIT_BAD_INPUT)
+    summary = _read_summary(out) if ended.status != EXIT_BAD_INPUT else None
     if summary is None:
         # bad input (the child said why on stderr), or interrupted before anything was run
         if ended.status == EXIT_INTERRUPTED:

@@ -150,6 +150,37 @@ def test_rei_run_and_replay_write_through_no_link(tmp_path: Path) -> None:
 
 
 @pytest.mark.slow
+def test_bad_input_never_costs_the_outputs_of_an_earlier_run(tmp_path: Path) -> None:
+    """A second `rei run` (or `rei monitor`) into a folder with a finished run's outputs that
+    is refused for its input (exit 2) leaves those outputs as they were, byte for byte."""
+    out = tmp_path / "run"
+    done = rei("run", str(MISSION), "-o", str(out), "--duration", "1", "--quiet")
+    assert done.returncode in (0, 1), done.stderr
+    kept = ["summary.json", "trace.jsonl", "events.csv", "report.html"]
+    before = {name: (out / name).read_bytes() for name in kept}
+    bad_vepl = tmp_path / "bad.vepl"
+    bad_vepl.write_text("garbage {\n", encoding="utf-8")
+    bad_mission = tmp_path / "bad.mission"
+    bad_mission.write_text("mission broken\n", encoding="utf-8")
+    refused = [
+        rei("run", str(MISSION), "-o", str(out), "--duration", "1", "--vepl", str(bad_vepl)),
+        rei("run", str(bad_mission), "-o", str(out), "--duration", "1"),
+        rei("run", str(MISSION), "-o", str(out), "--param", "react_zon=0.7"),
+        rei("monitor", "--bus", "tcp/127.0.0.1:9", "--vepl", str(bad_vepl), "-o", str(out)),
+    ]
+    for done in refused:
+        assert done.returncode == 2, done.stderr
+        assert ("bad." in done.stderr or "react_zon" in done.stderr), done.stderr
+        assert {name: (out / name).read_bytes() for name in kept} == before, done.args
+    assert not [p.name for p in out.iterdir() if p.name.endswith(".earlier")]
+    # a good run into the folder still replaces them
+    done = rei("run", str(MISSION), "-o", str(out), "--duration", "0.5", "--quiet")
+    assert done.returncode in (0, 1), done.stderr
+    assert (out / "trace.jsonl").read_bytes() != before["trace.jsonl"]
+    assert not [p.name for p in out.iterdir() if p.name.endswith(".earlier")]
+
+
+@pytest.mark.slow
 def test_a_reused_run_folder_keeps_no_stale_urdf_or_automata(tmp_path: Path) -> None:
     out = tmp_path / "run"
     (out / "world" / "urdf").mkdir(parents=True)
