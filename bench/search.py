@@ -105,8 +105,8 @@ def confirm(result: CandidateResult, root: Path, seed: int, workers: int) -> boo
     return all(r.passed for r in done.records)
 
 
-def one_search(nav: str, spec: str, strategy: str, seed: int, args: argparse.Namespace
-               ) -> SearchOutcome:
+def one_search(nav: str, spec: str, strategy: str, seed: int, args: argparse.Namespace,
+               budget: int) -> SearchOutcome:
     """One search; a defect's search ends at its first *confirmed* failure (the reference
     passes that candidate), the reference's runs its whole budget (every failure a false
     alarm)."""
@@ -115,7 +115,7 @@ def one_search(nav: str, spec: str, strategy: str, seed: int, args: argparse.Nam
     levels = tuple(tuple(f.split("=", 1)) for f in args.factor)
     levels = (*levels, ("speed", args.speed)) if args.speed else levels
     config = SearchConfig(preset=args.preset, levels=levels,  # type: ignore[arg-type]
-                          strategy=strategy, seed=seed, budget=args.budget, batch=args.batch,
+                          strategy=strategy, seed=seed, budget=budget, batch=args.batch,
                           controller=None if spec == REFERENCE else spec)
     verdicts: dict[str, bool] = {}
 
@@ -128,6 +128,8 @@ def one_search(nav: str, spec: str, strategy: str, seed: int, args: argparse.Nam
     result = run_search(config, root, LocalEngine(args.workers),
                         {"command": ["bench/search.py"]}, stream=io.StringIO(),
                         until=None if nav == REFERENCE else confirmed_failure)
+    if not result.complete:  # interrupted (Ctrl-C): record nothing of this search
+        raise KeyboardInterrupt
     ran = [r for r in result.results if r.record is not None]
     failing = [r for r in ran if r.failed]
     confirmed, first_at = "", None
@@ -252,6 +254,9 @@ def main() -> int:
     parser.add_argument("--budget", type=int, default=32,
                         help="simulations per search at most (a defect's search stops at its "
                              "first confirmed failure)")
+    parser.add_argument("--reference-budget", type=int, default=None, metavar="N",
+                        help="simulations of each of the reference's searches (default: "
+                             "--budget)")
     parser.add_argument("--batch", type=int, default=4, help="candidates per batch")
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--preset", default="small")
@@ -278,21 +283,30 @@ def main() -> int:
     if unknown:
         raise SystemExit(f"--only: unknown defect(s) {', '.join(unknown)}")
     reference_seeds = args.reference_seeds if args.reference_seeds is not None else args.seeds
-    # Seed-major, so an interrupted benchmark has whole seeds; each search is appended to
-    # outcomes.jsonl as it ends, so --resume loses nothing but the search under way.
-    jobs = [(seed, nav, spec, strategy) for seed in sorted(set(args.seeds) | set(reference_seeds))
-            for nav, spec in [(REFERENCE, REFERENCE), *[(n, known[n]) for n in args.only]]
-            if seed in (reference_seeds if nav == REFERENCE else args.seeds)
+    # The reference's first seed, then the defects seed by seed, then its other seeds: an
+    # interrupted benchmark has whole seeds and a false-alarm check. Each search is appended
+    # to outcomes.jsonl as it ends, so --resume loses nothing but the search under way.
+    defects = [(n, known[n]) for n in args.only]
+    jobs = [(seed, REFERENCE, REFERENCE, strategy) for seed in reference_seeds[:1]
             for strategy in strategies]
+    jobs += [(seed, nav, spec, strategy) for seed in args.seeds for nav, spec in defects
+             for strategy in strategies]
+    jobs += [(seed, REFERENCE, REFERENCE, strategy) for seed in reference_seeds[1:]
+             for strategy in strategies]
     args.out.mkdir(parents=True, exist_ok=True)
     log = args.out / "outcomes.jsonl"
-    key = {"budget": args.budget, "batch": args.batch, "preset": args.preset,
-           "speed": args.speed, "factor": args.factor}
+    reference_budget = args.reference_budget or args.budget
+
+    def key_of(nav: str) -> dict[str, Any]:
+        return {"budget": reference_budget if nav == REFERENCE else args.budget,
+                "batch": args.batch, "preset": args.preset, "speed": args.speed,
+                "factor": args.factor}
+
     outcomes: list[SearchOutcome] = []
     if args.resume and log.is_file():
         for line in log.read_text(encoding="utf-8").splitlines():
             data = json.loads(line)
-            if data.pop("settings") == key:
+            if data.pop("settings") == key_of(data["navigator"]):
                 data["requirements"] = tuple(data["requirements"])
                 outcomes.append(SearchOutcome(**data))
     else:
@@ -302,10 +316,11 @@ def main() -> int:
     for seed, nav, spec, strategy in jobs:
         if (seed, nav, strategy) in done:
             continue
-        o = one_search(nav, spec, strategy, seed, args)
+        o = one_search(nav, spec, strategy, seed, args,
+                       reference_budget if nav == REFERENCE else args.budget)
         outcomes.append(o)
         with log.open("a", encoding="utf-8") as out:
-            out.write(json.dumps({**o.__dict__, "settings": key}) + "\n")
+            out.write(json.dumps({**o.__dict__, "settings": key_of(nav)}) + "\n")
         print(f"seed {seed} {nav} {strategy}: {o.failing}/{o.simulations} failing, "
               f"confirmed {o.confirmed or '-'} at {o.first_at or '-'} "
               f"({time.perf_counter() - started:.0f} s, load {os.getloadavg()[0]:.1f})",
@@ -313,7 +328,8 @@ def main() -> int:
     own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(
         resource.RUSAGE_CHILDREN)
     summary = summarise(outcomes, strategies, args.only, args.seeds, args.budget)
-    settings = {**key, "seeds": args.seeds, "reference_seeds": reference_seeds,
+    settings = {**key_of(""), "reference_budget": reference_budget, "seeds": args.seeds,
+                "reference_seeds": reference_seeds,
                 "workers": args.workers, "defects": args.only, "strategies": strategies,
                 "wall_seconds": time.perf_counter() - started,
                 "cpu_seconds": own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime,

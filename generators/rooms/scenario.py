@@ -121,7 +121,7 @@ def apply_to_plan(plan: RoomPlan, values: Mapping[str, float]) -> RoomPlan:
                                   "robot's lane first and cannot set off later; expected a "
                                   f"shift of at most 0 s, found {shift:g} s")
         plan = replace(plan, stressor=replace(stress, mover=shifted(stress.mover, shift),
-                                              meeting_s=round(stress.meeting_s + shift, 2)))
+                                              meeting_s=round(stress.meeting_s + shift, 3)))
     return plan
 
 
@@ -130,7 +130,7 @@ def shifted(mover: TimedMover, shift: float) -> TimedMover:
     writes it (vertices HOLD_STEP apart, the last two SETTLE apart)."""
     first = mover.vertices[0][0]
     hold = [t for c, t in mover.vertices if c == first]
-    go = round(hold[-1] + shift, 2)
+    go = round(hold[-1] + shift, 3)  # the shift has 3 decimals: keep them all
     if go < MIN_WAIT:
         raise ScenarioRefused(f"--stress-shift: the mover would wait {go:g} s; expected at "
                               f"least {MIN_WAIT:g} s (a shift of at least "
@@ -138,8 +138,8 @@ def shifted(mover: TimedMover, shift: float) -> TimedMover:
     waiting = go - SETTLE
     intervals = math.ceil(waiting / HOLD_STEP - 1e-9)
     times = [round(k * waiting / intervals, 2) for k in range(intervals)]
-    times += [round(waiting, 2), go]
-    walk = [(c, round(t + shift, 2)) for c, t in mover.vertices[len(hold):]]
+    times += [round(waiting, 3), go]
+    walk = [(c, round(t + shift, 3)) for c, t in mover.vertices[len(hold):]]
     return replace(mover, vertices=(*((first, t) for t in times), *walk))
 
 

@@ -72,7 +72,7 @@ def room_text(name: str, plan: RoomPlan, provenance: Provenance) -> str:
             times, _ = vertex_times(points, [None] * len(points), human.total_time, human.loop)
             lines.append(f"    human {human.name} on {cell_name(human.vertices[0])} "
                          f"trajectory {end} {{")
-            lines += [f"        {cell_name(v)} at {_fmt(round(human.start_s + t, 2))}"
+            lines += [f"        {cell_name(v)} at {_fmt(round(human.start_s + t, 3))}"
                       for v, t in zip(human.vertices, times, strict=False)]
         else:
             lines.append(f"    human {human.name} on {cell_name(human.vertices[0])} "
