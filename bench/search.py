@@ -1,30 +1,35 @@
-"""Search benchmark: how many of bench/bugs.py's defects does `rei search` find, per strategy,
+"""Search benchmark: how soon does `rei search` find bench/bugs.py's defects, per strategy,
 against random sampling on the same budget of simulations?
 
-For every navigator (the correct ``reference`` and the defects of bench/defects chosen with
-``--only``), every strategy (``--strategies``, random always included: it is the baseline)
-and every seed, one search of ``--budget`` simulations over the ``--preset`` rooms (layout
-searched, optionally ``--speed LOW:HIGH`` of the humans as a continuous range; the default
-objective: the smallest margin of any requirement). A defect is *found* by a search when one
-of its candidates fails and the correct navigator passes that same candidate (same files,
-same run seed: one extra run), so a candidate no navigator could pass is never counted as a
-detection. The reference's searches must find nothing (false alarms).
+For every defect chosen with ``--only``, every strategy (``--strategies``, random always
+included: it is the baseline) and every seed, one search of at most ``--budget`` simulations
+over the ``--preset`` rooms (layout searched, optionally ``--speed LOW:HIGH`` or other
+``--factor`` levels; the default objective: the smallest margin of any requirement). A defect
+is *found* when one of its candidates fails and the correct navigator passes that same
+candidate (same files, same run seed: one extra run, made after each batch), so a candidate no
+navigator could pass is never counted as a detection; the search *stops at its first
+confirmed failure*, so a search that finds its defect early costs little. The reference's own
+searches (``--reference-seeds``, ``--reference-strategies``, ``--reference-budget``) run their
+whole budget: every failure in them is a false alarm.
 
-Reported per strategy: defects found per search seed (mean and spread), the rate per 1,000
-simulations (found / simulations run x 1,000: an extrapolation from the budget actually run,
-labelled so), the ratio to random's rate measured in the same invocation, simulations to the
-first confirmed failure, distinct descriptor cells among failing candidates (diversity), and
-the reference's false alarms. With ``--shrink``, each confirmed failure is then shrunk with
-`rei shrink`'s engine (3 seeds, at most ``--shrink-runs`` runs) and the "shrunk" column gives
-the mean size reduction (share of the case's elements removed); without it, "n/a".
+Reported per strategy: defects found per seed (mean and spread), simulations to the first
+confirmed failure (mean, spread, max), detections per 1,000 simulations *spent* (a found
+search counts its simulations up to the detection, a missed one its whole budget), its ratio
+to random's rate measured in the same invocation, the defects found on every seed, failing
+candidates the reference failed too, and the reference's false alarms. With ``--shrink`` each
+confirmed failure is shrunk with `rei shrink`'s engine (3 seeds, at most ``--shrink-runs``
+runs) and "shrunk" gives the mean size reduction; without it, "n/a".
 
-Writes bench/out/search/search.json; ``--markdown`` prints the tables for bench/RESULTS.md.
-CPU seconds (this process and its children) are reported with the load average, since the
-machine is shared.
+Each search is appended to OUT/outcomes.jsonl as it ends (``--resume`` keeps those of the
+same settings and runs the rest); OUT/search.json has the summary; ``--markdown`` prints the
+tables for bench/RESULTS.md. CPU seconds (this process and its children, this invocation
+only) are reported with the load average, since the machine is shared.
 
 Usage: python bench/search.py [--only NAME ...] [--strategies S ...] [--seeds S ...]
+       [--reference-seeds S ...] [--reference-strategies S ...] [--reference-budget N]
        [--budget N] [--batch K] [--workers N] [--preset small] [--speed LOW:HIGH]
-       [--factor NAME=LEVELS ...] [--shrink [--shrink-runs N]] [--markdown] [--out DIR]
+       [--factor NAME=LEVELS ...] [--shrink [--shrink-runs N]] [--resume] [--markdown]
+       [--out DIR]
 """
 
 from __future__ import annotations
@@ -254,6 +259,8 @@ def main() -> int:
     parser.add_argument("--budget", type=int, default=32,
                         help="simulations per search at most (a defect's search stops at its "
                              "first confirmed failure)")
+    parser.add_argument("--reference-strategies", nargs="+", default=None, metavar="S",
+                        help="strategies of the reference's searches (default: all)")
     parser.add_argument("--reference-budget", type=int, default=None, metavar="N",
                         help="simulations of each of the reference's searches (default: "
                              "--budget)")
@@ -287,12 +294,13 @@ def main() -> int:
     # interrupted benchmark has whole seeds and a false-alarm check. Each search is appended
     # to outcomes.jsonl as it ends, so --resume loses nothing but the search under way.
     defects = [(n, known[n]) for n in args.only]
+    checked = [s for s in strategies if s in (args.reference_strategies or strategies)]
     jobs = [(seed, REFERENCE, REFERENCE, strategy) for seed in reference_seeds[:1]
-            for strategy in strategies]
+            for strategy in checked[:1]]
     jobs += [(seed, nav, spec, strategy) for seed in args.seeds for nav, spec in defects
              for strategy in strategies]
-    jobs += [(seed, REFERENCE, REFERENCE, strategy) for seed in reference_seeds[1:]
-             for strategy in strategies]
+    jobs += [(seed, REFERENCE, REFERENCE, strategy) for seed in reference_seeds
+             for strategy in checked if (seed, strategy) != (reference_seeds[0], checked[0])]
     args.out.mkdir(parents=True, exist_ok=True)
     log = args.out / "outcomes.jsonl"
     reference_budget = args.reference_budget or args.budget
