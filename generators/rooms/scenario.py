@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 from rei.generators.rooms.construct import RoomPlan
 from rei.generators.rooms.descriptors import format_number
@@ -45,31 +45,19 @@ class ScenarioRefused(Exception):
     """These values cannot be put into this room (a candidate the search cannot build)."""
 
 
-@dataclass(frozen=True)
-class ScenarioRange:
-    """One searched scenario parameter: its name (``phase``, ``stress_shift`` or
-    ``KIND.PARAM``), the command-line option that gave it, and its range."""
-
-    name: str
-    option: str
-    interval: Interval
-
-
 def fault_parameter(name: str) -> tuple[str, str] | None:
     """``KIND.PARAM`` -> (kind, parameter), or None for a name that is not a fault's."""
     kind, dot, param = name.partition(".")
     return (kind, param) if dot else None
 
 
-def parse_scenario(name: str, text: str) -> ScenarioRange:
-    """The range of one scenario parameter, checked; ParameterError names the option."""
+def parse_scenario(name: str, text: str) -> Interval:
+    """The range of one scenario parameter (an Interval called ``name``), checked;
+    ParameterError names the option."""
     if name == PHASE:
-        return ScenarioRange(name, "phase",
-                             parse_range("phase", name, text, 0.0, MAX_PHASE, False))
+        return parse_range("phase", name, text, 0.0, MAX_PHASE, False)
     if name == STRESS_SHIFT:
-        return ScenarioRange(name, "stress-shift",
-                             parse_range("stress-shift", name, text, -MAX_SHIFT, MAX_SHIFT,
-                                         False))
+        return parse_range("stress-shift", name, text, -MAX_SHIFT, MAX_SHIFT, False)
     option = "fault-range"
     pair = fault_parameter(name)
     if pair is None:
@@ -83,16 +71,15 @@ def parse_scenario(name: str, text: str) -> ScenarioRange:
     if parameter is None:
         names = ", ".join(p.name for p in spec.parameters) or "none"
         raise ParameterError(option, f"a parameter of {kind} ({names})", f"'{param}'")
-    return ScenarioRange(name, option, parse_range(option, name, text, parameter.low,
-                                                   parameter.high, parameter.low_open))
+    return parse_range(option, name, text, parameter.low, parameter.high, parameter.low_open)
 
 
-def check_faults(ranges: Sequence[ScenarioRange]) -> None:
+def check_faults(ranges: Sequence[Interval]) -> None:
     """Refuse fault kinds whose required parameters are not all searched (a fault entry
     with a parameter missing is not a mission), before any candidate is built."""
     searched: dict[str, set[str]] = {}
     for r in ranges:
-        pair = fault_parameter(r.name)
+        pair = fault_parameter(r.factor)
         if pair is not None:
             searched.setdefault(pair[0], set()).add(pair[1])
     for kind, params in searched.items():
@@ -172,5 +159,5 @@ def comment(values: Mapping[str, float]) -> str:
 
 
 __all__ = ["MAX_PHASE", "MAX_SHIFT", "PHASE", "STRESS_SHIFT",
-           "ScenarioRange", "ScenarioRefused", "apply_to_plan", "check_faults", "comment",
+           "ScenarioRefused", "apply_to_plan", "check_faults", "comment",
            "fault_section", "parse_scenario", "with_faults"]

@@ -34,7 +34,7 @@ from rei.generators.rooms.design import (
     decode_point,
     search_dimensions,
 )
-from rei.generators.rooms.scenario import ScenarioRange, check_faults, parse_scenario
+from rei.generators.rooms.scenario import check_faults, parse_scenario
 from rei.generators.rooms.space import (
     FACTOR_NAMES,
     Interval,
@@ -121,13 +121,13 @@ class SearchConfig:
                 overrides[name] = tuple(v.strip() for v in text.split(",") if v.strip())
         return preset_space(self.preset).replaced(overrides), intervals
 
-    def scenario_ranges(self) -> tuple[ScenarioRange, ...]:
+    def scenario_ranges(self) -> tuple[Interval, ...]:
         return tuple(parse_scenario(name, text) for name, text in self.scenario)
 
     def dimensions(self) -> tuple[ParameterSpace, tuple[SearchDimension, ...]]:
         space, intervals = self.space()
         return space, search_dimensions(space, intervals, self.layout,
-                                        [r.interval for r in self.scenario_ranges()])
+                                        self.scenario_ranges())
 
 
 def check_config(config: SearchConfig) -> tuple[ParameterSpace, tuple[SearchDimension, ...]]:
