@@ -281,6 +281,9 @@ def main() -> int:
     parser.add_argument("--resume", action="store_true",
                         help="keep the searches already in OUT/outcomes.jsonl (same settings) "
                              "and run only the missing ones")
+    parser.add_argument("--summary-only", action="store_true",
+                        help="run nothing: summarise the searches in OUT/outcomes.jsonl of "
+                             "these settings (what an interrupted benchmark finished)")
     parser.add_argument("--markdown", action="store_true")
     parser.add_argument("--out", type=Path, default=REPO / "bench" / "out" / "search")
     args = parser.parse_args()
@@ -311,7 +314,7 @@ def main() -> int:
                 "factor": args.factor}
 
     outcomes: list[SearchOutcome] = []
-    if args.resume and log.is_file():
+    if (args.resume or args.summary_only) and log.is_file():
         for line in log.read_text(encoding="utf-8").splitlines():
             data = json.loads(line)
             if data.pop("settings") == key_of(data["navigator"]):
@@ -322,7 +325,7 @@ def main() -> int:
     done = {(o.seed, o.navigator, o.strategy) for o in outcomes}
     started, load = time.perf_counter(), os.getloadavg()
     for seed, nav, spec, strategy in jobs:
-        if (seed, nav, strategy) in done:
+        if (seed, nav, strategy) in done or args.summary_only:
             continue
         o = one_search(nav, spec, strategy, seed, args,
                        reference_budget if nav == REFERENCE else args.budget)
