@@ -114,6 +114,11 @@ def test_the_stressor_shift_moves_the_movers_times_and_the_meeting(tmp_path: Pat
         return [float(t) for c, t in rows if c != first]
 
     assert np.allclose(np.subtract(walk_times(texts[1]), walk_times(texts[0])), 3.0)
+    again = candidate(tmp_path / "again", [("stress_shift", "0:4")], 0.75, levels=EMERGE,
+                      preset="stress")
+    assert again.pair is not None and later.pair is not None
+    assert (again.pair.room_text, again.pair.mission_text) == (later.pair.room_text,
+                                                               later.pair.mission_text)
 
 
 def test_a_room_that_cannot_take_a_shift_is_a_candidate_not_built(tmp_path: Path) -> None:
