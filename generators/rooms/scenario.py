@@ -23,14 +23,13 @@ kinds' limits are the mission language's). The pair is written again and checked
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 
 from rei.generators.rooms.construct import RoomPlan
 from rei.generators.rooms.descriptors import format_number
 from rei.generators.rooms.space import Interval, ParameterError, parse_range
-from rei.generators.rooms.stressors import HOLD_STEP, MIN_WAIT, SETTLE, TimedMover
+from rei.generators.rooms.stressors import MIN_WAIT, TimedMover, hold_times
 from rei.lang.mission.faults import KINDS
 
 PHASE = "phase"
@@ -114,7 +113,7 @@ def apply_to_plan(plan: RoomPlan, values: Mapping[str, float]) -> RoomPlan:
 
 def shifted(mover: TimedMover, shift: float) -> TimedMover:
     """The mover setting off ``shift`` seconds later, its wait written as the generator
-    writes it (vertices HOLD_STEP apart, the last two SETTLE apart)."""
+    writes it (``hold_times``)."""
     first = mover.vertices[0][0]
     hold = [t for c, t in mover.vertices if c == first]
     go = round(hold[-1] + shift, 3)  # the shift has 3 decimals: keep them all
@@ -122,12 +121,8 @@ def shifted(mover: TimedMover, shift: float) -> TimedMover:
         raise ScenarioRefused(f"--stress-shift: the mover would wait {go:g} s; expected at "
                               f"least {MIN_WAIT:g} s (a shift of at least "
                               f"{MIN_WAIT - hold[-1]:g} s here)")
-    waiting = go - SETTLE
-    intervals = math.ceil(waiting / HOLD_STEP - 1e-9)
-    times = [round(k * waiting / intervals, 2) for k in range(intervals)]
-    times += [round(waiting, 3), go]
     walk = [(c, round(t + shift, 3)) for c, t in mover.vertices[len(hold):]]
-    return replace(mover, vertices=(*((first, t) for t in times), *walk))
+    return replace(mover, vertices=(*((first, t) for t in hold_times(go)), *walk))
 
 
 def fault_section(values: Mapping[str, float]) -> list[str]:
