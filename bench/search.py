@@ -1,30 +1,35 @@
-"""Search benchmark: how many of bench/bugs.py's defects does `rei search` find, per strategy,
+"""Search benchmark: how soon does `rei search` find bench/bugs.py's defects, per strategy,
 against random sampling on the same budget of simulations?
 
-For every navigator (the correct ``reference`` and the defects of bench/defects chosen with
-``--only``), every strategy (``--strategies``, random always included: it is the baseline)
-and every seed, one search of ``--budget`` simulations over the ``--preset`` rooms (layout
-searched, optionally ``--speed LOW:HIGH`` of the humans as a continuous range; the default
-objective: the smallest margin of any requirement). A defect is *found* by a search when one
-of its candidates fails and the correct navigator passes that same candidate (same files,
-same run seed: one extra run), so a candidate no navigator could pass is never counted as a
-detection. The reference's searches must find nothing (false alarms).
+For every defect chosen with ``--only``, every strategy (``--strategies``, random always
+included: it is the baseline) and every seed, one search of at most ``--budget`` simulations
+over the ``--preset`` rooms (layout searched, optionally ``--speed LOW:HIGH`` or other
+``--factor`` levels; the default objective: the smallest margin of any requirement). A defect
+is *found* when one of its candidates fails and the correct navigator passes that same
+candidate (same files, same run seed: one extra run, made after each batch), so a candidate no
+navigator could pass is never counted as a detection; the search *stops at its first
+confirmed failure*, so a search that finds its defect early costs little. The reference's own
+searches (``--reference-seeds``, ``--reference-strategies``, ``--reference-budget``) run their
+whole budget: every failure in them is a false alarm.
 
-Reported per strategy: defects found per search seed (mean and spread), the rate per 1,000
-simulations (found / simulations run x 1,000: an extrapolation from the budget actually run,
-labelled so), the ratio to random's rate measured in the same invocation, simulations to the
-first confirmed failure, distinct descriptor cells among failing candidates (diversity), and
-the reference's false alarms. With ``--shrink``, each confirmed failure is then shrunk with
-`rei shrink`'s engine (3 seeds, at most ``--shrink-runs`` runs) and the "shrunk" column gives
-the mean size reduction (share of the case's elements removed); without it, "n/a".
+Reported per strategy: defects found per seed (mean and spread), simulations to the first
+confirmed failure (mean, spread, max), detections per 1,000 simulations *spent* (a found
+search counts its simulations up to the detection, a missed one its whole budget), its ratio
+to random's rate measured in the same invocation, the defects found on every seed, failing
+candidates the reference failed too, and the reference's false alarms. With ``--shrink`` each
+confirmed failure is shrunk with `rei shrink`'s engine (3 seeds, at most ``--shrink-runs``
+runs) and "shrunk" gives the mean size reduction; without it, "n/a".
 
-Writes bench/out/search/search.json; ``--markdown`` prints the tables for bench/RESULTS.md.
-CPU seconds (this process and its children) are reported with the load average, since the
-machine is shared.
+Each search is appended to OUT/outcomes.jsonl as it ends (``--resume`` keeps those of the
+same settings and runs the rest); OUT/search.json has the summary; ``--markdown`` prints the
+tables for bench/RESULTS.md. CPU seconds (this process and its children, this invocation
+only) are reported with the load average, since the machine is shared.
 
 Usage: python bench/search.py [--only NAME ...] [--strategies S ...] [--seeds S ...]
+       [--reference-seeds S ...] [--reference-strategies S ...] [--reference-budget N]
        [--budget N] [--batch K] [--workers N] [--preset small] [--speed LOW:HIGH]
-       [--factor NAME=LEVELS ...] [--shrink [--shrink-runs N]] [--markdown] [--out DIR]
+       [--factor NAME=LEVELS ...] [--shrink [--shrink-runs N]] [--resume] [--markdown]
+       [--out DIR]
 """
 
 from __future__ import annotations
@@ -38,6 +43,7 @@ import shutil
 import statistics
 import sys
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -72,6 +78,10 @@ class SearchOutcome:
     """Distinct (measure A, measure B) cells of 0.25 x 0.25 among failing candidates."""
     requirements: tuple[str, ...]
     shrunk: float | None
+    confirmations: int = 0
+    """Reference runs made to confirm failing candidates."""
+    unconfirmed: int = 0
+    """Failing candidates the reference failed too (not detections)."""
 
 
 def shrink_reduction(mission: Path, spec: str, args: argparse.Namespace) -> float | None:
@@ -100,22 +110,36 @@ def confirm(result: CandidateResult, root: Path, seed: int, workers: int) -> boo
     return all(r.passed for r in done.records)
 
 
-def one_search(nav: str, spec: str, strategy: str, seed: int, args: argparse.Namespace
-               ) -> SearchOutcome:
+def one_search(nav: str, spec: str, strategy: str, seed: int, args: argparse.Namespace,
+               budget: int) -> SearchOutcome:
+    """One search; a defect's search ends at its first *confirmed* failure (the reference
+    passes that candidate), the reference's runs its whole budget (every failure a false
+    alarm)."""
     root = args.out / nav / f"{strategy}-{seed}"
     shutil.rmtree(root, ignore_errors=True)
     levels = tuple(tuple(f.split("=", 1)) for f in args.factor)
     levels = (*levels, ("speed", args.speed)) if args.speed else levels
     config = SearchConfig(preset=args.preset, levels=levels,  # type: ignore[arg-type]
-                          strategy=strategy, seed=seed, budget=args.budget, batch=args.batch,
+                          strategy=strategy, seed=seed, budget=budget, batch=args.batch,
                           controller=None if spec == REFERENCE else spec)
+    verdicts: dict[str, bool] = {}
+
+    def confirmed_failure(results: Sequence[CandidateResult]) -> bool:
+        for r in results:
+            if r.failed and r.candidate.name not in verdicts:
+                verdicts[r.candidate.name] = confirm(r, root, seed, args.workers)
+        return any(verdicts.values())
+
     result = run_search(config, root, LocalEngine(args.workers),
-                        {"command": ["bench/search.py"]}, stream=io.StringIO())
+                        {"command": ["bench/search.py"]}, stream=io.StringIO(),
+                        until=None if nav == REFERENCE else confirmed_failure)
+    if not result.complete:  # interrupted (Ctrl-C): record nothing of this search
+        raise KeyboardInterrupt
     ran = [r for r in result.results if r.record is not None]
     failing = [r for r in ran if r.failed]
     confirmed, first_at = "", None
-    for r in failing if nav != REFERENCE else []:
-        if confirm(r, root, seed, args.workers):
+    for r in failing:
+        if verdicts.get(r.candidate.name):
             confirmed = r.candidate.name
             first_at = ran.index(r) + 1
             break
@@ -128,30 +152,52 @@ def one_search(nav: str, spec: str, strategy: str, seed: int, args: argparse.Nam
         shrunk = shrink_reduction(root / "candidates" / f"{confirmed}_0001.mission", spec,
                                   args)
     return SearchOutcome(nav, strategy, seed, len(ran), len(failing), confirmed, first_at,
-                         len(cells), tuple(reqs), shrunk)
+                         len(cells), tuple(reqs), shrunk, len(verdicts),
+                         sum(not v for v in verdicts.values()))
+
+
+def _mean_sd(values: Sequence[float]) -> tuple[float | None, float | None]:
+    if not values:
+        return None, None
+    return statistics.mean(values), statistics.pstdev(values) if len(values) > 1 else 0.0
 
 
 def summarise(outcomes: list[SearchOutcome], strategies: list[str], defects: list[str],
-              seeds: list[int]) -> dict[str, Any]:
+              seeds: list[int], budget: int) -> dict[str, Any]:
+    """Per strategy over the defects' searches. A search that finds its defect stops there,
+    so ``per_1000`` is detections per 1,000 simulations *spent* (a found search counts the
+    simulations up to its confirmed failure, a missed one its whole budget): the rate of a
+    searcher that moves on to the next defect when it has one."""
     rows: dict[str, Any] = {}
     for strategy in strategies:
         mine = [o for o in outcomes if o.strategy == strategy and o.navigator != REFERENCE]
         per_seed = [sum(bool(o.confirmed) for o in mine if o.seed == s) for s in seeds]
         sims = sum(o.simulations for o in mine)
         found = sum(bool(o.confirmed) for o in mine)
-        firsts = [o.first_at for o in mine if o.first_at is not None]
-        alarms = sum(o.failing for o in outcomes
-                     if o.strategy == strategy and o.navigator == REFERENCE)
+        firsts = [float(o.first_at) for o in mine if o.first_at is not None]
+        first_mean, first_sd = _mean_sd(firsts)
+        reference = [o for o in outcomes if o.strategy == strategy and o.navigator == REFERENCE]
+        every_seed = [d for d in defects
+                      if (ds := [o for o in mine if o.navigator == d]) and all(o.confirmed
+                                                                                for o in ds)]
         rows[strategy] = {
+            "searches": len(mine),
             "found_per_seed": per_seed,
             "mean": statistics.mean(per_seed) if per_seed else 0.0,
             "spread": statistics.pstdev(per_seed) if len(per_seed) > 1 else 0.0,
+            "found": found,
             "simulations": sims,
             "per_1000": 1000.0 * found / sims if sims else 0.0,
-            "first_failure_median": statistics.median(firsts) if firsts else None,
-            "failing_cells": sum(o.cells for o in mine),
+            "first_failure_mean": first_mean,
+            "first_failure_sd": first_sd,
+            "first_failure_max": max(firsts) if firsts else None,
+            "defects_found_every_seed": every_seed,
+            "share_found_every_seed": len(every_seed) / len(defects) if defects else 0.0,
             "defects_found": sorted({o.navigator for o in mine if o.confirmed}),
-            "false_alarms": alarms,
+            "unconfirmed": sum(o.unconfirmed for o in mine),
+            "reference_simulations": sum(o.simulations for o in reference),
+            "false_alarms": sum(o.failing for o in reference),
+            "budget": budget,
         }
     base = rows.get("random", {}).get("per_1000") or 0.0
     for strategy in strategies:
@@ -160,25 +206,37 @@ def summarise(outcomes: list[SearchOutcome], strategies: list[str], defects: lis
     return rows
 
 
+def _fmt(value: float | None, spec: str = ".1f") -> str:
+    return "—" if value is None else format(value, spec)
+
+
 def table(summary: dict[str, Any], outcomes: list[SearchOutcome], defects: list[str]) -> str:
-    lines = ["| strategy | defects found per seed (mean ± sd) | per 1,000 simulations "
-             "(extrapolated) | ratio to random | median simulations to first failure | "
-             "failing descriptor cells | reference false alarms |",
-             "|---|---|---|---|---|---|---|"]
+    lines = ["| strategy | searches | defects found per seed (mean ± sd) | simulations spent | "
+             "detections per 1,000 simulations spent | ratio to random | simulations to the "
+             "first confirmed failure (mean ± sd, max) | defects found on every seed | "
+             "failing candidates the reference also failed | reference: false alarms / "
+             "simulations |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for name, row in summary.items():
-        ratio = f"{row['ratio_to_random']:.2f}" if row["ratio_to_random"] is not None else "—"
-        first = row["first_failure_median"]
-        lines.append(f"| {name} | {row['found_per_seed']} ({row['mean']:.2f} ± "
-                     f"{row['spread']:.2f}) | {row['per_1000']:.0f} | {ratio} | "
-                     f"{first if first is not None else '—'} | {row['failing_cells']} | "
-                     f"{row['false_alarms']} |")
-    lines += ["", "| defect | " + " | ".join(summary) + " | failed requirements | shrunk |",
+        ratio = _fmt(row["ratio_to_random"], ".2f")
+        first = (f"{_fmt(row['first_failure_mean'])} ± {_fmt(row['first_failure_sd'])}, "
+                 f"{_fmt(row['first_failure_max'], '.0f')}")
+        lines.append(f"| {name} | {row['searches']} | {row['found_per_seed']} "
+                     f"({row['mean']:.2f} ± {row['spread']:.2f}) | {row['simulations']} | "
+                     f"{row['per_1000']:.0f} | {ratio} | {first} | "
+                     f"{len(row['defects_found_every_seed'])}/{len(defects)} | "
+                     f"{row['unconfirmed']} | {row['false_alarms']} / "
+                     f"{row['reference_simulations']} |")
+    lines += ["", "| defect | " + " | ".join(f"{s}: found (simulations to it)" for s in summary)
+              + " | failed requirements | shrunk |",
               "|---|" + "---|" * (len(summary) + 2)]
     for nav in defects:
         cells = []
         for strategy in summary:
-            mine = [o for o in outcomes if o.navigator == nav and o.strategy == strategy]
-            cells.append(f"{sum(bool(o.confirmed) for o in mine)}/{len(mine)}")
+            mine = sorted((o for o in outcomes if o.navigator == nav and o.strategy == strategy),
+                          key=lambda o: o.seed)
+            at = ", ".join(str(o.first_at) if o.first_at else "—" for o in mine)
+            cells.append(f"{sum(bool(o.confirmed) for o in mine)}/{len(mine)} ({at})")
         reqs = sorted({q for o in outcomes if o.navigator == nav for q in o.requirements})
         shrunk = [o.shrunk for o in outcomes if o.navigator == nav and o.shrunk is not None]
         lines.append(f"| {nav} | " + " | ".join(cells) + f" | {', '.join(reqs) or '—'} | "
@@ -194,8 +252,18 @@ def main() -> int:
                              "campaign misses); the reference always runs")
     parser.add_argument("--strategies", nargs="+", default=["random", "tpe", "map-elites"],
                         metavar="S", help="strategies (random is always added)")
-    parser.add_argument("--seeds", type=int, nargs="+", default=[1, 2], metavar="S")
-    parser.add_argument("--budget", type=int, default=16, help="simulations per search")
+    parser.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3], metavar="S")
+    parser.add_argument("--reference-seeds", type=int, nargs="+", default=None, metavar="S",
+                        help="seeds of the reference's whole-budget searches (default: "
+                             "--seeds)")
+    parser.add_argument("--budget", type=int, default=32,
+                        help="simulations per search at most (a defect's search stops at its "
+                             "first confirmed failure)")
+    parser.add_argument("--reference-strategies", nargs="+", default=None, metavar="S",
+                        help="strategies of the reference's searches (default: all)")
+    parser.add_argument("--reference-budget", type=int, default=None, metavar="N",
+                        help="simulations of each of the reference's searches (default: "
+                             "--budget)")
     parser.add_argument("--batch", type=int, default=4, help="candidates per batch")
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--preset", default="small")
@@ -210,6 +278,12 @@ def main() -> int:
                         help="shrink every confirmed failure with rei shrink (3 seeds)")
     parser.add_argument("--shrink-runs", type=int, default=120, metavar="N",
                         help="run budget of each shrink (default 120)")
+    parser.add_argument("--resume", action="store_true",
+                        help="keep the searches already in OUT/outcomes.jsonl (same settings) "
+                             "and run only the missing ones")
+    parser.add_argument("--summary-only", action="store_true",
+                        help="run nothing: summarise the searches in OUT/outcomes.jsonl of "
+                             "these settings (what an interrupted benchmark finished)")
     parser.add_argument("--markdown", action="store_true")
     parser.add_argument("--out", type=Path, default=REPO / "bench" / "out" / "search")
     args = parser.parse_args()
@@ -218,26 +292,59 @@ def main() -> int:
     unknown = sorted(set(args.only) - set(known))
     if unknown:
         raise SystemExit(f"--only: unknown defect(s) {', '.join(unknown)}")
-    navs = [(REFERENCE, REFERENCE), *[(n, known[n]) for n in args.only]]
+    reference_seeds = args.reference_seeds if args.reference_seeds is not None else args.seeds
+    # The reference's first seed, then the defects seed by seed, then its other seeds: an
+    # interrupted benchmark has whole seeds and a false-alarm check. Each search is appended
+    # to outcomes.jsonl as it ends, so --resume loses nothing but the search under way.
+    defects = [(n, known[n]) for n in args.only]
+    checked = [s for s in strategies if s in (args.reference_strategies or strategies)]
+    jobs = [(seed, REFERENCE, REFERENCE, strategy) for seed in reference_seeds[:1]
+            for strategy in checked[:1]]
+    jobs += [(seed, nav, spec, strategy) for seed in args.seeds for nav, spec in defects
+             for strategy in strategies]
+    jobs += [(seed, REFERENCE, REFERENCE, strategy) for seed in reference_seeds
+             for strategy in checked if (seed, strategy) != (reference_seeds[0], checked[0])]
+    args.out.mkdir(parents=True, exist_ok=True)
+    log = args.out / "outcomes.jsonl"
+    reference_budget = args.reference_budget or args.budget
+
+    def key_of(nav: str) -> dict[str, Any]:
+        return {"budget": reference_budget if nav == REFERENCE else args.budget,
+                "batch": args.batch, "preset": args.preset, "speed": args.speed,
+                "factor": args.factor}
+
+    outcomes: list[SearchOutcome] = []
+    if (args.resume or args.summary_only) and log.is_file():
+        for line in log.read_text(encoding="utf-8").splitlines():
+            data = json.loads(line)
+            if data.pop("settings") == key_of(data["navigator"]):
+                data["requirements"] = tuple(data["requirements"])
+                outcomes.append(SearchOutcome(**data))
+    else:
+        log.write_text("", encoding="utf-8")
+    done = {(o.seed, o.navigator, o.strategy) for o in outcomes}
     started, load = time.perf_counter(), os.getloadavg()
-    outcomes = []
-    for seed in args.seeds:
-        for nav, spec in navs:
-            for strategy in strategies:
-                o = one_search(nav, spec, strategy, seed, args)
-                outcomes.append(o)
-                print(f"seed {seed} {nav} {strategy}: {o.failing}/{o.simulations} failing, "
-                      f"confirmed {o.confirmed or '-'} ({time.perf_counter() - started:.0f} s)",
-                      file=sys.stderr)
+    for seed, nav, spec, strategy in jobs:
+        if (seed, nav, strategy) in done or args.summary_only:
+            continue
+        o = one_search(nav, spec, strategy, seed, args,
+                       reference_budget if nav == REFERENCE else args.budget)
+        outcomes.append(o)
+        with log.open("a", encoding="utf-8") as out:
+            out.write(json.dumps({**o.__dict__, "settings": key_of(nav)}) + "\n")
+        print(f"seed {seed} {nav} {strategy}: {o.failing}/{o.simulations} failing, "
+              f"confirmed {o.confirmed or '-'} at {o.first_at or '-'} "
+              f"({time.perf_counter() - started:.0f} s, load {os.getloadavg()[0]:.1f})",
+              file=sys.stderr)
     own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(
         resource.RUSAGE_CHILDREN)
-    summary = summarise(outcomes, strategies, args.only, args.seeds)
-    settings = {"seeds": args.seeds, "budget": args.budget, "batch": args.batch,
-                "preset": args.preset, "workers": args.workers, "defects": args.only,
-                "strategies": strategies, "wall_seconds": time.perf_counter() - started,
+    summary = summarise(outcomes, strategies, args.only, args.seeds, args.budget)
+    settings = {**key_of(""), "reference_budget": reference_budget, "seeds": args.seeds,
+                "reference_seeds": reference_seeds,
+                "workers": args.workers, "defects": args.only, "strategies": strategies,
+                "wall_seconds": time.perf_counter() - started,
                 "cpu_seconds": own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime,
                 "load_average_at_start": load, "load_average_at_end": os.getloadavg()}
-    args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "search.json").write_text(json.dumps(
         {"settings": settings, "summary": summary,
          "searches": [o.__dict__ for o in outcomes]}, indent=1) + "\n", encoding="utf-8")

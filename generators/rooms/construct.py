@@ -93,6 +93,9 @@ class HumanPlan:
     loop: bool
     total_time: float
     behaviour: str = "scripted"
+    start_s: float = 0.0
+    """When the human passes its first vertex (a search's start phase,
+    generators/rooms/scenario.py); 0 keeps the ``total`` form the generator writes."""
 
 
 @dataclass(frozen=True)

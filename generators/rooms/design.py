@@ -166,18 +166,23 @@ class SearchRow:
 
     levels: tuple[tuple[str, str], ...]
     layout: int
+    scenario: tuple[tuple[str, str], ...] = ()
+    """Scenario parameters (generators/rooms/scenario.py) and their values, as written."""
 
 
 def search_dimensions(space: ParameterSpace, intervals: Mapping[str, Interval],
-                      layout: int | None) -> tuple[SearchDimension, ...]:
+                      layout: int | None, scenario: Sequence[Interval] = ()
+                      ) -> tuple[SearchDimension, ...]:
     """The coordinates of a search over ``space``: every factor with more than one level or
-    with an interval, in FACTOR order, then the layout unless it is fixed."""
+    with an interval, in FACTOR order, then the scenario parameters' ranges as given, then
+    the layout unless it is fixed."""
     dims = []
     for factor in space.factors:
         if factor.name in intervals:
             dims.append(SearchDimension(factor.name, interval=intervals[factor.name]))
         elif len(factor.levels) > 1:
             dims.append(SearchDimension(factor.name, levels=factor.levels))
+    dims += [SearchDimension(r.factor, interval=r) for r in scenario]
     if layout is None:
         dims.append(SearchDimension(LAYOUT))
     return tuple(dims)
@@ -192,4 +197,6 @@ def decode_point(space: ParameterSpace, dims: Sequence[SearchDimension],
     chosen = {d.name: d.decode(u) for d, u in zip(dims, point, strict=True)}
     levels = tuple((f.name, chosen.get(f.name, f.levels[0])) for f in space.factors)
     seed = int(chosen[LAYOUT]) if LAYOUT in chosen else (layout or 0)
-    return SearchRow(levels, seed)
+    factors = {f.name for f in space.factors} | {LAYOUT}
+    scenario = tuple((d.name, chosen[d.name]) for d in dims if d.name not in factors)
+    return SearchRow(levels, seed, scenario)

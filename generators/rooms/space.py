@@ -376,7 +376,14 @@ def parse_interval(name: str, text: str) -> Interval:
         numeric = ", ".join(n.replace("_", "-") for n in CONTINUOUS_FACTORS)
         raise ParameterError(option, f"levels without ':' (only {numeric} take a LOW:HIGH "
                                      f"range)", f"'{text}'")
-    low_limit, high_limit, low_open = CONTINUOUS_FACTORS[name]
+    return parse_range(option, name, text, *CONTINUOUS_FACTORS[name])
+
+
+def parse_range(option: str, name: str, text: str, low_limit: float, high_limit: float,
+                low_open: bool) -> Interval:
+    """``LOW:HIGH`` within [low_limit, high_limit] (low_limit excluded when ``low_open``),
+    an Interval called ``name``; ParameterError naming ``--option`` otherwise. Also the
+    ranges of a search's scenario parameters (generators/rooms/scenario.py)."""
     parts = text.split(":")
     if len(parts) != 2:
         raise ParameterError(option, "a range LOW:HIGH, e.g. 0.5:1.4", f"'{text}'")

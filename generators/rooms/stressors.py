@@ -417,6 +417,16 @@ def planned_arrival(route: Sequence[Cell], point: Cell, speed: float) -> float:
     return START_DELAY + route_lengths(route)[list(route).index(point)] / speed
 
 
+def hold_times(go: float) -> list[float]:
+    """The times of a mover's waiting vertices on its first tile when it sets off at ``go``
+    s: HOLD_STEP apart at most, the last two SETTLE apart (also a search's shifted mover,
+    generators/rooms/scenario.py)."""
+    waiting = go - SETTLE
+    intervals = math.ceil(waiting / HOLD_STEP - 1e-9)
+    times = [round(k * waiting / intervals, 2) for k in range(intervals)]
+    return [*times, round(waiting, 2), go]
+
+
 def time_layout(layout: StressorLayout, route: Sequence[Cell], params: RoomParameters,
                 bodies: Bodies) -> StressorPlan:
     """The mover's vertex times from the final route; StressorFailed when the final route
@@ -457,11 +467,7 @@ def time_layout(layout: StressorLayout, route: Sequence[Cell], params: RoomParam
     if go < MIN_WAIT:
         raise StressorFailed("the meeting point is too near the start to wait for the robot")
     go = round(go, 2)
-    waiting = go - SETTLE
-    intervals = math.ceil(waiting / HOLD_STEP - 1e-9)
-    times = [round(k * waiting / intervals, 2) for k in range(intervals)]
-    times += [round(waiting, 2), go]
-    timed = [(mover.vertices[0], t) for t in times]
+    timed = [(mover.vertices[0], t) for t in hold_times(go)]
     timed += [(v, round(go + walk[m] / speed, 2)) for m, v in enumerate(mover.vertices)
               if m > 0]
     behaviour = "yielding" if mover.role == "human" else "scripted"

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 from rei.generators.rooms.construct import GRID, ROBOT_TYPE, RoomPlan, cell_name
 from rei.generators.rooms.descriptors import format_number
+from rei.lang.room.spline import vertex_times
 
 GOAL_TOLERANCE = 0.3
 ROBOT_SPEED = 0.26
@@ -64,9 +65,19 @@ def room_text(name: str, plan: RoomPlan, provenance: Provenance) -> str:
     for human in plan.humans:
         end = "loop" if human.loop else "stop"
         lines.append("")
-        lines.append(f"    human {human.name} on {cell_name(human.vertices[0])} trajectory "
-                     f"total {_fmt(human.total_time)} {end} {{")
-        lines += [f"        {cell_name(v)}" for v in human.vertices]
+        if human.start_s:
+            # A start phase: every vertex timed, the first at start_s, the rest as `total`
+            # would share the time out (rei.lang.room.spline.vertex_times), start_s later.
+            points = [(float(i), float(j)) for i, j in human.vertices]
+            times, _ = vertex_times(points, [None] * len(points), human.total_time, human.loop)
+            lines.append(f"    human {human.name} on {cell_name(human.vertices[0])} "
+                         f"trajectory {end} {{")
+            lines += [f"        {cell_name(v)} at {_fmt(round(human.start_s + t, 3))}"
+                      for v, t in zip(human.vertices, times, strict=False)]
+        else:
+            lines.append(f"    human {human.name} on {cell_name(human.vertices[0])} "
+                         f"trajectory total {_fmt(human.total_time)} {end} {{")
+            lines += [f"        {cell_name(v)}" for v in human.vertices]
         lines.append(f"    }} behaviour {human.behaviour}")
     lines += _mover_lines(plan)
     lines.append("}")
@@ -158,6 +169,6 @@ def read_metadata(text: str) -> dict[str, dict[str, str]]:
         if not line.startswith("//"):
             break
         head, sep, rest = line[2:].strip().partition(": ")
-        if sep and head in ("generator", "parameters", "descriptors", "stressor"):
+        if sep and head in ("generator", "parameters", "descriptors", "stressor", "scenario"):
             out[head] = dict(item.split("=", 1) for item in rest.split() if "=" in item)
     return out

@@ -27,6 +27,9 @@ HELP_EXAMPLES = """\
 rei search -o out/search --controller my_nav:Navigator --budget 200 --workers 2
 rei search -o out/slow --preset stress --strategy map-elites --requirement HUMAN_SLOW_ZONE
 rei search -o out/limit --max-speed 0.05:0.3 --requirement SPEED_LIMIT --budget 12 --batch 4
+rei search -o out/phase --phase 0:20 --speed 0.6:1.0 --requirement HUMAN_SLOW_ZONE
+rei search -o out/emerge --preset stress --stressor emerge --stress-shift=-4:4 --budget 24
+rei search -o out/noise --fault-range laser_noise.sigma=0.01:0.2 --requirement REACTION_TIME
 rei search -o out/search --controller my_nav:Navigator --budget 200   # again: resumes
 rei search -o out/slow07 --preset stress --requirement REACTION_TIME --param react_zone=0.7
 """
@@ -37,6 +40,7 @@ EXIT_HELP = ("Exit status (the campaign's rule): 0 no run failed (nothing found)
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    from rei.generators.rooms.scenario import MAX_PHASE, MAX_SHIFT  # noqa: PLC0415
     from rei.lang.commands.rooms import OVERRIDES  # noqa: PLC0415
     from rei.runtime.commands.campaign import _seconds, add_engine_arguments  # noqa: PLC0415
     from rei.runtime.commands.run import CONTROLLER_HELP  # noqa: PLC0415
@@ -57,7 +61,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                     "in DIR (so `rei report DIR` reads it); DIR/search.csv lists every "
                     "candidate with its margin and verdict. Factor options take levels as "
                     "`rei-gen rooms` does; --speed, --spacing and --max-speed also take a "
-                    "range LOW:HIGH searched as a continuous value. The layout (object "
+                    "range LOW:HIGH searched as a continuous value, and so do the scenario's "
+                    "--phase, --stress-shift and --fault-range. The layout (object "
                     "placement, the humans' paths, the goals' tiles) is searched as a seed "
                     "unless --layout fixes it. Same options and seed give the same candidates "
                     "and results, with any number of workers. " + EXIT_HELP)
@@ -85,6 +90,23 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     for name, text in OVERRIDES:
         parser.add_argument(f"--{name.replace('_', '-')}", default=None, metavar="LEVELS",
                             help=text)
+    parser.add_argument("--phase", default=None, metavar="LOW:HIGH",
+                        help="search the humans' start phase: the second (0 to "
+                             f"{MAX_PHASE:g}) at which every generated human passes its first "
+                             "vertex (one with an open path waits there until then; a looping "
+                             "one is already on its loop)")
+    parser.add_argument("--stress-shift", default=None, metavar="LOW:HIGH",
+                        help="search when the stressor's person sets off: seconds later "
+                             f"(negative: earlier, -{MAX_SHIFT:g} to {MAX_SHIFT:g}) than "
+                             "timed, which moves the encounter along the robot's first leg; "
+                             "write --stress-shift=-4:4 for a negative LOW")
+    parser.add_argument("--fault-range", action="append", default=[],
+                        metavar="KIND.PARAM=LOW:HIGH",
+                        help="search a sensor fault's parameter (repeatable): the missions "
+                             "get a `fault { }` entry of KIND active the whole run, PARAM "
+                             "drawn from LOW:HIGH (e.g. laser_noise.sigma=0.01:0.1, "
+                             "laser_dropout.share=0.05:0.5, laser_delay.seconds=0.1:0.6; "
+                             "every required parameter of a kind needs a range; docs/faults.md)")
     parser.add_argument("--layout", type=int, default=None, metavar="SEED",
                         help="fix the room's construction seed instead of searching it")
     parser.add_argument("--stop-on-failure", action="store_true",
@@ -124,12 +146,24 @@ def config_of(args: argparse.Namespace) -> SearchConfig:
             raise ParameterError(name.replace("_", "-"), "levels or one range LOW:HIGH, "
                                  "not both", f"'{value}'")
         levels.append((name, ",".join(parts)))
+    scenario: list[tuple[str, str]] = []
+    if args.phase is not None:
+        scenario.append(("phase", args.phase))
+    if args.stress_shift is not None:
+        scenario.append(("stress_shift", args.stress_shift))
+    for text in args.fault_range:
+        name, sep, value = text.partition("=")
+        if not sep or not name.strip():
+            raise ParameterError("fault-range", "KIND.PARAM=LOW:HIGH (e.g. "
+                                 "laser_noise.sigma=0.01:0.1)", f"'{text}'")
+        scenario.append((name.strip(), value.strip()))
     measures = tuple(m.strip() for m in args.measures.split(","))
     if len(measures) != 2:
         raise SearchError(f"--measures: expected two descriptor names A,B, found "
                           f"'{args.measures}'")
     return SearchConfig(
-        preset=args.preset, levels=tuple(levels), layout=args.layout, strategy=args.strategy,
+        preset=args.preset, levels=tuple(levels), scenario=tuple(scenario),
+        layout=args.layout, strategy=args.strategy,
         seed=args.seed, budget=args.budget, batch=args.batch, requirement=args.requirement,
         measures=(measures[0], measures[1]), controller=args.controller,
         vepl=str(args.vepl.resolve()) if args.vepl is not None else None,

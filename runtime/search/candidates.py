@@ -4,8 +4,11 @@
 A candidate is built by the room generator exactly as `rei-gen rooms` builds a room
 (``rei.generators.rooms.generate`` on a one-level-per-factor space, the layout seed as the
 suite seed): valid by construction and checked with the `rei-gen check` rules before it is
-written. A row the generator refuses (an impossible combination) is a candidate with a
-``problem`` and no files; it never runs. This module never runs a simulation.
+written. A row's scenario parameters (start phase, stressor shift, sensor faults:
+generators/rooms/scenario.py) are then put into the pair, which is written and checked
+again. A row the generator refuses (an impossible combination, or scenario values the room
+cannot take) is a candidate with a ``problem`` and no files; it never runs. This module
+never runs a simulation.
 """
 
 from __future__ import annotations
@@ -13,20 +16,29 @@ from __future__ import annotations
 import csv
 import io
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from rei.generators.errors import GenerationError
 from rei.generators.output import write_atomic
 from rei.generators.rooms.design import SearchRow
+from rei.generators.rooms.scenario import ScenarioRefused, apply_to_plan, comment, with_faults
 from rei.generators.rooms.space import Factor, ParameterSpace
-from rei.generators.rooms.suite import INDEX_COLUMNS, GeneratedPair, Suite, SuiteRequest, generate
+from rei.generators.rooms.suite import (
+    INDEX_COLUMNS,
+    GeneratedPair,
+    Suite,
+    SuiteRequest,
+    check_pair,
+    generate,
+)
 from rei.generators.rooms.suite import index_csv as suite_index_csv
+from rei.generators.rooms.writer import Provenance, mission_text, room_text
 
 CANDIDATES = "candidates"
 """``DIR/candidates/``: every built candidate's .room and .mission, and index.csv."""
 INDEX = "index.csv"
-SEARCH_COLUMNS = ("candidate", "batch", "search", "preset")
+SEARCH_COLUMNS = ("candidate", "batch", "search", "preset", "scenario")
 
 
 @dataclass(frozen=True)
@@ -61,9 +73,33 @@ def build_candidate(row: SearchRow, number: int, batch: int, point: tuple[float,
                            prefix=f"cand{number:04d}", version=version)
     try:
         suite = generate(request, folder)
-    except GenerationError as exc:
+        if row.scenario:
+            suite = with_scenario(suite, row, folder)
+    except (GenerationError, ScenarioRefused) as exc:
         return Candidate(number, batch, point, row, None, str(exc))
     return Candidate(number, batch, point, row, suite)
+
+
+def with_scenario(suite: Suite, row: SearchRow, folder: Path) -> Suite:
+    """The suite's pair with the row's scenario parameters put in (start phase, stressor
+    shift, faults), written again and checked with the `rei-gen check` rules;
+    ScenarioRefused when the room cannot take them or the checker refuses the result."""
+    pair = suite.pairs[0]
+    values = {name: float(text) for name, text in row.scenario}
+    plan = apply_to_plan(pair.plan, values)
+    request = suite.request
+    provenance = Provenance(request.version, request.strategy, suite.design.design,
+                            request.seed, pair.index, pair.design_row, pair.attempts)
+    lines = room_text(pair.name, plan, provenance).split("\n")
+    at = next(k for k, line in enumerate(lines) if line.startswith("// descriptors:"))
+    room = "\n".join([*lines[:at + 1], comment(values), *lines[at + 1:]])
+    mission = with_faults(mission_text(f"{pair.name}_mission", pair.room_file, plan), values)
+    errors = check_pair(folder / pair.room_file, room, folder / pair.mission_file, mission)
+    if errors:
+        raise ScenarioRefused(f"the checker refused the candidate with "
+                              f"{comment(values)[3:]}: {errors[0]}")
+    return replace(suite, pairs=(replace(pair, room_text=room, mission_text=mission,
+                                         plan=plan),))
 
 
 def write_candidates(candidates: Sequence[Candidate], folder: Path, strategy: str,
@@ -83,7 +119,8 @@ def write_candidates(candidates: Sequence[Candidate], folder: Path, strategy: st
         row = next(csv.DictReader(io.StringIO(suite_index_csv(candidate.suite))))
         row.update(index=str(candidate.number), design="search", strategy=strategy)
         writer.writerow([row[c] for c in INDEX_COLUMNS]
-                        + [candidate.name, str(candidate.batch), strategy, preset])
+                        + [candidate.name, str(candidate.batch), strategy, preset,
+                           " ".join(f"{k}={v}" for k, v in candidate.row.scenario)])
     path = folder / INDEX
     write_atomic(path, out.getvalue().encode("utf-8"))
     return path

@@ -21,7 +21,7 @@ import json
 import math
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, TextIO
@@ -34,6 +34,7 @@ from rei.generators.rooms.design import (
     decode_point,
     search_dimensions,
 )
+from rei.generators.rooms.scenario import check_faults, parse_scenario
 from rei.generators.rooms.space import (
     FACTOR_NAMES,
     Interval,
@@ -73,6 +74,9 @@ class SearchConfig:
     preset: str = "small"
     levels: tuple[tuple[str, str], ...] = ()
     """Factor options as given (``max_speed`` -> ``0.05:2``): levels, or a LOW:HIGH range."""
+    scenario: tuple[tuple[str, str], ...] = ()
+    """Scenario parameters' ranges as given (``phase`` -> ``0:20``, ``laser_noise.sigma``
+    -> ``0.01:0.1``): generators/rooms/scenario.py."""
     layout: int | None = None
     """A fixed construction seed (the layout is then not searched)."""
     strategy: str = "tpe"
@@ -93,6 +97,7 @@ class SearchConfig:
     def to_json(self) -> dict[str, Any]:
         data = asdict(self)
         data["levels"] = [list(p) for p in self.levels]
+        data["scenario"] = [list(p) for p in self.scenario]
         data["measures"] = list(self.measures)
         if self.vepl_parameters:  # a search without them keeps the shape it always had
             data["vepl_parameters"] = dict(self.vepl_parameters)
@@ -104,6 +109,8 @@ class SearchConfig:
     def from_json(data: dict[str, Any]) -> SearchConfig:
         config = dict(data["config"])
         config["levels"] = tuple(tuple(p) for p in config["levels"])
+        # A search.json from before scenario parameters existed searched none.
+        config["scenario"] = tuple(tuple(p) for p in config.get("scenario", ()))
         config["measures"] = tuple(config["measures"])
         if "vepl_parameters" in config:
             config["vepl_parameters"] = tuple(sorted(
@@ -123,9 +130,13 @@ class SearchConfig:
                 overrides[name] = tuple(v.strip() for v in text.split(",") if v.strip())
         return preset_space(self.preset).replaced(overrides), intervals
 
+    def scenario_ranges(self) -> tuple[Interval, ...]:
+        return tuple(parse_scenario(name, text) for name, text in self.scenario)
+
     def dimensions(self) -> tuple[ParameterSpace, tuple[SearchDimension, ...]]:
         space, intervals = self.space()
-        return space, search_dimensions(space, intervals, self.layout)
+        return space, search_dimensions(space, intervals, self.layout,
+                                        self.scenario_ranges())
 
 
 def check_config(config: SearchConfig) -> tuple[ParameterSpace, tuple[SearchDimension, ...]]:
@@ -154,6 +165,12 @@ def check_config(config: SearchConfig) -> tuple[ParameterSpace, tuple[SearchDime
     for name, _ in config.levels:
         if name not in FACTOR_NAMES:
             raise ParameterError(name, f"a factor ({', '.join(FACTOR_NAMES)})", f"'{name}'")
+    names = [name for name, _ in config.scenario]
+    if len(set(names)) != len(names):
+        twice = sorted({n for n in names if names.count(n) > 1})
+        raise ParameterError("fault-range", "each scenario parameter once",
+                             f"{', '.join(twice)} more than once")
+    check_faults(config.scenario_ranges())
     if config.layout is not None and not 0 <= config.layout < LAYOUT_SEEDS:
         raise SearchError(f"--layout: expected a construction seed from 0 to "
                           f"{LAYOUT_SEEDS - 1}, found {config.layout}")
@@ -294,9 +311,14 @@ def _open_folder(root: Path, config: SearchConfig) -> None:
 
 
 def run_search(config: SearchConfig, root: Path, engine: CampaignEngine,
-               provenance: dict[str, Any], *, stream: TextIO | None = None) -> SearchResult:
+               provenance: dict[str, Any], *, stream: TextIO | None = None,
+               until: Callable[[Sequence[CandidateResult]], bool] | None = None
+               ) -> SearchResult:
     """Run (or resume) the search in ``root``; SearchError for options it cannot use.
-    KeyboardInterrupt passes through with every finished run recorded."""
+    KeyboardInterrupt passes through with every finished run recorded. ``until(results)``,
+    asked after every batch with all results so far, ends the search early when True (a
+    benchmark's stop at its first *confirmed* failure); it must depend only on the results,
+    so a resumed search stops where an uninterrupted one did."""
     space, dims = check_config(config)
     _open_folder(root, config)
     strategy = make_strategy(config.strategy, dims, config.seed % 2**32, config.batch,
@@ -348,6 +370,8 @@ def run_search(config: SearchConfig, root: Path, engine: CampaignEngine,
             progress.update(results)
             if config.stop_on_failure and any(r.failed for r in results):
                 break
+            if until is not None and until(results):
+                break
     finally:
         progress.finish()
         write_atomic(root / SEARCH_TABLE, search_table(results, dims).encode("utf-8"))
@@ -389,7 +413,7 @@ def search_table(results: Sequence[CandidateResult], dims: Sequence[SearchDimens
                      "failed_requirements", *names, "problem"])
     for r in results:
         c = r.candidate
-        levels = dict(c.row.levels)
+        levels = dict(c.row.levels) | dict(c.row.scenario)
         levels["layout"] = str(c.row.layout)
         record = r.record
         failed = ""
