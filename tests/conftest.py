@@ -1,5 +1,5 @@
 """Shared fixtures: the examples, temporary REI files, and real external tools; and how the
-suite is spread over parallel workers (pytest-xdist, `bash scripts/test` runs `-n auto`).
+suite is spread over parallel workers (pytest-xdist, `bash scripts/test` runs `-n logical`).
 
 A test that needs an external tool (Debian's `ign`, Chromium) is skipped on a developer's
 machine that lacks it, but fails in CI (CI=true), where .ci/run installs it: a green CI
