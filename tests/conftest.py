@@ -1,5 +1,5 @@
 """Shared fixtures: the examples, temporary REI files, and real external tools; and how the
-suite is spread over parallel workers (pytest-xdist, `bash scripts/test` runs `-n auto`).
+suite is spread over parallel workers (pytest-xdist, `bash scripts/test` runs `-n logical`).
 
 A test that needs an external tool (Debian's `ign`, Chromium) is skipped on a developer's
 machine that lacks it, but fails in CI (CI=true), where .ci/run installs it: a green CI
@@ -15,10 +15,11 @@ suffix xdist 3.8 writes into node ids, so its groups are not kept together.)
 
 from __future__ import annotations
 
+import fcntl
 import os
 import shutil
 import subprocess
-from collections.abc import Generator
+from collections.abc import Callable, Generator
 from pathlib import Path
 
 import pytest
@@ -54,6 +55,27 @@ def chromium(page: Path, tmp_path: Path, *args: str) -> subprocess.CompletedProc
     return subprocess.run([program, *CHROMIUM_FLAGS, f"--user-data-dir={profile}", *args,
                            page.as_uri()], capture_output=True, text=True, timeout=180,
                           check=True)
+
+
+def made_once(tmp_path_factory: pytest.TempPathFactory, name: str,
+              make: Callable[[Path], None]) -> Path:
+    """A folder ``make`` fills once per test session, whichever worker asks for it first, for
+    expensive real runs that test files on several workers read (a session-scoped fixture alone
+    is made once per worker). The workers' temporary folders share a parent: the first worker
+    to take the lock there makes the folder, the others wait for it and read it. ``make`` writes
+    only into the folder it is given; the tests only read it. If ``make`` fails, the next
+    worker that asks tries again (and fails the same way: each reports it)."""
+    base = tmp_path_factory.getbasetemp()
+    root = base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
+    folder = root / f"made-once-{name}"
+    with (root / f"made-once-{name}.lock").open("a") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+        if not (folder / ".made").is_file():
+            shutil.rmtree(folder, ignore_errors=True)
+            folder.mkdir()
+            make(folder)
+            (folder / ".made").touch()
+    return folder
 
 
 def slow_tests(items: list[pytest.Item]) -> dict[str, int]:

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import EXAMPLES, REPO, require_tool
+from tests.conftest import EXAMPLES, REPO, made_once, require_tool
 
 SAFETY_LIMIT = 600.0
 """Seconds after which a stuck command fails instead of hanging CI (not a performance limit)."""
@@ -35,16 +35,17 @@ def rei(*args: str) -> subprocess.CompletedProcess[str]:
 @pytest.fixture(scope="session")
 def recorded(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     """name -> the output folder of a recorded `rei run` (trace.jsonl, recording.mcap,
-    events.csv, summary.json)."""
-    root = tmp_path_factory.mktemp("watched")
-    out = {}
-    for name, (mission, duration, extra) in RUNS.items():
-        folder = root / name
-        done = rei("run", str(mission), "-o", str(folder), "--record", "--duration", duration,
-                   *extra)
-        assert done.returncode == {"pass": 0, "fail": 1}[name], done.stdout + done.stderr
-        out[name] = folder
-    return out
+    events.csv, summary.json), recorded once for the whole session (the view tests of either
+    worker read the same folders)."""
+
+    def record(root: Path) -> None:
+        for name, (mission, duration, extra) in RUNS.items():
+            done = rei("run", str(mission), "-o", str(root / name), "--record", "--duration",
+                       duration, *extra)
+            assert done.returncode == {"pass": 0, "fail": 1}[name], done.stdout + done.stderr
+
+    root = made_once(tmp_path_factory, "watched", record)
+    return {name: root / name for name in RUNS}
 
 
 class Terminal:

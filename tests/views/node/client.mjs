@@ -18,10 +18,16 @@ const { MessageReader } = serialization;
 const url = process.argv[2];
 const idleMs = process.argv[3] ? Number(process.argv[3]) : 0;
 let idle = null;
+// process.exit drops the lines a full stdout pipe has not taken yet (a reader slower than the
+// messages, as on a loaded machine: the test then read a line cut short): exit only once
+// everything written before has gone out.
+function finish() {
+  process.stdout.write("", () => process.exit(0));
+}
 function stillHere() {
   if (idleMs > 0) {
     clearTimeout(idle);
-    idle = setTimeout(() => process.exit(0), idleMs);
+    idle = setTimeout(finish, idleMs);
   }
 }
 const ws = new WebSocket(url, ["foxglove.sdk.v1"]);
@@ -70,4 +76,4 @@ client.on("message", ({ subscriptionId, timestamp, data }) => {
 client.on("error", (error) => {
   process.stderr.write(`client error: ${error}\n`);
 });
-client.on("close", () => process.exit(0));
+client.on("close", finish);
