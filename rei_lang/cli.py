@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from rei.lang.cli_support import build_parser, run_main
+from rei.lang.cli_support import build_parser, command_word, run_main
 
 DESCRIPTION = """\
 Check .room, .mission and .vepl files, and generate artifacts from them.
@@ -14,7 +14,7 @@ exit status: 0 ok, 2 invalid input (every problem is printed as FILE:LINE:COL: R
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser("rei-gen", DESCRIPTION, "rei.lang.commands")
+    parser = build_parser("rei-gen", DESCRIPTION, "rei.lang.commands", command_word(argv))
     return run_main(parser, argv)
 
 

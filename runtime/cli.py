@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from rei.lang.cli_support import build_parser, run_main
+from rei.lang.cli_support import build_parser, command_word, run_main
 
 DESCRIPTION = """\
 Run REI missions in pybullet with the robot's navigation software in the loop, monitor them
@@ -16,7 +16,7 @@ exit status: 0 every requirement passed, 1 a requirement failed, 2 invalid input
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser("rei", DESCRIPTION, "rei.runtime.commands")
+    parser = build_parser("rei", DESCRIPTION, "rei.runtime.commands", command_word(argv))
     return run_main(parser, argv)
 
 

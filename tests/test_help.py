@@ -157,3 +157,36 @@ def test_rooms_shows_progress_on_a_terminal_only(tmp_path: Path) -> None:
     # The display changes nothing in the files.
     for name in ("index.csv", "room_0001.room", "room_0006.mission"):
         assert (tmp_path / "piped" / name).read_bytes() == (tmp_path / "tty" / name).read_bytes()
+
+
+@pytest.mark.parametrize("program", sorted(PROGRAMS))
+def test_a_command_line_builds_only_its_own_commands_parser(program: str) -> None:
+    """`rei run …` imports and builds the run command alone (every command's module costs
+    ~0.45 CPU s per process a campaign starts); the same parser as in the full build, and
+    anything else (no word, an option, a misspelling, a module without a command) gets the
+    full listing and its errors."""
+    description, package = PROGRAMS[program]
+    full = commands(build_parser(program, description, package))
+    assert len(full) > 4
+    for name, whole in full.items():
+        alone = commands(build_parser(program, description, package, name))
+        assert set(alone) == {name}
+        assert alone[name].format_help() == whole.format_help()
+    for word in (None, "--help", "rnu", "run_config", "cli_support"):
+        assert set(commands(build_parser(program, description, package, word))) == set(full)
+
+
+def test_rei_run_imports_no_other_commands_module() -> None:
+    probe = ("import sys\n"
+             "from rei.runtime.cli import main\n"
+             "try:\n"
+             "    main(['run', '--help'])\n"
+             "except SystemExit:\n"
+             "    pass\n"
+             "print(sorted(m for m in sys.modules if m.startswith('rei.runtime.commands.')))\n")
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                          check=True, timeout=600)
+    loaded = done.stdout.strip().splitlines()[-1]
+    assert "'rei.runtime.commands.run'" in loaded
+    for other in ("campaign", "search", "shrink", "watch", "bus", "demo"):
+        assert f"'rei.runtime.commands.{other}'" not in loaded, loaded
