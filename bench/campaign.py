@@ -177,6 +177,13 @@ def figures(args: argparse.Namespace, root: Path) -> int:
                 measured(cut, root / f"cut-{label}-{i}", args.compare, on))
             rows.setdefault(f"demo {label}", []).append(
                 demo(root / f"demo-{label}-{i}", args.compare, on))
+        if args.compare == "pages":
+            # start-up alone: a run cut at 0.1 s does not pass, so it draws its full page
+            # under both settings above; without any page, what is left is the start-up
+            with setting(args.compare, True):
+                cpu = children_cpu()
+                wall = timed(cut, LocalEngine(2, pages="none"), root / f"cut-none-{i}")
+                rows.setdefault("start-up none", []).append((wall, children_cpu() - cpu))
         print(f"  round {i + 1} (load average before: {loads[-1]:.2f}): " + ", ".join(
             f"{k} {v[-1][0]:.1f} s wall / {v[-1][1]:.1f} CPU s" for k, v in rows.items()),
             flush=True)
@@ -200,6 +207,9 @@ def figures(args: argparse.Namespace, root: Path) -> int:
             ("`rei demo --workers 2`: CPU s", "demo", lambda w, c: c)):
         before, after = show(*best(f"{key} before")), show(*best(f"{key} after"))
         print(f"| {title} | {before:.3f} | {after:.3f} | {after / before:.2f} |")
+    if "start-up none" in rows:
+        print(f"| start-up: CPU s per run without any page (--pages none) | | "
+              f"{best('start-up none')[1] / runs:.3f} | |")
     for title, (before, after) in sample.items():
         print(f"| {title} | {before:.1f} | {after:.1f} | {after / before:.2f} |")
     print()

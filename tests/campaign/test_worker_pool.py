@@ -7,15 +7,21 @@ Real runs of the bundled examples (pybullet, the reference navigator), real fork
 
 from __future__ import annotations
 
+import io
 import os
 import sys
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 import pytest
 
-from rei.runtime.campaign import LocalEngine, plan_campaign
-from rei.runtime.campaign.engines import WorkerPool, kept_workers
+from rei.runtime.campaign import LocalEngine, RunResult, plan_campaign
+from rei.runtime.campaign.engines import WorkDirFactory, WorkerPool, kept_workers
 from rei.runtime.campaign.plan import RunSpec
+from rei.runtime.search import run_search
+from rei.runtime.search.run import SearchConfig
+from rei.runtime.shrink.case import load_case
+from rei.runtime.shrink.oracle import FailureOracle, RunSettings
 from rei.runtime.warm import WARM_VARIABLE
 
 from .records import EXAMPLES
@@ -94,3 +100,51 @@ def test_a_closed_pool_refuses_work_and_a_cold_campaign_keeps_working(
     monkeypatch.setenv(WARM_VARIABLE, "off")
     with kept_workers(LocalEngine(1)) as engine:
         assert batch(engine, [spec("simple_wall", 0.5)], tmp_path / "cold") == [set()]
+
+
+class Watching:
+    """An engine that runs on ``inner`` and notes the fork servers alive at each result."""
+
+    name = "local"
+
+    def __init__(self, inner: LocalEngine) -> None:
+        self.inner = inner
+        self.seen: list[frozenset[int]] = []
+
+    def describe(self) -> dict[str, object]:
+        return self.inner.describe()
+
+    def execute(self, specs: Sequence[RunSpec], work_dir: WorkDirFactory
+                ) -> Iterator[tuple[RunSpec, Path, RunResult]]:
+        for item in self.inner.execute(specs, work_dir):
+            self.seen.append(frozenset(servers_of(os.getpid())))
+            yield item
+
+
+def test_a_search_runs_every_batch_on_the_same_servers(plugins: Path, tmp_path: Path) -> None:
+    config = SearchConfig(preset="small", strategy="random", seed=0, budget=4, batch=2,
+                          duration=1.0)
+    with kept_workers(LocalEngine(1, pages="none")) as engine:
+        watching = Watching(engine)
+        result = run_search(config, tmp_path / "search", watching, {}, stream=io.StringIO())
+    simulated = sum(r.record is not None for r in result.results)
+    assert simulated >= 3 and len(watching.seen) == simulated  # more than one batch ran
+    assert len(set(watching.seen)) == 1 and len(watching.seen[0]) == 1
+    assert not servers_of(os.getpid())
+
+
+def test_a_shrinks_oracle_judges_every_candidate_on_the_same_servers(
+        plugins: Path, tmp_path: Path) -> None:
+    settings = RunSettings(seeds=(0,), duration=0.5, workers=1)
+    case = load_case(EXAMPLES / "simple_wall" / "simple_wall.mission")
+    seen = []
+    with WorkerPool(1) as pool:
+        oracle = FailureOracle(settings, tmp_path / "work", tmp_path / "journal.jsonl",
+                               pool=pool)
+        for _ in range(2):
+            oracle.known.clear()  # judged again, as a new candidate is
+            assert oracle.outcomes(case)[0].verdict not in ("error", "invalid")
+            seen.append(servers_of(os.getpid()))
+    assert oracle.started == 2
+    assert len(seen[0]) == 1 and seen[0] == seen[1]
+    assert not servers_of(os.getpid())
