@@ -11,7 +11,9 @@ Targets (issue 8): scaling efficiency 1 -> 2 workers >= 90 %, Dask overhead < 10
 With --figures, instead: what users feel, before and after, alternating in the same
 invocation — runs per CPU minute of a medium campaign on 2 workers, the start-up CPU seconds
 per run (the same campaign with runs cut after --startup-duration simulated seconds), and the
-wall time of `rei demo` on 2 workers. --compare warm (default): before = REI_WARM=off (every
+wall time of `rei demo` on 2 workers. --compare pages: before = every run its full page
+(--pages all), after = full pages only for runs that did not pass (--pages failed, the
+default of campaigns; issue 26). --compare warm (default): before = REI_WARM=off (every
 process a fresh interpreter), after = warm workers (rei.runtime.warm: a fork server per worker,
 the simulation and the robot's host forked), the cache on in both; --compare cache: before =
 REI_CACHE_DIR=off, after = the campaign's cache. CPU time is every process of the campaign,
@@ -99,14 +101,26 @@ def children_cpu() -> float:
     return usage.ru_utime + usage.ru_stime
 
 
-SETTINGS = {"warm": ("REI_WARM", "off"), "cache": ("REI_CACHE_DIR", "off")}
-"""--compare: the variable that turns the measured feature off (before)."""
+SETTINGS = {"warm": ("REI_WARM", "off"), "cache": ("REI_CACHE_DIR", "off"),
+            "pages": ("--pages", "all")}
+"""--compare: the variable (or, for pages, the option) that turns the measured feature off
+(before)."""
+
+
+def pages(compare: str, on: bool) -> str:
+    """The campaigns' --pages: 'failed' (the default: full pages for runs that did not pass
+    only) after with --compare pages, 'all' (every run its full page, as before the option)
+    otherwise, so the warm and cache figures stay comparable with earlier ones."""
+    return "failed" if compare == "pages" and on else "all"
 
 
 @contextmanager
 def setting(compare: str, on: bool) -> Iterator[None]:
     """The feature off (before: its variable set to off) or on (after: the variable unset)
     for the processes started meanwhile."""
+    if compare == "pages":  # an option, not a variable (see ``pages``)
+        yield
+        return
     name, off = SETTINGS[compare]
     saved = os.environ.get(name)
     if on:
@@ -126,7 +140,7 @@ def measured(plan: CampaignPlan, out: Path, compare: str, on: bool) -> tuple[flo
     """(wall s, CPU s of all processes) of the campaign on 2 local workers."""
     with setting(compare, on):
         cpu = children_cpu()
-        wall = timed(plan, LocalEngine(2), out)
+        wall = timed(plan, LocalEngine(2, pages=pages(compare, on)), out)
         return wall, children_cpu() - cpu
 
 
@@ -136,7 +150,8 @@ def demo(out: Path, compare: str, on: bool) -> tuple[float, float]:
         cpu = children_cpu()
         start = time.perf_counter()
         subprocess.run([sys.executable, "-m", "rei.runtime.cli", "demo", "-o", str(out),
-                        "--workers", "2", "-q"], check=False, stdout=subprocess.DEVNULL,
+                        "--workers", "2", "--pages", pages(compare, on), "-q"], check=False,
+                       stdout=subprocess.DEVNULL,
                        stderr=subprocess.DEVNULL)
         return time.perf_counter() - start, children_cpu() - cpu
 
@@ -162,6 +177,13 @@ def figures(args: argparse.Namespace, root: Path) -> int:
                 measured(cut, root / f"cut-{label}-{i}", args.compare, on))
             rows.setdefault(f"demo {label}", []).append(
                 demo(root / f"demo-{label}-{i}", args.compare, on))
+        if args.compare == "pages":
+            # start-up alone: a run cut at 0.1 s does not pass, so it draws its full page
+            # under both settings above; without any page, what is left is the start-up
+            with setting(args.compare, True):
+                cpu = children_cpu()
+                wall = timed(cut, LocalEngine(2, pages="none"), root / f"cut-none-{i}")
+                rows.setdefault("start-up none", []).append((wall, children_cpu() - cpu))
         print(f"  round {i + 1} (load average before: {loads[-1]:.2f}): " + ", ".join(
             f"{k} {v[-1][0]:.1f} s wall / {v[-1][1]:.1f} CPU s" for k, v in rows.items()),
             flush=True)
@@ -185,6 +207,9 @@ def figures(args: argparse.Namespace, root: Path) -> int:
             ("`rei demo --workers 2`: CPU s", "demo", lambda w, c: c)):
         before, after = show(*best(f"{key} before")), show(*best(f"{key} after"))
         print(f"| {title} | {before:.3f} | {after:.3f} | {after / before:.2f} |")
+    if "start-up none" in rows:
+        print(f"| start-up: CPU s per run without any page (--pages none) | | "
+              f"{best('start-up none')[1] / runs:.3f} | |")
     for title, (before, after) in sample.items():
         print(f"| {title} | {before:.1f} | {after:.1f} | {after / before:.2f} |")
     print()
@@ -240,7 +265,8 @@ def alone(args: argparse.Namespace, root: Path) -> int:
                 cpu = children_cpu()
                 subprocess.run([sys.executable, "-m", "rei.runtime.cli", "run", str(mission),
                                 "-o", str(root / f"alone-{on}-{i}"), "--duration", "0.01",
-                                "-q"], check=False, stdout=subprocess.DEVNULL)
+                                "--page", pages(args.compare, on), "-q"], check=False,
+                               stdout=subprocess.DEVNULL)
                 found[on].append(children_cpu() - cpu)
     name, off = SETTINGS[args.compare]
     before, after = (statistics.median(found[on]) for on in (False, True))
@@ -265,7 +291,7 @@ def main() -> int:
                              "before and after (--compare)")
     parser.add_argument("--compare", choices=sorted(SETTINGS), default="warm",
                         help="with --figures: the feature turned off before and on after: "
-                             "warm workers (default) or the cache")
+                             "warm workers (default), the cache or the pages of passing runs")
     parser.add_argument("--sample", type=int, default=0, metavar="N",
                         help="with --figures: also N whole medium runs before and after, "
                              "and 1,000 runs extrapolated (default 0: not measured)")

@@ -26,6 +26,12 @@ failed but one could not be decided), error (the run itself broke), interrupted 
 the user), unjudged (no requirement was checked: ``rei run --no-monitor``)."""
 
 
+PAGE_POLICIES = ("all", "failed", "none")
+"""Which runs get their page, report.html (`rei run --page`, `rei campaign --pages`): ``all``
+the full page; ``failed`` the full page for a run that did not pass, a brief one (verdicts,
+no plots or map) for a run that did; ``none`` no page. Here, not in rei.runtime.report, so
+that the commands' parsers need not import the report's libraries."""
+
 @dataclass(frozen=True)
 class Verdict:
     requirement: str

@@ -105,6 +105,8 @@ class RunRequest:
     wait_monitor: bool = False
     parameters: tuple[tuple[str, float], ...] = ()
     """The specification's parameter values of ``--param``, sorted by name."""
+    page: str = "all"
+    """Which page to write (``--page``: rei.runtime.report.run_page.PAGE_POLICIES)."""
 
     def to_json(self) -> str:
         return json.dumps(asdict(self), allow_nan=False)

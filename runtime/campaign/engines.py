@@ -9,13 +9,14 @@ raise because one run failed: a crash or a hang is a result.
 from __future__ import annotations
 
 import concurrent.futures
+import contextlib
 import threading
 import uuid
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import ModuleType
-from typing import Protocol, runtime_checkable
+from typing import Protocol, TypeVar, runtime_checkable
 
 from rei.runtime.campaign.errors import CampaignError
 from rei.runtime.campaign.execute import (
@@ -25,6 +26,7 @@ from rei.runtime.campaign.execute import (
     execute_run_remote,
 )
 from rei.runtime.campaign.plan import RunSpec
+from rei.runtime.results import PAGE_POLICIES
 from rei.runtime.warm.server import WarmWorkers
 
 WorkDirFactory = Callable[[RunSpec], Path]
@@ -57,43 +59,52 @@ def check_engine(engine: object) -> list[str]:
     return problems
 
 
-@dataclass(frozen=True)
-class LocalEngine:
-    """Runs at most ``workers`` runs at once, each in its own `rei run` process."""
+class WorkerPool:
+    """The local engine's worker threads, each with its fork server (rei.runtime.warm.server),
+    kept from one ``execute`` to the next until ``close``: a search's batches and a shrink's
+    candidates then pay the servers' imports once, not once per batch or candidate.
 
-    workers: int = 1
-    timeout: float | None = None
-    runner: tuple[str, ...] = DEFAULT_RUNNER
-    cache: Path | None = None
-    """Where the runs share generated worlds and automata (rei.runtime.cache); run_campaign
-    gives the campaign's own ``DIR/cache`` when this is None."""
-    name: str = field(default="local", init=False)
+    A thread lives until ``close`` (a fork server dies with the thread that started it, so
+    closing ends the servers too, and a killed campaign takes them along). Runs stay a
+    process each: nothing of one run is kept for the next but imported code, which the
+    servers check for staleness before every fork.
+    """
 
-    def __post_init__(self) -> None:
-        if self.workers < 1:
-            raise CampaignError(f"--workers: expected at least 1, found {self.workers}")
-
-    def describe(self) -> dict[str, object]:
-        return {"engine": self.name, "workers": self.workers}
-
-    def execute(self, specs: Sequence[RunSpec], work_dir: WorkDirFactory
-                ) -> Iterator[tuple[RunSpec, Path, RunResult]]:
-        stop = threading.Event()
+    def __init__(self, workers: int) -> None:
+        if workers < 1:
+            raise CampaignError(f"--workers: expected at least 1, found {workers}")
+        self.workers = workers
         # Threads only wait on the run processes; the isolation is the process per run.
-        pool = concurrent.futures.ThreadPoolExecutor(self.workers, thread_name_prefix="rei-run")
-        # A fork server per thread, imports done once per worker (rei.runtime.warm.server).
-        warm = WarmWorkers()
+        self._threads = concurrent.futures.ThreadPoolExecutor(
+            workers, thread_name_prefix="rei-run")
+        self.warm = WarmWorkers()
+        self._closed = False
+
+    @property
+    def closed(self) -> bool:
+        return self._closed
+
+    def execute(self, specs: Sequence[RunSpec], work_dir: WorkDirFactory, *,
+                timeout: float | None = None, runner: tuple[str, ...] = DEFAULT_RUNNER,
+                cache: Path | None = None, pages: str = "all"
+                ) -> Iterator[tuple[RunSpec, Path, RunResult]]:
+        """Run ``specs`` on these workers, at most ``workers`` at once; when the caller
+        stops (Ctrl-C, an error, a closed iterator) the runs in flight are stopped and
+        waited for, and the workers stay for the next call."""
+        if self._closed:
+            raise CampaignError("the engine's workers were closed")
+        stop = threading.Event()
+        pending: dict[concurrent.futures.Future[RunResult], tuple[RunSpec, Path]] = {}
         try:
-            pending: dict[concurrent.futures.Future[RunResult], tuple[RunSpec, Path]] = {}
             queue = list(specs)
             queue.reverse()
 
             def submit() -> None:
                 spec = queue.pop()
                 folder = work_dir(spec)
-                future = pool.submit(execute_run, spec, folder, timeout=self.timeout,
-                                     runner=self.runner, stop=stop, cache=self.cache,
-                                     warm=warm)
+                future = self._threads.submit(execute_run, spec, folder, timeout=timeout,
+                                              runner=runner, stop=stop, cache=cache,
+                                              warm=self.warm, pages=pages)
                 pending[future] = (spec, folder)
 
             # Submitting only as workers free up keeps partial folders to the running ones.
@@ -109,8 +120,75 @@ class LocalEngine:
                     yield spec, folder, future.result()
         finally:
             stop.set()
-            pool.shutdown(wait=True, cancel_futures=True)
-            warm.close()
+            for future in pending:
+                future.cancel()
+            # the runs in flight end at once (interrupted); none outlives this call
+            concurrent.futures.wait(pending)
+
+    def close(self) -> None:
+        """Stop the threads and their fork servers (idempotent)."""
+        self._closed = True
+        self._threads.shutdown(wait=True, cancel_futures=True)
+        self.warm.close()
+
+    def __enter__(self) -> WorkerPool:
+        return self
+
+    def __exit__(self, *_: object) -> None:
+        self.close()
+
+
+@dataclass(frozen=True)
+class LocalEngine:
+    """Runs at most ``workers`` runs at once, each in its own `rei run` process."""
+
+    workers: int = 1
+    timeout: float | None = None
+    runner: tuple[str, ...] = DEFAULT_RUNNER
+    cache: Path | None = None
+    """Where the runs share generated worlds and automata (rei.runtime.cache); run_campaign
+    gives the campaign's own ``DIR/cache`` when this is None."""
+    pages: str = "all"
+    """Which runs get their page: `rei run --page` (rei.runtime.results.PAGE_POLICIES)."""
+    pool: WorkerPool | None = field(default=None, compare=False, repr=False)
+    """Workers kept across ``execute`` calls (``kept_workers``); None: each call starts its
+    own and ends them when it returns."""
+    name: str = field(default="local", init=False)
+
+    def __post_init__(self) -> None:
+        if self.workers < 1:
+            raise CampaignError(f"--workers: expected at least 1, found {self.workers}")
+        check_pages(self.pages)
+
+    def describe(self) -> dict[str, object]:
+        return {"engine": self.name, "workers": self.workers, "pages": self.pages}
+
+    def execute(self, specs: Sequence[RunSpec], work_dir: WorkDirFactory
+                ) -> Iterator[tuple[RunSpec, Path, RunResult]]:
+        pool = self.pool if self.pool is not None else WorkerPool(self.workers)
+        try:
+            yield from pool.execute(specs, work_dir, timeout=self.timeout,
+                                    runner=self.runner, cache=self.cache, pages=self.pages)
+        finally:
+            if self.pool is None:
+                pool.close()
+
+
+EngineT = TypeVar("EngineT", bound=CampaignEngine)
+
+
+@contextlib.contextmanager
+def kept_workers(engine: EngineT) -> Iterator[EngineT]:
+    """``engine`` with one pool of workers (and fork servers) for the whole block, closed
+    when it ends however it ends (Ctrl-C, an error): for commands that call ``execute``
+    more than once (search's batches, shrink's candidates). Engines without local workers
+    (Dask keeps its own per worker) come back as they are."""
+    if not isinstance(engine, LocalEngine) or engine.pool is not None:
+        yield engine
+        return
+    with WorkerPool(engine.workers) as pool:
+        kept: EngineT = replace(engine, pool=pool)
+        yield kept
 
 
 @dataclass(frozen=True)
@@ -120,10 +198,15 @@ class DaskEngine:
     scheduler: str
     timeout: float | None = None
     connect_timeout: float = 30.0
+    pages: str = "all"
+    """Which runs get their page: `rei run --page` (rei.runtime.results.PAGE_POLICIES)."""
     name: str = field(default="dask", init=False)
 
+    def __post_init__(self) -> None:
+        check_pages(self.pages)
+
     def describe(self) -> dict[str, object]:
-        return {"engine": self.name, "scheduler": self.scheduler}
+        return {"engine": self.name, "scheduler": self.scheduler, "pages": self.pages}
 
     def execute(self, specs: Sequence[RunSpec], work_dir: WorkDirFactory
                 ) -> Iterator[tuple[RunSpec, Path, RunResult]]:
@@ -142,7 +225,7 @@ class DaskEngine:
                 # pure=False: a repeat is a new experiment even with equal arguments;
                 # retries=0: a run that killed its worker is a result, not something to hide.
                 future = client.submit(execute_run_remote, spec, str(folder), self.timeout,
-                                       pure=False,
+                                       None, self.pages, pure=False,
                                        key=f"rei-run-{spec.run_id}-{uuid.uuid4().hex[:8]}")
                 futures.append(future)
                 by_key[future.key] = (spec, folder)
@@ -156,6 +239,12 @@ class DaskEngine:
                 yield spec, folder, result
         finally:
             client.close()
+
+
+def check_pages(pages: str) -> None:
+    if pages not in PAGE_POLICIES:
+        raise CampaignError(f"--pages: expected one of {', '.join(PAGE_POLICIES)}, found "
+                            f"{pages!r}")
 
 
 def _import_distributed() -> ModuleType:

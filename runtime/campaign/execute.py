@@ -107,12 +107,13 @@ def _read_summary(path: Path) -> tuple[dict[str, Any] | None, str]:
 def execute_run(spec: RunSpec, work_dir: Path, *, timeout: float | None = None,
                 runner: Sequence[str] = DEFAULT_RUNNER,
                 stop: threading.Event | None = None, cache: Path | None = None,
-                warm: WarmWorkers | None = None) -> RunResult:
+                warm: WarmWorkers | None = None, pages: str = "all") -> RunResult:
     """Run ``spec`` with its output in ``work_dir`` (created); kill it after ``timeout`` s.
     ``cache``: the run reuses generated worlds and automata from there (rei.runtime.cache).
     ``warm``: the `rei run` process is forked by this thread's fork server, its imports done
     (rei.runtime.warm.server), when the runner is REI's own and REI_WARM is not off; the
     same process otherwise, and watched, killed and judged the same way.
+    ``pages``: `rei run --page` (rei.runtime.results.PAGE_POLICIES), "all" as `rei run`.
 
     Setting ``stop`` kills the run at once and reports it interrupted (the campaign is ending);
     nothing else makes a run interrupted. On Linux the run dies with the calling thread, so
@@ -120,7 +121,7 @@ def execute_run(spec: RunSpec, work_dir: Path, *, timeout: float | None = None,
     """
     work_dir.mkdir(parents=True, exist_ok=True)
     limit = default_timeout(spec) if timeout is None else timeout
-    argv = [*runner, *spec.run_argv(str(work_dir))]
+    argv = [*runner, *spec.run_argv(str(work_dir)), *page_argv(pages)]
     with open_output(work_dir / "campaign-stdout.txt", binary=True) as out, \
             open_output(work_dir / "campaign-stderr.txt", binary=True) as err:
         # Its own process group and death with this thread (rei.runtime.processes): Ctrl-C
@@ -167,6 +168,12 @@ def execute_run(spec: RunSpec, work_dir: Path, *, timeout: float | None = None,
         return RunResult(spec.run_id, "crashed", code, wall, None,
                          f"exit status {code}, {problem}" + (f": {detail}" if detail else ""))
     return RunResult(spec.run_id, "ran", code, wall, summary, "")
+
+
+def page_argv(pages: str) -> list[str]:
+    """The `rei run` option for ``pages``: none for "all" (its default, and the same command
+    line campaigns gave before the option existed)."""
+    return [] if pages == "all" else ["--page", pages]
 
 
 class _ColdRun:
@@ -225,7 +232,7 @@ def _dask_worker_warm() -> WarmWorkers | None:
 
 
 def execute_run_remote(spec: RunSpec, work_dir: str, timeout: float | None = None,
-                       runner: Sequence[str] | None = None) -> RunResult:
+                       runner: Sequence[str] | None = None, pages: str = "all") -> RunResult:
     """The Dask task: run in a private folder on the worker, then deliver the run's files.
 
     The campaign process creates ``work_dir`` (unique and fresh) before submitting. When this
@@ -244,7 +251,7 @@ def execute_run_remote(spec: RunSpec, work_dir: str, timeout: float | None = Non
     with tempfile.TemporaryDirectory(prefix="rei-run-") as tmp:
         work = Path(tmp) / spec.run_id
         result = execute_run(spec, work, timeout=timeout, runner=program,
-                             warm=_dask_worker_warm())
+                             warm=_dask_worker_warm(), pages=pages)
         if shared:
             if target.is_dir():
                 for entry in sorted(work.iterdir()):

@@ -74,6 +74,7 @@ rei campaign examples/navigation/navigation.mission -o out/nav5 --repeat 5 --pas
 rei campaign suite/index.csv -o out/suite --controller my_nav:Navigator -v
 rei campaign examples/ -o out/campaign --repeat 3   # again: resumes, runs only what is missing
 rei campaign examples/ -o out/slow07 --param react_zone=0.7   # a robot that slows nearer
+rei campaign examples/ -o out/all-pages --pages all  # plots and map for passing runs too
 """
 
 
@@ -147,9 +148,21 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.set_defaults(func=run)
 
 
+def add_pages_argument(parser: argparse.ArgumentParser) -> None:
+    """--pages of `rei campaign`, `rei search` and `rei demo`: which runs get their page."""
+    from rei.runtime.results import PAGE_POLICIES  # noqa: PLC0415
+
+    parser.add_argument("--pages", choices=PAGE_POLICIES, default="failed",
+                        help="passed to `rei run --page`: 'failed' (default) draws the full "
+                             "page (plots, map) of every run that did not pass and a brief "
+                             "one (verdicts) for the others, which `rei page DIR` completes "
+                             "later; 'all' full pages for every run; 'none' no run pages "
+                             "(the campaign report still lists every run)")
+
+
 def add_engine_arguments(parser: argparse.ArgumentParser) -> None:
-    """--workers, --timeout, --engine and --scheduler: where the runs of `rei campaign` and
-    `rei search` execute (``engine_of`` reads them)."""
+    """--workers, --timeout, --engine, --scheduler and --pages: where and how the runs of
+    `rei campaign` and `rei search` execute (``engine_of`` reads them)."""
     parser.add_argument("--workers", type=positive_int, default=None, metavar="N",
                         help="runs at once with the local engine (default: number of CPUs)")
     parser.add_argument("--timeout", type=_seconds, default=None, metavar="S",
@@ -159,6 +172,7 @@ def add_engine_arguments(parser: argparse.ArgumentParser) -> None:
                         help="local worker processes (default) or a Dask distributed cluster")
     parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
                         help="Dask scheduler address, e.g. tcp://10.0.0.5:8786 (--engine dask)")
+    add_pages_argument(parser)
 
 
 def engine_of(args: argparse.Namespace) -> CampaignEngine:
@@ -169,10 +183,11 @@ def engine_of(args: argparse.Namespace) -> CampaignEngine:
         if not args.scheduler:
             raise CampaignError("--engine dask: expected --scheduler ADDRESS "
                                 "(start one with `dask scheduler`)")
-        return DaskEngine(args.scheduler, timeout=args.timeout)
+        return DaskEngine(args.scheduler, timeout=args.timeout, pages=args.pages)
     if args.scheduler:
         raise CampaignError("--scheduler is only used with --engine dask")
-    return LocalEngine(args.workers or os.cpu_count() or 1, timeout=args.timeout)
+    return LocalEngine(args.workers or os.cpu_count() or 1, timeout=args.timeout,
+                       pages=args.pages)
 
 
 def _faults(args: argparse.Namespace) -> tuple[str, ...]:

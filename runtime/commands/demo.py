@@ -21,7 +21,7 @@ from pathlib import Path
 
 from rei.lang.cli_support import EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_OK
 from rei.lang.vepl_parameters import add_parameter_option, parameter_values
-from rei.runtime.commands.campaign import EXIT_STATUS_HELP, positive_int
+from rei.runtime.commands.campaign import EXIT_STATUS_HELP, add_pages_argument, positive_int
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
@@ -69,6 +69,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                         help="monitoring specification passed to every `rei run` (default: "
                              "REI's default.vepl)")
     add_parameter_option(parser, "passed to every `rei run`: ")
+    add_pages_argument(parser)
     add_verbosity(parser, CAMPAIGN_VERBOSE_HELP)  # as `rei campaign`
     parser.set_defaults(func=run)
 
@@ -144,7 +145,7 @@ def run(args: argparse.Namespace) -> int:
     inputs = generate_suite(out / "suite", args.count, args.preset, args.seed)
     plan = plan_campaign(inputs, repeat=args.repeat, seed=args.seed, controller=args.controller,
                          vepl=args.vepl, vepl_parameters=parameters)
-    engine = LocalEngine(args.workers or os.cpu_count() or 1)
+    engine = LocalEngine(args.workers or os.cpu_count() or 1, pages=args.pages)
     who = f" of {args.controller}" if args.controller else ""
     say(f"2/3 running {len(plan.runs)} runs{who} on {engine.workers} worker(s) into "
         f"{out / 'campaign'}")

@@ -51,7 +51,7 @@ from rei.lang.vepl_parameters import (
 )
 from rei.runtime.commands.run_config import apply_run_config, defer_defaults
 from rei.runtime.errors import RunError
-from rei.runtime.results import RunSummary, judge
+from rei.runtime.results import PAGE_POLICIES, RunSummary, judge
 
 if TYPE_CHECKING:
     from rei.runtime.collector import SampleSink
@@ -105,6 +105,7 @@ rei run examples/navigation/navigation.mission -o out/nav --seed 3 \\
 rei run examples/navigation/navigation.mission -o out/mine --controller my_nav:Navigator
 rei run examples/navigation/navigation.mission -o out/rec --record -q  # + recording.mcap
 rei run examples/navigation/navigation.mission -o out/n07 --param react_zone=0.7  # your field
+rei run examples/simple_wall/simple_wall.mission -o out/quick --page failed  # plots if failed
 """
 
 
@@ -162,6 +163,12 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                              "functions the specification declares with 'function'")
     parser.add_argument("--no-monitor", action="store_true",
                         help="record the trace only (monitor it later with `rei replay`)")
+    parser.add_argument("--page", choices=PAGE_POLICIES, default="all",
+                        help="report.html: 'all' (default) the full page with plots and map; "
+                             "'failed' the full page only if the run did not pass, a brief "
+                             "one (verdicts, no plots) if it did: `rei page DIR` draws the "
+                             "full one later; 'none' no page (what campaigns save, "
+                             "docs/campaign.md)")
     parser.add_argument("--record", action="store_true",
                         help="also write recording.mcap: the run as an MCAP file with ROS 2 "
                              "messages (/scan, /odom, /cmd_vel, /tf, /world/markers, "
@@ -435,7 +442,7 @@ def execute_request(request: RunRequest, probe: RunProbe) -> tuple[int, dict[str
         bus=request.bus, bus_credentials=Path(request.bus_credentials)
         if request.bus_credentials is not None else None, bus_wait=request.bus_wait,
         wait_monitor=request.wait_monitor, parameters=request.parameters)
-    page = write_page(Path(request.output)) if request.monitor else None
+    page = write_page(Path(request.output), policy=request.page) if request.monitor else None
     written = (Path(request.output) / SUMMARY).read_bytes()
     return exit_code(summary, request.monitor), {
         "wall": record.wall_seconds, "cpu": record.cpu_seconds,
@@ -477,7 +484,8 @@ def run(args: argparse.Namespace) -> int:
         echo_events=args.verbose, functions=args.functions, record=args.record,
         faults=tuple(f.text() for f in args.fault or ()), bus=args.bus,
         bus_credentials=os.path.abspath(args.credentials) if args.credentials else None,
-        bus_wait=args.bus_wait, wait_monitor=args.wait_for_monitor, parameters=parameters)
+        bus_wait=args.bus_wait, wait_monitor=args.wait_for_monitor, parameters=parameters,
+        page=args.page)
     try:
         ended = supervise(request)
     except BaseException:
@@ -509,14 +517,15 @@ def _read_summary(out: Path) -> RunSummary | None:
         return None
 
 
-def write_page(out_dir: Path, trace: Path | None = None) -> Path | None:
-    """Write the run's report.html; a page that cannot be written is reported (on stderr),
-    never allowed to change the run's verdict or exit status."""
+def write_page(out_dir: Path, trace: Path | None = None, policy: str = "all") -> Path | None:
+    """Write the run's report.html as ``policy`` asks (``--page``); a page that cannot be
+    written is reported (on stderr), never allowed to change the run's verdict or exit
+    status."""
     from rei.lang.errors import ReiError  # noqa: PLC0415
-    from rei.runtime.report.run_page import write_run_page  # noqa: PLC0415  (matplotlib)
+    from rei.runtime.report.run_page import write_run_page  # noqa: PLC0415
 
     try:
-        return write_run_page(out_dir, trace)
+        return write_run_page(out_dir, trace, policy=policy)
     except (ReiError, OSError) as exc:
         print(f"  report.html not written: {exc}", file=sys.stderr)
         return None

@@ -173,6 +173,7 @@ def config_of(args: argparse.Namespace) -> SearchConfig:
 
 def run(args: argparse.Namespace) -> int:
     from rei.runtime.campaign import CampaignError  # noqa: PLC0415
+    from rei.runtime.campaign.engines import kept_workers  # noqa: PLC0415
     from rei.runtime.campaign.provenance import collect  # noqa: PLC0415
     from rei.runtime.commands.campaign import (  # noqa: PLC0415
         _terminate_as_interrupt,
@@ -198,8 +199,10 @@ def run(args: argparse.Namespace) -> int:
               f"{config.batch}, seed {config.seed}, on {args.engine} engine -> {args.output}",
               file=sys.stderr)
     try:
-        with _terminate_as_interrupt(), open(os.devnull, "w", encoding="utf-8") as silent:
-            result = run_search(config, args.output, engine, provenance,
+        # One pool of workers (and fork servers) for every batch, closed when the search ends.
+        with _terminate_as_interrupt(), open(os.devnull, "w", encoding="utf-8") as silent, \
+                kept_workers(engine) as kept:
+            result = run_search(config, args.output, kept, provenance,
                                 stream=silent if args.quiet else None)
     except KeyboardInterrupt:
         print(f"rei search: interrupted; the finished runs are kept in {args.output}. Run the "

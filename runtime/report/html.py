@@ -15,8 +15,10 @@ from __future__ import annotations
 
 import math
 from collections import Counter
+from collections.abc import Sequence
 from dataclasses import dataclass
 from importlib import resources
+from pathlib import Path
 
 import jinja2
 
@@ -27,12 +29,12 @@ from rei.runtime.campaign.stats import (
     classify_pairs,
     mission_verdicts,
 )
-from rei.runtime.campaign.store import RunRecord, required_pass_rate, verdict_reason
+from rei.runtime.campaign.store import RUNS, RunRecord, required_pass_rate, verdict_reason
 from rei.runtime.report import plots
 from rei.runtime.report.clusters import Cluster, clusters, failures
 from rei.runtime.report.data import CampaignData, read_events
 from rei.runtime.report.overview import requirement_matrix
-from rei.runtime.report.run_page import run_page_link
+from rei.runtime.report.run_page import page_is_full, run_page_link
 from rei.runtime.report.tables import (
     execution_summary,
     group_success_table,
@@ -164,6 +166,7 @@ def render_html(data: CampaignData, rerun: dict[str, str],
                                                           rerun, data.root),
         missions=sections, rerun=rerun, reason_of=verdict_reason,
         page_of=lambda record: run_page_link(data.root, record),
+        pages=page_counts(data.root, records),
         success_tables=[success_table(missions, "Mission"), group_success_table(records)],
         summary_tables=tables, signal_table=signal_counts(records),
         utility_plot=plots.utility_over_time(data),
@@ -176,6 +179,19 @@ def render_html(data: CampaignData, rerun: dict[str, str],
         parameters=sorted({(name, value) for r in records if r.summary is not None
                            for name, value in r.summary.parameters.items()}),
     )
+
+
+def page_counts(root: Path, records: Sequence[RunRecord]) -> dict[str, int]:
+    """How many recorded runs have a brief page (``--pages failed``: a run that passed) and
+    how many no page (``--pages none``, a run that crashed): what the report says of its
+    links."""
+    counts = {"brief": 0, "missing": 0}
+    for record in records:
+        if run_page_link(root, record) is None:
+            counts["missing"] += 1
+        elif not page_is_full(root / RUNS / record.spec.run_id):
+            counts["brief"] += 1
+    return counts
 
 
 def utility_legend(data: CampaignData) -> list[tuple[str, float]]:

@@ -37,6 +37,14 @@ EPS_COLLISION = 0.02
 
 
 @dataclass(frozen=True)
+class FailureMark:
+    """A failed requirement and the simulation time of the event that decided it."""
+
+    requirement: str
+    time: float
+
+
+@dataclass(frozen=True)
 class Thresholds:
     close: float
     collision: float

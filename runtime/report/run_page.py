@@ -23,8 +23,8 @@ from rei.runtime.campaign.store import RUNS, RunRecord, write_atomic
 from rei.runtime.collector.trace import TraceError
 from rei.runtime.evaluator.signal_log import SignalRow
 from rei.runtime.messages import MissionEvent
-from rei.runtime.report import run_plots
 from rei.runtime.report.run_data import (
+    FailureMark,
     Thresholds,
     TraceSeries,
     read_manifest,
@@ -34,12 +34,16 @@ from rei.runtime.report.run_data import (
     read_thresholds,
     trace_path,
 )
-from rei.runtime.report.run_plots import FailureMark
 from rei.runtime.report.templating import environment
-from rei.runtime.results import RunSummary, judge
+from rei.runtime.results import PAGE_POLICIES, RunSummary, judge
 from rei.runtime.world.manifest import WorldManifest
 
 PAGE = "report.html"
+BRIEF_MARK = '<meta name="rei-page" content="brief">'
+"""In the head of a brief page (verdicts, no plots or map): `rei page` draws the full one."""
+BRIEF_NOTE = ("Not drawn: this run passed, and it was run with --page failed (a campaign's "
+              "default), which draws the plots and the map only for runs that did not pass. "
+              "Draw them with `rei page` on this run's folder or on its campaign's folder.")
 STATUS_WORDS = {"pass": "pass", "fail": "fail", "inconclusive": "inconclusive",
                 "not_applicable": "not applicable"}
 EVENT_WORDS = {"begin": "mission began", "task_start": "task started",
@@ -121,7 +125,8 @@ def render_run_page(summary: RunSummary, signals: list[SignalRow], series: Trace
                     thresholds: Thresholds, map_image: str | None, map_note: str,
                     trace_note: str, trace_name: str = "") -> str:
     """The page's HTML from what was read (no file access here but the templates)."""
-    verdict = judge(summary)
+    from rei.runtime.report import run_plots  # noqa: PLC0415  (matplotlib: full pages only)
+
     end = series.end if series is not None else summary.duration
     failures = _failures(summary, end)
     plots: list[Plot] = []
@@ -142,9 +147,25 @@ def render_run_page(summary: RunSummary, signals: list[SignalRow], series: Trace
         if speed is not None:
             plots.append(Plot("speed-plot", "Speed", speed,
                               "driven and commanded speed over time against the speed limit"))
+    return _render(summary, signals, series, thresholds, map_image, map_note, trace_note,
+                   trace_name, plots, failures)
+
+
+def render_brief_page(summary: RunSummary, thresholds: Thresholds, trace_name: str = "") -> str:
+    """The brief page of a run that passed: the header, the requirements and the faults, no
+    plots and no map (so no trace read and no matplotlib), with ``BRIEF_NOTE``."""
+    return _render(summary, [], None, thresholds, None, BRIEF_NOTE, "", trace_name, [],
+                   _failures(summary, summary.duration), brief=True)
+
+
+def _render(summary: RunSummary, signals: list[SignalRow], series: TraceSeries | None,
+            thresholds: Thresholds, map_image: str | None, map_note: str, trace_note: str,
+            trace_name: str, plots: list[Plot], failures: list[FailureMark],
+            brief: bool = False) -> str:
     return _environment().get_template("run.html.j2").render(
-        title=f"REI run — {summary.mission}", css=_css(), summary=summary,
-        verdict=verdict, verdicts=summary.verdicts, status_words=STATUS_WORDS,
+        title=f"REI run — {summary.mission}", css=_css(), summary=summary, brief=brief,
+        brief_mark=BRIEF_MARK, verdict=judge(summary), verdicts=summary.verdicts,
+        status_words=STATUS_WORDS,
         events=_event_rows(series.events) if series is not None else [],
         signals=signals, plots=plots, map_image=map_image, map_note=map_note,
         trace_note=trace_note, thresholds=thresholds, failures=failures,
@@ -161,6 +182,7 @@ def _map(manifest: WorldManifest | None, series: TraceSeries | None, summary: Ru
         return None, "No map: the run folder has no generated world (world/world.json)."
     if series is None:
         return None, "No map: the run has no readable trace."
+    from rei.runtime.report import run_plots  # noqa: PLC0415
     from rei.runtime.report.maps import mission_from_facts, world_from_manifest  # noqa: PLC0415
 
     world = world_from_manifest(manifest)
@@ -170,13 +192,29 @@ def _map(manifest: WorldManifest | None, series: TraceSeries | None, summary: Ru
     return run_plots.run_map(world, mission, series, failures, title), ""
 
 
-def write_run_page(out_dir: Path, trace: Path | None = None) -> Path:
-    """Write DIR/report.html from the run's outputs (the trace given, else DIR's own);
-    RunError when DIR has no readable summary.json."""
+def write_run_page(out_dir: Path, trace: Path | None = None, *, policy: str = "all"
+                   ) -> Path | None:
+    """Write DIR/report.html from the run's outputs (the trace given, else DIR's own) as
+    ``policy`` (``PAGE_POLICIES``) asks: the full page, the brief one for a run that passed
+    under ``failed``, none under ``none`` (None returned). RunError when DIR has no readable
+    summary.json."""
+    if policy not in PAGE_POLICIES:
+        raise ValueError(f"page policy: expected one of {', '.join(PAGE_POLICIES)}, "
+                         f"found {policy!r}")
+    if policy == "none":
+        return None
     out_dir = Path(out_dir)
     summary = read_summary(out_dir)
-    signals = read_signals(out_dir)
     path = trace_path(out_dir, trace)
+    # linked only when it sits in the folder (a replayed trace may live anywhere)
+    trace_name = path.name if path is not None and path.parent.resolve() == out_dir.resolve() \
+        else ""
+    target = out_dir / PAGE
+    if policy == "failed" and judge(summary) == "pass":
+        write_atomic(target, render_brief_page(summary, read_thresholds(out_dir),
+                                               trace_name).encode("utf-8"))
+        return target
+    signals = read_signals(out_dir)
     manifest = read_manifest(out_dir, path)
     series: TraceSeries | None = None
     trace_note = ""
@@ -189,14 +227,20 @@ def write_run_page(out_dir: Path, trace: Path | None = None) -> Path:
             trace_note = f"The trace could not be read ({exc}); plots are not drawn."
     end = series.end if series is not None else summary.duration
     map_image, map_note = _map(manifest, series, summary, _failures(summary, end))
-    # linked only when it sits in the folder (a replayed trace may live anywhere)
-    trace_name = path.name if path is not None and path.parent.resolve() == out_dir.resolve() \
-        else ""
     page = render_run_page(summary, signals, series, read_thresholds(out_dir), map_image,
                            map_note, trace_note, trace_name)
-    target = out_dir / PAGE
     write_atomic(target, page.encode("utf-8"))
     return target
+
+
+def page_is_full(out_dir: Path) -> bool:
+    """Whether DIR/report.html exists and is a full page (not a brief one)."""
+    try:
+        with (Path(out_dir) / PAGE).open("rb") as page:
+            head = page.read(4096)
+    except OSError:
+        return False
+    return BRIEF_MARK.encode() not in head
 
 
 def run_page_link(root: Path, record: RunRecord) -> str | None:
@@ -208,4 +252,5 @@ def run_page_link(root: Path, record: RunRecord) -> str | None:
     return quote(Path(os.path.relpath(page, root)).as_posix())
 
 
-__all__ = ["PAGE", "render_run_page", "run_page_link", "write_run_page"]
+__all__ = ["BRIEF_MARK", "PAGE", "PAGE_POLICIES", "page_is_full", "render_brief_page",
+           "render_run_page", "run_page_link", "write_run_page"]

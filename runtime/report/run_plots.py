@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import re
 from collections.abc import Sequence
-from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -31,7 +30,7 @@ from rei.runtime.report.figures import (
     png_data_uri,
 )
 from rei.runtime.report.maps import draw_human_paths, map_figure
-from rei.runtime.report.run_data import Series, Thresholds, TraceSeries
+from rei.runtime.report.run_data import FailureMark, Series, Thresholds, TraceSeries
 from rei.runtime.report.tables import SIGNAL_ORDER
 
 if TYPE_CHECKING:
@@ -68,14 +67,6 @@ def _svg(fig: Figure, name: str) -> str:
         # the hash appears only as the id and in references to it (url(#..), href="#..")
         text = text.replace(old, f"{name}-{n}")
     return text
-
-
-@dataclass(frozen=True)
-class FailureMark:
-    """A failed requirement and the simulation time of the event that decided it."""
-
-    requirement: str
-    time: float
 
 
 def _mark_failures(ax: Axes, failures: Sequence[FailureMark], label: bool, end: float

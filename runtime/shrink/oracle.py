@@ -1,7 +1,8 @@
 """Does a candidate case still fail? Its K seeded runs through the campaign's local engine.
 
 Every candidate runs as `rei run` processes (rei.runtime.campaign.engines.LocalEngine: each in
-its own supervised process, ``workers`` at once), one per seed, and its outcome is kept by the
+its own supervised process, ``workers`` at once, on workers kept for the whole shrink), one per
+seed, and its outcome is kept by the
 case's digest, in memory and in a JSON-lines file, so an identical candidate never runs twice
 and a shrink started again over the same output folder resumes without rerunning anything.
 This module must never edit a case; it only judges one.
@@ -16,7 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from rei.runtime.campaign.engines import LocalEngine
+from rei.runtime.campaign.engines import LocalEngine, WorkerPool
 from rei.runtime.campaign.plan import RunSpec
 from rei.runtime.results import RunSummary, failed_verdicts
 from rei.runtime.shrink.case import ScenarioCase
@@ -100,6 +101,9 @@ class FailureOracle:
     known: dict[str, tuple[SeedOutcome, ...]] = field(default_factory=dict)
     charged: set[str] = field(default_factory=set)
     """Digests already counted in ``runs`` this session: judging one again costs nothing."""
+    pool: WorkerPool | None = None
+    """The workers every candidate runs on (kept for the shrink: their fork servers' imports
+    are paid once, not per candidate); None: each candidate starts its own."""
 
     def __post_init__(self) -> None:
         self.work.mkdir(parents=True, exist_ok=True)
@@ -133,7 +137,7 @@ class FailureOracle:
         mission = case.write(folder / "case")
         specs = [self.settings.spec(mission, seed, f"s{seed}") for seed in self.settings.seeds]
         engine = LocalEngine(self.settings.workers, timeout=self.settings.timeout,
-                             cache=self.work / "cache")
+                             cache=self.work / "cache", pages="none", pool=self.pool)
         by_seed: dict[int, SeedOutcome] = {}
         for spec, run_dir, result in engine.execute(specs, lambda s: folder / "runs" / s.run_id):
             self.started += 1

@@ -14,6 +14,7 @@ import shutil
 from collections.abc import Callable
 from pathlib import Path
 
+from rei.runtime.campaign.engines import WorkerPool
 from rei.runtime.errors import RunError
 from rei.runtime.shrink.case import ScenarioCase, load_case, sizes
 from rei.runtime.shrink.oracle import FailureOracle, RunSettings
@@ -46,13 +47,16 @@ def shrink_into(mission: Path, out: Path, settings: RunSettings, *,
     the best case."""
     case = load_case(mission)
     out.mkdir(parents=True, exist_ok=True)
-    oracle = FailureOracle(settings, out / WORK, out / JOURNAL)
-    try:
-        return _shrink(mission, case, out, oracle, requirement, max_runs, keep, progress)
-    finally:
-        shutil.rmtree(out / WORK, ignore_errors=True)
-        progress(f"{oracle.started} runs started now, {oracle.runs - oracle.started} "
-                 f"remembered from {out / JOURNAL}")
+    # One pool of workers for every candidate, closed however the shrink ends.
+    with WorkerPool(settings.workers) as pool:
+        oracle = FailureOracle(settings, out / WORK, out / JOURNAL, pool=pool)
+        try:
+            return _shrink(mission, case, out, oracle, requirement, max_runs, keep, progress)
+        finally:
+            pool.close()  # before the scratch folder goes: no run may still write there
+            shutil.rmtree(out / WORK, ignore_errors=True)
+            progress(f"{oracle.started} runs started now, {oracle.runs - oracle.started} "
+                     f"remembered from {out / JOURNAL}")
 
 
 def _shrink(mission: Path, case: ScenarioCase, out: Path, oracle: FailureOracle,

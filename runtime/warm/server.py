@@ -68,6 +68,7 @@ PRELOAD = (
     "rei.runtime.robot.select",
     "rei.runtime.robot.host",
     "rei.runtime.report.run_page",
+    "rei.runtime.report.run_plots",
     "rei.lang.vepl.document",
     "rei.generators.output",
 )

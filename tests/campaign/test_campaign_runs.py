@@ -101,7 +101,8 @@ def test_the_dask_engine_passes_the_same_test_on_a_real_cluster(tmp_path: Path,
     assert resumed.returncode == 1, resumed.stderr
     assert_every_run_once(out)
     manifest = json.loads((out / "campaign.json").read_text())
-    assert manifest["sessions"][0]["engine"] == {"engine": "dask", "scheduler": dask_scheduler}
+    assert manifest["sessions"][0]["engine"] == {"engine": "dask", "scheduler": dask_scheduler,
+                                                 "pages": "failed"}
 
 
 def _summaries(out: Path) -> dict[str, str]:

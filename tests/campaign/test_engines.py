@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import pytest
 
 from rei.runtime.campaign import CampaignEngine, CampaignError, DaskEngine, LocalEngine
@@ -30,5 +32,14 @@ def test_local_engine_needs_a_worker() -> None:
 
 
 def test_engines_describe_themselves_for_the_provenance() -> None:
-    assert LocalEngine(3).describe() == {"engine": "local", "workers": 3}
-    assert DaskEngine("tcp://h:1").describe() == {"engine": "dask", "scheduler": "tcp://h:1"}
+    assert LocalEngine(3).describe() == {"engine": "local", "workers": 3, "pages": "all"}
+    assert DaskEngine("tcp://h:1", pages="failed").describe() == {
+        "engine": "dask", "scheduler": "tcp://h:1", "pages": "failed"}
+
+
+@pytest.mark.parametrize("make", [lambda: LocalEngine(1, pages="some"),
+                                  lambda: DaskEngine("tcp://h:1", pages="")])
+def test_engines_refuse_an_unknown_page_policy(make: Callable[[], object]) -> None:
+    with pytest.raises(CampaignError, match="--pages: expected one of all, failed, none, "
+                                            "found 'some'|found ''"):
+        make()
