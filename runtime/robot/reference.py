@@ -46,7 +46,7 @@ from rei.runtime.robot.protocol import (
     Observation,
     VelocityCommand,
 )
-from rei.runtime.robot.recovery import Recovery
+from rei.runtime.robot.recovery import Recovery, arc_poses, footprint_gaps
 
 RESOLUTION = 0.2
 """Metres per planning cell: a tile of 1 m holds 5, so a 1 m passage keeps free centres."""
@@ -526,21 +526,47 @@ class ReferenceNavigator:
 
     def _rollout_clearance(self, points: np.ndarray) -> np.ndarray:
         """Each roll-out's smallest gap to the laser points (robot frame), 0.5 when none
-        is in reach; the same for every tick of one scan, so computed once per scan."""
+        is in reach; the same for every tick of one scan, so computed once per scan.
+
+        The swept-distance grid is a fast but rounded answer: a point counts as the centre
+        of its cell, half a diagonal nearer, so a gap can read up to ~5.7 cm smaller than it
+        is. Beside a table corner 4.5 cm from the robot's side, that rounding refused every
+        motion, standing still included, and the robot could only back up and come back to
+        the same spot until it aborted (issue 25). So a roll-out the grid puts below
+        ``MARGIN`` is measured again exactly (``footprint_gaps`` over finely spaced poses of
+        its arc, against the points that made it so): the margins then mean what they say,
+        no less careful (a true gap below the margin is still refused) and no longer stuck
+        by rounding.
+        """
         if self._clearance_of is points:
             return self._clearance
         n = self._local_n
+        clearance = np.full(len(self._cmds), 0.5)
         if len(points):
             ij = np.floor(points / LOCAL_RES + n / 2).astype(np.int64)
             inside = ((ij >= 0) & (ij < n)).all(axis=1)
             flat = ij[inside, 0] * n + ij[inside, 1]
-            gaps = self._sweep[:, flat]
-            clearance = gaps.min(axis=1) if gaps.shape[1] else np.full(len(self._cmds), 0.5)
-        else:
-            clearance = np.full(len(self._cmds), 0.5)
+            if len(flat):
+                gaps = self._sweep[:, flat]
+                clearance = gaps.min(axis=1).astype(float)
+                near = points[inside]
+                for k in np.nonzero(clearance < MARGIN)[0].tolist():
+                    clearance[k] = self._exact_clearance(k, near, gaps[k])
         clearance.flags.writeable = False
         self._clearance_of, self._clearance = points, clearance
         return clearance
+
+    def _exact_clearance(self, k: int, points: np.ndarray, rounded: np.ndarray) -> float:
+        """Roll-out ``k``'s smallest gap, exact for the points whose rounded gap
+        (``rounded``, from the grid) is below ``MARGIN``; the others keep the grid's."""
+        v, w = float(self._cmds[k, 0]), float(self._cmds[k, 1])
+        # Poses spaced so that the footprint moves at most ~1 cm (or 0.02 rad) between them.
+        steps = max(2, int(math.ceil(max(abs(v) * HORIZON / 0.01, abs(w) * HORIZON / 0.02))))
+        close = rounded < MARGIN
+        exact = float(footprint_gaps(points[close], self._half,
+                                     arc_poses(v, w, HORIZON, steps)).min())
+        rest = rounded[~close]
+        return min(exact, float(rest.min())) if len(rest) else exact
 
     def _replan_around(self, points: np.ndarray, goal: NavGoal, xy: tuple[float, float],
                        reduced: bool = False) -> bool:
