@@ -1,0 +1,115 @@
+"""The `reference` navigator beside a table's corner (issue 25: a false alarm in search).
+
+`rei search` (tpe, seed 1, small preset) found a fair room where the reference aborted a goal:
+turning round beside a table, it ended with its side 4.5 cm from the table's corner. The
+local planner's swept-distance grid counts a laser point as its cell's centre, half a
+diagonal nearer, so it read that gap as below zero: every motion was refused, standing still
+included, and the robot only backed up and came back until it gave up. A roll-out the grid
+puts below the margin is now measured exactly. ``RoundedClearance`` is the navigator as it
+was (the grid's rounded gap only): it is the side these tests show failing.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rei.runtime.robot import NavGoal
+from rei.runtime.robot.recovery import arc_poses, footprint_gaps
+from rei.runtime.robot.reference import HORIZON, MARGIN, TIGHT_MARGIN, ReferenceNavigator
+from tests.runtime.test_reference_recovery import HALF, Box, context_of, corridor_walls, drive
+
+REPO = Path(__file__).resolve().parents[2]
+SCENE = Path(__file__).parent / "scenes" / "table_corner.mission"
+
+
+class RoundedClearance(ReferenceNavigator):
+    """The reference before the fix: a roll-out's gap is the grid's rounded one only."""
+
+    def _exact_clearance(self, k: int, points: np.ndarray, rounded: np.ndarray) -> float:
+        return float(rounded.min())
+
+
+def table_edge_beside_the_left_side(gap: float) -> np.ndarray:
+    """Laser points (robot frame) along a table's edge level with the robot's left side,
+    ``gap`` from it, from behind the robot to its corner just ahead of the centre."""
+    xs = np.arange(-0.40, 0.021, 0.01)
+    return np.stack((xs, np.full(len(xs), HALF[1] + gap)), axis=1)
+
+
+def swept_gaps(nav: ReferenceNavigator, points: np.ndarray) -> np.ndarray:
+    """Each roll-out's true smallest gap to ``points``, measured independently (400 poses)."""
+    return np.array([footprint_gaps(points, HALF, arc_poses(float(v), float(w), HORIZON,
+                                                            400)).min()
+                     for v, w in nav._cmds])
+
+
+def command_index(nav: ReferenceNavigator, v: float, w: float) -> int:
+    return int(np.argmin(np.hypot(nav._cmds[:, 0] - v, nav._cmds[:, 1] - w)))
+
+
+def navigator(cls: type[ReferenceNavigator] = ReferenceNavigator) -> ReferenceNavigator:
+    nav = cls()
+    nav.reset(context_of(corridor_walls()))
+    return nav
+
+
+def test_a_gap_beside_a_table_corner_is_measured_not_rounded_away() -> None:
+    points = table_edge_beside_the_left_side(0.045)
+    nav, old = navigator(), navigator(RoundedClearance)
+    ahead = command_index(nav, nav._vmax, 0.0)
+    # Before: the grid read the 4.5 cm gap as less than the tight margin, for every motion.
+    assert (old._rollout_clearance(points) < TIGHT_MARGIN).all()
+    clearance = nav._rollout_clearance(points)
+    # Driving straight on keeps the side 4.5 cm from the edge: admissible with either margin.
+    assert clearance[ahead] == pytest.approx(0.045, abs=1e-3)
+    assert clearance[ahead] >= MARGIN
+    # Turning right on the spot swings the rear left corner (0.207 m out) into the edge:
+    # still refused, so the robot is no less careful than before.
+    spin_right = command_index(nav, 0.0, -0.6 * nav._wmax)
+    assert clearance[spin_right] < 0.0
+
+
+@pytest.mark.parametrize("gap", [0.005, 0.02, 0.045, 0.07])
+def test_a_measured_gap_never_reads_wider_than_it_is(gap: float) -> None:
+    points = table_edge_beside_the_left_side(gap)
+    nav = navigator()
+    clearance = nav._rollout_clearance(points)
+    truth = swept_gaps(nav, points)
+    measured = clearance < MARGIN + 0.06  # the roll-outs the grid put near the margin
+    assert measured.any()
+    # Poses every ~1 cm / 0.02 rad: a corner 0.207 m out moves at most 4 mm between them.
+    assert (clearance[measured] <= truth[measured] + 0.005).all()
+    # Whatever is admissible at the tight margin really keeps (nearly) that margin.
+    assert (truth[clearance >= TIGHT_MARGIN] >= TIGHT_MARGIN - 0.005).all()
+
+
+def test_the_measured_clearances_are_deterministic() -> None:
+    table = [Box(-0.5, 0.32, 0.3, 0.5)]  # a box the map does not know, 12 cm off the left side
+    walls = corridor_walls()
+    runs = [drive(walls, table, [], NavGoal("g", 5.0, 0.0, None, 0.3, 200.0),
+                  (0.0, 0.0, 0.3), 20.0).commands for _ in range(2)]
+    assert runs[0] == runs[1]
+
+
+@pytest.mark.slow
+def test_the_reference_gets_past_the_table_corner_the_rounded_one_does_not(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from rei.runtime.commands.run import run_into  # noqa: PLC0415
+
+    monkeypatch.chdir(REPO)  # `tests.runtime...:RoundedClearance` is imported from here
+    old, _ = run_into(SCENE, tmp_path / "old", "tests.runtime.test_table_corner:RoundedClearance",
+                      seed=1, monitor=False)
+    beyond = old.measurements["tasks"][-1]
+    assert old.outcome == "failed" and "no progress" in beyond["reason"], beyond
+    summary, _ = run_into(SCENE, tmp_path / "new", seed=1, monitor=False)
+    assert summary.outcome == "completed", summary.measurements["tasks"]
+    assert summary.measurements["tasks_succeeded"] == 2
+    assert summary.measurements["collisions"] == 0
+    again, _ = run_into(SCENE, tmp_path / "again", seed=1, monitor=False)
+    assert again.outcome == "completed"
+    # Same room, seed and version: the same bytes.
+    assert (tmp_path / "new" / "trace.jsonl").read_bytes() == \
+        (tmp_path / "again" / "trace.jsonl").read_bytes()
