@@ -503,7 +503,7 @@ class ReferenceNavigator:
         c, s = math.cos(yaw), math.sin(yaw)
         tx = c * (target[0] - x) + s * (target[1] - y)
         ty = -s * (target[0] - x) + c * (target[1] - y)
-        clearance = self._rollout_clearance(points)
+        clearance = self._rollout_clearance(points, pose)
         hit = clearance < margin
         clearance = np.clip(clearance, 0.0, 0.5)
         v, w = self._cmds[:, 0], self._cmds[:, 1]
@@ -524,19 +524,22 @@ class ReferenceNavigator:
             return None
         return VelocityCommand(float(v[best]), float(w[best]))
 
-    def _rollout_clearance(self, points: np.ndarray) -> np.ndarray:
-        """Each roll-out's smallest gap to the laser points (robot frame), 0.5 when none
-        is in reach; the same for every tick of one scan, so computed once per scan.
+    def _rollout_clearance(self, points: np.ndarray,
+                           pose: tuple[float, float, float]) -> np.ndarray:
+        """Each roll-out's smallest gap to the laser points (robot frame, seen from ``pose``),
+        0.5 when none is in reach; the same for every tick of one scan, so computed once per
+        scan.
 
         The swept-distance grid is a fast but rounded answer: a point counts as the centre
         of its cell, half a diagonal nearer, so a gap can read up to ~5.7 cm smaller than it
-        is. Beside a table corner 4.5 cm from the robot's side, that rounding refused every
+        is. Beside a table's corner 4.5 cm from the robot's side, that rounding refused every
         motion, standing still included, and the robot could only back up and come back to
-        the same spot until it aborted (issue 25). So a roll-out the grid puts below
-        ``MARGIN`` is measured again exactly (``footprint_gaps`` over finely spaced poses of
-        its arc, against the points that made it so): the margins then mean what they say,
-        no less careful (a true gap below the margin is still refused) and no longer stuck
-        by rounding.
+        the same spot until it aborted (issue 25). So where the grid puts a roll-out below
+        ``MARGIN`` because of points the static map explains (walls, furniture: they stay
+        where they are), the gap to those points is measured again exactly
+        (``footprint_gaps`` over finely spaced poses of the arc): the margin then means what
+        it says, and a true gap below it is still refused. Unmapped points (people, moving
+        things, which may come nearer within the horizon) keep the grid's wider reading.
         """
         if self._clearance_of is points:
             return self._clearance
@@ -549,20 +552,26 @@ class ReferenceNavigator:
             if len(flat):
                 gaps = self._sweep[:, flat]
                 clearance = gaps.min(axis=1).astype(float)
-                near = points[inside]
-                for k in np.nonzero(clearance < MARGIN)[0].tolist():
-                    clearance[k] = self._exact_clearance(k, near, gaps[k])
+                below = np.nonzero(clearance < MARGIN)[0].tolist()
+                if below:
+                    near = points[inside]
+                    mapped = ~self._unmapped(near, pose)
+                    for k in below:
+                        clearance[k] = self._exact_clearance(k, near, gaps[k], mapped)
         clearance.flags.writeable = False
         self._clearance_of, self._clearance = points, clearance
         return clearance
 
-    def _exact_clearance(self, k: int, points: np.ndarray, rounded: np.ndarray) -> float:
-        """Roll-out ``k``'s smallest gap, exact for the points whose rounded gap
-        (``rounded``, from the grid) is below ``MARGIN``; the others keep the grid's."""
+    def _exact_clearance(self, k: int, points: np.ndarray, rounded: np.ndarray,
+                         mapped: np.ndarray) -> float:
+        """Roll-out ``k``'s smallest gap: exact to the ``mapped`` points whose rounded gap
+        (``rounded``, from the grid) is below ``MARGIN``, the grid's to every other one."""
+        close = (rounded < MARGIN) & mapped
+        if not close.any():
+            return float(rounded.min())
         v, w = float(self._cmds[k, 0]), float(self._cmds[k, 1])
         # Poses spaced so that the footprint moves at most ~1 cm (or 0.02 rad) between them.
         steps = max(2, int(math.ceil(max(abs(v) * HORIZON / 0.01, abs(w) * HORIZON / 0.02))))
-        close = rounded < MARGIN
         exact = float(footprint_gaps(points[close], self._half,
                                      arc_poses(v, w, HORIZON, steps)).min())
         rest = rounded[~close]

@@ -28,7 +28,8 @@ SCENE = Path(__file__).parent / "scenes" / "table_corner.mission"
 class RoundedClearance(ReferenceNavigator):
     """The reference before the fix: a roll-out's gap is the grid's rounded one only."""
 
-    def _exact_clearance(self, k: int, points: np.ndarray, rounded: np.ndarray) -> float:
+    def _exact_clearance(self, k: int, points: np.ndarray, rounded: np.ndarray,
+                         mapped: np.ndarray) -> float:
         return float(rounded.min())
 
 
@@ -50,19 +51,30 @@ def command_index(nav: ReferenceNavigator, v: float, w: float) -> int:
     return int(np.argmin(np.hypot(nav._cmds[:, 0] - v, nav._cmds[:, 1] - w)))
 
 
-def navigator(cls: type[ReferenceNavigator] = ReferenceNavigator) -> ReferenceNavigator:
+HERE = (0.0, 0.0, 0.0)
+"""The robot's pose in these tests: the corridor's start, facing along it."""
+
+
+def navigator(gap: float | None, cls: type[ReferenceNavigator] = ReferenceNavigator
+              ) -> ReferenceNavigator:
+    """A navigator in the corridor, whose map also holds a table with its edge ``gap`` from
+    the robot's left side (None: the map has no table, what the laser sees there is a
+    person or something else unmapped)."""
+    walls = corridor_walls()
+    if gap is not None:
+        walls = [*walls, Box(-0.40, HALF[1] + gap, 0.02, 0.45)]
     nav = cls()
-    nav.reset(context_of(corridor_walls()))
+    nav.reset(context_of(walls))
     return nav
 
 
 def test_a_gap_beside_a_table_corner_is_measured_not_rounded_away() -> None:
     points = table_edge_beside_the_left_side(0.045)
-    nav, old = navigator(), navigator(RoundedClearance)
+    nav, old = navigator(0.045), navigator(0.045, RoundedClearance)
     ahead = command_index(nav, nav._vmax, 0.0)
     # Before: the grid read the 4.5 cm gap as less than the tight margin, for every motion.
-    assert (old._rollout_clearance(points) < TIGHT_MARGIN).all()
-    clearance = nav._rollout_clearance(points)
+    assert (old._rollout_clearance(points, HERE) < TIGHT_MARGIN).all()
+    clearance = nav._rollout_clearance(points, HERE)
     # Driving straight on keeps the side 4.5 cm from the edge: admissible with either margin.
     assert clearance[ahead] == pytest.approx(0.045, abs=1e-3)
     assert clearance[ahead] >= MARGIN
@@ -72,11 +84,21 @@ def test_a_gap_beside_a_table_corner_is_measured_not_rounded_away() -> None:
     assert clearance[spin_right] < 0.0
 
 
+def test_a_person_as_near_as_the_table_keeps_the_wider_rounded_gap() -> None:
+    """The same points, but the map has no table there: a person (who may step nearer within
+    the horizon) is kept at the grid's rounded distance, as before."""
+    points = table_edge_beside_the_left_side(0.045)
+    person = navigator(None)._rollout_clearance(points, HERE)
+    before = navigator(None, RoundedClearance)._rollout_clearance(points, HERE)
+    assert (person == before).all()
+    assert (person < TIGHT_MARGIN).all()
+
+
 @pytest.mark.parametrize("gap", [0.005, 0.02, 0.045, 0.07])
 def test_a_measured_gap_never_reads_wider_than_it_is(gap: float) -> None:
     points = table_edge_beside_the_left_side(gap)
-    nav = navigator()
-    clearance = nav._rollout_clearance(points)
+    nav = navigator(gap)
+    clearance = nav._rollout_clearance(points, HERE)
     truth = swept_gaps(nav, points)
     measured = clearance < MARGIN + 0.06  # the roll-outs the grid put near the margin
     assert measured.any()
