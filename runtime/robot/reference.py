@@ -85,6 +85,9 @@ SLOW_ZONE_MEMORY = 3.0
 """Seconds the slow zone holds after the last unmapped point in it was seen."""
 UNMAPPED_BEYOND = 0.15
 """Metres: a laser point farther than this from every static map obstacle is unmapped."""
+EXACT_ALLOWANCE = 0.02
+"""Metres an exactly measured gap still counts nearer than measured (the laser's 1 cm noise,
+the drive's lag), as the swept-distance grid's rounding used to by chance."""
 MAP_FIT_RES = 0.05
 """Metres per cell of the fine distance-to-map grid the laser points are checked against."""
 
@@ -537,8 +540,9 @@ class ReferenceNavigator:
         the same spot until it aborted (issue 25). So where the grid puts a roll-out below
         ``MARGIN`` because of points the static map explains (walls, furniture: they stay
         where they are), the gap to those points is measured again exactly
-        (``footprint_gaps`` over finely spaced poses of the arc): the margin then means what
-        it says, and a true gap below it is still refused. Unmapped points (people, moving
+        (``footprint_gaps`` over finely spaced poses of the arc), less ``EXACT_ALLOWANCE``:
+        the margin then means what it says, and a true gap below it is still refused. Unmapped
+        points (people, moving
         things, which may come nearer within the horizon) keep the grid's wider reading.
         """
         if self._clearance_of is points:
@@ -564,8 +568,9 @@ class ReferenceNavigator:
 
     def _exact_clearance(self, k: int, points: np.ndarray, rounded: np.ndarray,
                          mapped: np.ndarray) -> float:
-        """Roll-out ``k``'s smallest gap: exact to the ``mapped`` points whose rounded gap
-        (``rounded``, from the grid) is below ``MARGIN``, the grid's to every other one."""
+        """Roll-out ``k``'s smallest gap: measured (less ``EXACT_ALLOWANCE``) to the
+        ``mapped`` points whose rounded gap (``rounded``, from the grid) is below ``MARGIN``,
+        the grid's to every other one."""
         close = (rounded < MARGIN) & mapped
         if not close.any():
             return float(rounded.min())
@@ -574,8 +579,10 @@ class ReferenceNavigator:
         steps = max(2, int(math.ceil(max(abs(v) * HORIZON / 0.01, abs(w) * HORIZON / 0.02))))
         exact = float(footprint_gaps(points[close], self._half,
                                      arc_poses(v, w, HORIZON, steps)).min())
+        # Never read nearer than the grid did, nor wider than the truth less the allowance.
+        gap = max(exact - EXACT_ALLOWANCE, float(rounded[close].min()))
         rest = rounded[~close]
-        return min(exact, float(rest.min())) if len(rest) else exact
+        return min(gap, float(rest.min())) if len(rest) else gap
 
     def _replan_around(self, points: np.ndarray, goal: NavGoal, xy: tuple[float, float],
                        reduced: bool = False) -> bool:
