@@ -46,7 +46,7 @@ from rei.runtime.robot.protocol import (
     Observation,
     VelocityCommand,
 )
-from rei.runtime.robot.recovery import Recovery
+from rei.runtime.robot.recovery import Recovery, arc_poses, footprint_gaps
 
 RESOLUTION = 0.2
 """Metres per planning cell: a tile of 1 m holds 5, so a 1 m passage keeps free centres."""
@@ -85,6 +85,9 @@ SLOW_ZONE_MEMORY = 3.0
 """Seconds the slow zone holds after the last unmapped point in it was seen."""
 UNMAPPED_BEYOND = 0.15
 """Metres: a laser point farther than this from every static map obstacle is unmapped."""
+EXACT_ALLOWANCE = 0.02
+"""Metres an exactly measured gap still counts nearer than measured (the laser's 1 cm noise,
+the drive's lag), as the swept-distance grid's rounding used to by chance."""
 MAP_FIT_RES = 0.05
 """Metres per cell of the fine distance-to-map grid the laser points are checked against."""
 
@@ -507,7 +510,7 @@ class ReferenceNavigator:
         c, s = math.cos(yaw), math.sin(yaw)
         tx = c * (target[0] - x) + s * (target[1] - y)
         ty = -s * (target[0] - x) + c * (target[1] - y)
-        clearance = self._rollout_clearance(points)
+        clearance = self._rollout_clearance(points, pose)
         hit = clearance < margin
         clearance = np.clip(clearance, 0.0, 0.5)
         v, w = self._cmds[:, 0], self._cmds[:, 1]
@@ -528,23 +531,62 @@ class ReferenceNavigator:
             return None
         return VelocityCommand(float(v[best]), float(w[best]))
 
-    def _rollout_clearance(self, points: np.ndarray) -> np.ndarray:
-        """Each roll-out's smallest gap to the laser points (robot frame), 0.5 when none
-        is in reach; the same for every tick of one scan, so computed once per scan."""
+    def _rollout_clearance(self, points: np.ndarray,
+                           pose: tuple[float, float, float]) -> np.ndarray:
+        """Each roll-out's smallest gap to the laser points (robot frame, seen from ``pose``),
+        0.5 when none is in reach; the same for every tick of one scan, so computed once per
+        scan.
+
+        The swept-distance grid is a fast but rounded answer: a point counts as the centre
+        of its cell, half a diagonal nearer, so a gap can read up to ~5.7 cm smaller than it
+        is. Beside a table's corner 4.5 cm from the robot's side, that rounding refused every
+        motion, standing still included, and the robot could only back up and come back to
+        the same spot until it aborted (issue 25). So where the grid puts a roll-out below
+        ``MARGIN`` because of points the static map explains (walls, furniture: they stay
+        where they are), the gap to those points is measured again exactly
+        (``footprint_gaps`` over finely spaced poses of the arc), less ``EXACT_ALLOWANCE``:
+        the margin then means what it says, and a true gap below it is still refused. Unmapped
+        points (people, moving
+        things, which may come nearer within the horizon) keep the grid's wider reading.
+        """
         if self._clearance_of is points:
             return self._clearance
         n = self._local_n
+        clearance = np.full(len(self._cmds), 0.5)
         if len(points):
             ij = np.floor(points / LOCAL_RES + n / 2).astype(np.int64)
             inside = ((ij >= 0) & (ij < n)).all(axis=1)
             flat = ij[inside, 0] * n + ij[inside, 1]
-            gaps = self._sweep[:, flat]
-            clearance = gaps.min(axis=1) if gaps.shape[1] else np.full(len(self._cmds), 0.5)
-        else:
-            clearance = np.full(len(self._cmds), 0.5)
+            if len(flat):
+                gaps = self._sweep[:, flat]
+                clearance = gaps.min(axis=1).astype(float)
+                below = np.nonzero(clearance < MARGIN)[0].tolist()
+                if below:
+                    near = points[inside]
+                    mapped = ~self._unmapped(near, pose)
+                    for k in below:
+                        clearance[k] = self._exact_clearance(k, near, gaps[k], mapped)
         clearance.flags.writeable = False
         self._clearance_of, self._clearance = points, clearance
         return clearance
+
+    def _exact_clearance(self, k: int, points: np.ndarray, rounded: np.ndarray,
+                         mapped: np.ndarray) -> float:
+        """Roll-out ``k``'s smallest gap: measured (less ``EXACT_ALLOWANCE``) to the
+        ``mapped`` points whose rounded gap (``rounded``, from the grid) is below ``MARGIN``,
+        the grid's to every other one."""
+        close = (rounded < MARGIN) & mapped
+        if not close.any():
+            return float(rounded.min())
+        v, w = float(self._cmds[k, 0]), float(self._cmds[k, 1])
+        # Poses spaced so that the footprint moves at most ~1 cm (or 0.02 rad) between them.
+        steps = max(2, int(math.ceil(max(abs(v) * HORIZON / 0.01, abs(w) * HORIZON / 0.02))))
+        exact = float(footprint_gaps(points[close], self._half,
+                                     arc_poses(v, w, HORIZON, steps)).min())
+        # Never read nearer than the grid did, nor wider than the truth less the allowance.
+        gap = max(exact - EXACT_ALLOWANCE, float(rounded[close].min()))
+        rest = rounded[~close]
+        return min(gap, float(rest.min())) if len(rest) else gap
 
     def _replan_around(self, points: np.ndarray, goal: NavGoal, xy: tuple[float, float],
                        reduced: bool = False) -> bool:

@@ -49,7 +49,12 @@ from rei.runtime.robot import (
     make_controller,
 )
 from rei.runtime.robot.conformance import checker_context
-from rei.runtime.robot.reference import SLOW_ZONE_SPEED, ReferenceNavigator
+from rei.runtime.robot.reference import (
+    HORIZON,
+    MARGIN,
+    SLOW_ZONE_SPEED,
+    ReferenceNavigator,
+)
 
 BEAMS = 90
 """The checker's laser: 90 beams over the full circle from -pi, 0.12-3.5 m."""
@@ -160,14 +165,16 @@ def test_blind_sector_drops_points_between_60_and_120_degrees_left() -> None:
 # -- timing --------------------------------------------------------------------------------
 
 def test_stale_scans_acts_on_a_scan_it_should_have_replaced() -> None:
-    """A wall of points 0.25 m ahead appears in the second scan: the reference does not drive
-    into it, the stale navigator still acts on the first, empty scan."""
+    """A wall of points 0.3 m ahead (16 cm from the front) appears in the second scan: the
+    reference does not drive into it (at most it creeps on at a speed whose roll-out still
+    keeps its margin from the wall), the stale navigator still acts on the first, empty scan."""
     wall = {math.radians(a): 0.3 / math.cos(math.radians(a)) for a in range(-40, 41, 4)}
-    for nav, expect_forward in ((ReferenceNavigator(), False), (StaleScans(), True)):
+    room = 0.3 - checker_context().robot_size[0] / 2 - MARGIN
+    for nav, expect_into in ((ReferenceNavigator(), False), (StaleScans(), True)):
         started(nav)
         drive(nav, 1)
         cmd = drive(nav, 1, hits=wall, t0=0.1)[0]
-        assert (cmd.linear > 0.0) == expect_forward, (nav.name, cmd)
+        assert (cmd.linear * HORIZON > room) == expect_into, (nav.name, cmd)
 
 
 def test_control_latency_delays_every_command_by_half_a_second() -> None:
@@ -197,12 +204,13 @@ def test_command_dropout_holds_the_last_delivered_command_through_each_outage() 
 def test_delayed_scans_acts_on_a_scan_taken_0_6_s_ago() -> None:
     wall = {math.radians(a): 0.3 / math.cos(math.radians(a)) for a in range(-40, 41, 4)}
     late = round(SCAN_DELAY / 0.1)
-    for nav, expect_forward in ((ReferenceNavigator(), False), (DelayedScans(), True)):
+    room = 0.3 - checker_context().robot_size[0] / 2 - MARGIN
+    for nav, expect_into in ((ReferenceNavigator(), False), (DelayedScans(), True)):
         started(nav)
         drive(nav, late)
         # the wall is there now; the delayed navigator still sees the empty room of 0.6 s ago
         cmd = drive(nav, 1, hits=wall, t0=0.1 * late)[0]
-        assert (cmd.linear > 0.0) == expect_forward, (nav.name, cmd)
+        assert (cmd.linear * HORIZON > room) == expect_into, (nav.name, cmd)
 
 
 # -- control -------------------------------------------------------------------------------
