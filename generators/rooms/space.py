@@ -32,10 +32,11 @@ NO_LIMIT = "none"
 NO_STRESSOR = "none"
 
 SHAPES = ("rect", "L", "joined")
-STRESSORS = ("none", "emerge", "oncoming", "crossing", "gap")
+STRESSORS = ("none", "emerge", "oncoming", "crossing", "gap", "doorway")
 """One stress scenario on the robot's first leg (generators/rooms/stressors.py): a person
 emerging from behind a corner, an oncoming person in a one-tile corridor, a cart crossing at
-a right angle, a furniture row whose gap on the direct line is narrower than the robot."""
+a right angle, a furniture row whose gap on the direct line is narrower than the robot, a
+person stepping out of a doorway beside the route as the robot comes level."""
 CROSSINGS = ("cross", "any")
 YES_NO = ("yes", "no")
 
@@ -131,7 +132,8 @@ PRESETS: Mapping[str, Mapping[str, tuple[str, ...]]] = {
         "mix": ("furniture", "mixed"), "humans": ("0",), "vertices": ("2",),
         "speed": ("1.0", "0.8"), "loop": ("no",), "crossing": ("any",), "goals": ("2",),
         "spacing": ("6",), "cycles": ("1",), "behaviour": ("yielding",), "heading": ("no",),
-        "max_speed": (NO_LIMIT,), "stressor": ("emerge", "crossing", "gap", "oncoming"),
+        "max_speed": (NO_LIMIT,),
+        "stressor": ("emerge", "crossing", "gap", "oncoming", "doorway"),
     },
 }
 

@@ -31,7 +31,8 @@ OVERRIDES = (
     ("stressor", "a stress scenario on the first leg: none, emerge (a person steps out from "
                  "behind a corner), oncoming (a person in a one-tile corridor), crossing (a "
                  "cart crosses at a right angle), gap (a furniture gap narrower than the "
-                 "robot on the direct line)"),
+                 "robot on the direct line), doorway (a person steps out of a doorway "
+                 "beside the route as the robot comes level)"),
 )
 
 
