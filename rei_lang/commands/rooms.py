@@ -39,6 +39,7 @@ OVERRIDES = (
 HELP_EXAMPLES = """\
 rei-gen rooms -o suite --count 20 --seed 1              # 20 rooms and missions
 rei-gen rooms -o dense --preset small --objects 10%,25% --humans 0,1
+rei-gen rooms -o doors --preset stress --stressor doorway --count 4   # people in doorways
 rei-gen rooms --describe examples/navigation/navigation.mission
 """
 
