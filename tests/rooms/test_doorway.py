@@ -14,8 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from rei.generators.rooms import SuiteRequest, coverage_report, generate, preset_space, \
-    write_suite
+from rei.generators.rooms import SuiteRequest, coverage_report, generate, preset_space, write_suite
 from rei.generators.rooms.stressors import DOORWAY_AHEAD, DOORWAY_OFF_LINE, DOORWAY_SEEN
 from rei.generators.rooms.suite import GeneratedPair
 from rei.lang.workspace import Workspace, load_room
