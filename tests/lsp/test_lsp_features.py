@@ -450,6 +450,12 @@ async def test_trigger_diagnostics_and_completion(client: RecordingClient, tmp_p
     assert ("REF-UNRESOLVED", 8, line.index("g_2_44")) in found
 
     assert await editor.change(path, good) == []
+    # the trigger's floor is a name like any other: go to its definition; the human's hover
+    # says when it starts
+    [loc] = await definition(client, path, position_of(good, "of g_2_4", offset=4))
+    assert loc.range.start.line == 4  # the grid row holding g_2_4
+    hover = await hover_text(client, path, position_of(good, "human h", offset=6))
+    assert "starts when the robot is within 1.2 m of `g_2_4`" in hover
     half = TRIGGER_ROOM.replace("TRIGGER", "start when robot within 1.2 of ")
     await editor.change(path, half)  # does not parse: floors come from the last good version
     floors = await completion_labels(client, path, position_of(half, "of  total", offset=3))
