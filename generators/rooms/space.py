@@ -126,14 +126,15 @@ PRESETS: Mapping[str, Mapping[str, tuple[str, ...]]] = {
     # puts one stressor on the first leg, timed from the robot's planned arrival. The
     # people they add yield (so a careful navigator can pass) and no other human walks, so
     # what fails is the stressor's doing. The systematic design lists the stressors first
-    # (they vary fastest), which is how `rei demo` takes one room of each.
+    # (they vary fastest), which is how `rei demo` takes one room of each. `doorway` is a
+    # level of the factor but not of the preset: it needs the straight line between the
+    # first goals on the floor, which a joined room seldom gives (`--stressor doorway`).
     "stress": {
         "shape": ("rect", "L"), "size": ("10x6", "12x7"), "objects": ("3", "5"),
         "mix": ("furniture", "mixed"), "humans": ("0",), "vertices": ("2",),
         "speed": ("1.0", "0.8"), "loop": ("no",), "crossing": ("any",), "goals": ("2",),
         "spacing": ("6",), "cycles": ("1",), "behaviour": ("yielding",), "heading": ("no",),
-        "max_speed": (NO_LIMIT,),
-        "stressor": ("emerge", "crossing", "gap", "oncoming", "doorway"),
+        "max_speed": (NO_LIMIT,), "stressor": ("emerge", "crossing", "gap", "oncoming"),
     },
 }
 
