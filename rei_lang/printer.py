@@ -40,7 +40,7 @@ def _object_line(obj: PlacedObject) -> list[str]:
         options += f" total {_num(traj.total_time)}"
     options += " loop" if traj.loop else ""
     if traj.trigger is not None:
-        options += (f" start when robot within {_num(traj.trigger.distance)} of "
+        options += (f" when robot within {_num(traj.trigger.distance)} of "
                     f"{traj.trigger.floor.name}")
     lines = [head + f" trajectory{options} {{"]
     for vertex in traj.vertices:

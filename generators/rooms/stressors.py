@@ -12,7 +12,7 @@ perception, or planning without its footprint, runs into — and a careful one p
 * ``doorway``: a doorway beside a straight stretch of the route (wall stubs either side of
   the tile beside it, and of the tile behind that), a person standing in it one tile back; the
   person steps into the doorway, towards the route, when the robot comes within a
-  distance of the route tile level with it (a start trigger, ``start when robot within D of
+  distance of the route tile level with it (a start trigger, ``when robot within D of
   FLOOR``): the robot's laser first shows the person through the opening 60-120 degrees off
   its heading, within a metre of its footprint. It is the one stressor timed by where the
   robot really is, so it tests a navigator blind on that side, or late, at every pace.

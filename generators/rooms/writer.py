@@ -109,7 +109,7 @@ def _mover_lines(plan: RoomPlan) -> list[str]:
     else:
         floor, within = mover.start_when
         timing = "started by where the robot is"
-        trigger = f" start when robot within {_fmt(within)} of {cell_name(floor)}"
+        trigger = f" when robot within {_fmt(within)} of {cell_name(floor)}"
     lines = ["", f"    // stressor: {plan.params.stressor} ({timing}, see docs/rooms.md)",
              f"{head} trajectory stop{trigger} {{"]
     lines += [f"        {cell_name(c)} at {_fmt(t)}" for c, t in mover.vertices]

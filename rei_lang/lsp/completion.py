@@ -35,10 +35,10 @@ MONITOR_KEYWORDS = ("rate", "data", "Hz")
 """Words of a mission's monitor block, offered only inside it."""
 FAULT_KEYWORDS = ACTIVATION_KEYWORDS
 """Words of a fault entry, offered only inside a fault section."""
-TRAJECTORY_OPTIONS = ("total", "loop", "stop", "start")
+TRAJECTORY_OPTIONS = ("total", "loop", "stop", "when")
 """What may follow ``trajectory`` before its ``{``."""
-TRIGGER_NEXT = {"start": "when", "when": "robot", "robot": "within"}
-"""A start trigger (``start when robot within D of FLOOR``) word by word."""
+TRIGGER_NEXT = {"when": "robot", "robot": "within"}
+"""A start trigger (``when robot within D of FLOOR``) word by word."""
 TRIGGER_WORDS = ("when", "within", "of")
 """Words of a start trigger only: offered in it, never as statements of a room."""
 

@@ -183,7 +183,7 @@ def _trajectory(linker: _Linker, raw: Any, owner: str) -> Trajectory | None:
         if kind == "StartTrigger":
             if trigger is not None:
                 linker.error(linker.span(option), "OPTION-REPEAT",
-                             f"trajectory of '{owner}': expected one 'start when', found "
+                             f"trajectory of '{owner}': expected one 'when robot within', found "
                              f"another")
             distance = linker.number(option.distance, option,
                                      f"start distance of '{owner}'s trajectory (m)", low=0.0,

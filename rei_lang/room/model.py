@@ -90,7 +90,7 @@ class Vertex:
 
 @dataclass(frozen=True)
 class StartTrigger:
-    """`start when robot within DISTANCE of FLOOR`: the trajectory's clock starts when the
+    """`when robot within DISTANCE of FLOOR`: the trajectory's clock starts when the
     robot's centre first comes within ``distance`` metres of the floor's centre."""
 
     floor: NameRef

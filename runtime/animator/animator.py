@@ -11,7 +11,7 @@ How the path time runs is the body's behaviour (runtime/animator/reactive.py): a
 human's velocity comes from the social force model, towards a target point whose path time
 only advances while the human keeps up with it.
 
-A trajectory with a start trigger (``start when robot within D of FLOOR``) keeps its clock
+A trajectory with a start trigger (``when robot within D of FLOOR``) keeps its clock
 at zero, so its body stands at its first vertex, until a control tick finds the robot's centre
 within D of the floor's centre; from that tick on its clock runs as a scripted one's does from
 the start of the run (a seeded variation keeps its speed scale but drops its start delay).

@@ -1,4 +1,4 @@
-"""A trajectory's start trigger (`start when robot within D of FLOOR`): parsed, checked with
+"""A trajectory's start trigger (`when robot within D of FLOOR`): parsed, checked with
 located errors, carried into the concrete model and world.json, printed back, offered by
 completion, and exported to Gazebo as a planned start with a comment saying so."""
 
@@ -33,7 +33,7 @@ ROOM = """room hall {
     human h on g_1_4 trajectory stop TRIGGER total 2 { g_1_4 g_2_4 g_2_7 }
 }
 """
-GOOD = "start when robot within 1.2 of g_2_4"
+GOOD = "when robot within 1.2 of g_2_4"
 
 
 def _write(tmp_path: Path, trigger: str, name: str = "hall.room") -> Path:
@@ -71,20 +71,20 @@ def test_the_trigger_reaches_the_concrete_model_and_world_json(tmp_path: Path) -
 
 
 @pytest.mark.parametrize(("trigger", "rule", "at", "message"), [
-    ("start when robot within 1.2 of g_2_44", "REF-UNRESOLVED", "g_2_44",
+    ("when robot within 1.2 of g_2_44", "REF-UNRESOLVED", "g_2_44",
      "expected the name of a floor, found 'g_2_44'; did you mean 'g_2_4'"),
-    ("start when robot within 1.2 of g_0_0", "REF-KIND", "g_0_0",
+    ("when robot within 1.2 of g_0_0", "REF-KIND", "g_0_0",
      "'h': expected a floor to start the trajectory near, found the wall 'g_0_0'"),
-    ("start when robot within -1 of g_2_4", "NUM-RANGE", "start",
+    ("when robot within -1 of g_2_4", "NUM-RANGE", "when",
      "start distance of 'h's trajectory (m): expected a number > 0 and <= 1000, found -1"),
-    ("start when robot within 0 of g_2_4", "NUM-RANGE", "start",
+    ("when robot within 0 of g_2_4", "NUM-RANGE", "when",
      "expected a number > 0 and <= 1000, found 0"),
-    ("start when robot within nan of g_2_4", "NUM-FINITE", "start",
+    ("when robot within nan of g_2_4", "NUM-FINITE", "when",
      "start distance of 'h's trajectory (m): expected a finite number, found 'nan'"),
-    ("start when robot within inf of g_2_4", "NUM-FINITE", "start", "found 'inf'"),
-    (f"{GOOD} start when robot within 2 of g_2_5", "OPTION-REPEAT",
-     "start when robot within 2",
-     "trajectory of 'h': expected one 'start when', found another"),
+    ("when robot within inf of g_2_4", "NUM-FINITE", "when", "found 'inf'"),
+    (f"{GOOD} when robot within 2 of g_2_5", "OPTION-REPEAT",
+     "when robot within 2",
+     "trajectory of 'h': expected one 'when robot within', found another"),
 ])
 def test_a_bad_trigger_is_a_located_error_with_exit_2(tmp_path: Path, trigger: str, rule: str,
                                                       at: str, message: str) -> None:
@@ -100,7 +100,7 @@ def test_a_bad_trigger_is_a_located_error_with_exit_2(tmp_path: Path, trigger: s
 
 
 def test_a_misspelt_trigger_is_a_syntax_error_naming_the_line(tmp_path: Path) -> None:
-    path = _write(tmp_path, "start when robot near 1.2 of g_2_4")
+    path = _write(tmp_path, "when robot near 1.2 of g_2_4")
     result = subprocess.run([sys.executable, "-m", "rei.lang.cli", "check", str(path)],
                             capture_output=True, text=True, check=False)
     assert result.returncode == 2 and f"{path}:9:" in result.stdout
@@ -111,7 +111,7 @@ def test_the_printer_round_trips_the_trigger(tmp_path: Path) -> None:
     doc = load_room(_write(tmp_path, GOOD), Workspace())
     assert doc.room is not None
     text = print_room(doc.room)
-    assert "start when robot within 1.2 of g_2_4" in text
+    assert "when robot within 1.2 of g_2_4" in text
     (tmp_path / "again.room").write_text(text, encoding="utf-8")
     again = load_room(tmp_path / "again.room", Workspace())
     assert again.ok and again.room is not None
@@ -128,13 +128,12 @@ def test_completion_walks_through_the_trigger(tmp_path: Path) -> None:
     def labels(before: str) -> list[str]:
         return [c.label for c in room_completions(head + before, doc.room, None)]
 
-    assert {"start", "total", "loop", "stop"} <= set(labels(""))
-    assert labels("start ") == ["when"]
-    assert labels("start when ") == ["robot"]
-    assert labels("start when robot ") == ["within"]
-    assert labels("start when robot within ") == []
-    assert labels("start when robot within 1.5 ") == ["of"]
-    floors = labels("start when robot within 1.5 of ")
+    assert {"when", "total", "loop", "stop"} <= set(labels(""))
+    assert labels("when ") == ["robot"]
+    assert labels("when robot ") == ["within"]
+    assert labels("when robot within ") == []
+    assert labels("when robot within 1.5 ") == ["of"]
+    floors = labels("when robot within 1.5 of ")
     assert "g_2_4" in floors and "g_0_0" not in floors
     # the trigger's words are not offered as statements of the room
     statements = [c.label for c in room_completions("room x {\n    ", doc.room, None)]

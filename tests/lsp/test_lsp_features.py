@@ -439,14 +439,14 @@ async def test_trigger_diagnostics_and_completion(client: RecordingClient, tmp_p
                                                   ) -> None:
     path = tmp_path / "hall.room"
     editor = Editor(client)
-    good = TRIGGER_ROOM.replace("TRIGGER", "start when robot within 1.2 of g_2_4")
+    good = TRIGGER_ROOM.replace("TRIGGER", "when robot within 1.2 of g_2_4")
     assert await editor.open(path, good) == []
 
-    bad = TRIGGER_ROOM.replace("TRIGGER", "start when robot within -2 of g_2_44")
+    bad = TRIGGER_ROOM.replace("TRIGGER", "when robot within -2 of g_2_44")
     published = await editor.change(path, bad)
     found = {(str(d.code), d.range.start.line, d.range.start.character) for d in published}
     line = bad.splitlines()[8]
-    assert ("NUM-RANGE", 8, line.index("start")) in found
+    assert ("NUM-RANGE", 8, line.index("when")) in found
     assert ("REF-UNRESOLVED", 8, line.index("g_2_44")) in found
 
     assert await editor.change(path, good) == []
@@ -456,11 +456,11 @@ async def test_trigger_diagnostics_and_completion(client: RecordingClient, tmp_p
     assert loc.range.start.line == 4  # the grid row holding g_2_4
     hover = await hover_text(client, path, position_of(good, "human h", offset=6))
     assert "starts when the robot is within 1.2 m of `g_2_4`" in hover
-    half = TRIGGER_ROOM.replace("TRIGGER", "start when robot within 1.2 of ")
+    half = TRIGGER_ROOM.replace("TRIGGER", "when robot within 1.2 of ")
     await editor.change(path, half)  # does not parse: floors come from the last good version
     floors = await completion_labels(client, path, position_of(half, "of  total", offset=3))
     assert {"g_2_4", "g_1_4"} <= set(floors) and "g_0_0" not in floors
-    typed = TRIGGER_ROOM.replace("TRIGGER", "start ")
+    typed = TRIGGER_ROOM.replace("TRIGGER", "when ")
     await editor.change(path, typed)
-    assert await completion_labels(client, path, position_of(typed, "start ", offset=6)) == ["when"]
+    assert await completion_labels(client, path, position_of(typed, "when ", offset=5)) == ["robot"]
     await editor.close(path)

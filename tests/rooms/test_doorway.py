@@ -60,7 +60,7 @@ def test_doorway_rooms_put_the_person_beside_the_robots_real_way(seed: int) -> N
         top = 0.26  # the Waffle's drive limit; the stress preset has no speed limit
         assert within == pytest.approx(DOORWAY_AHEAD + top * DOORWAY_SEEN / plan.params.speed,
                                        abs=0.01)
-        assert f"start when robot within {within:g} of area_{-p[1]}_{p[0]}" in pair.room_text
+        assert f"when robot within {within:g} of area_{-p[1]}_{p[0]}" in pair.room_text
         # the straight line between the goals (the any-angle robot's way) passes p closely
         a, b = plan.goals[0], plan.goals[1]
         off = abs((b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0])) / \

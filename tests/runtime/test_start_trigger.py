@@ -46,7 +46,7 @@ def _run(folder: Path, speed: float, trigger: bool = True, duration: float = 24.
          ) -> tuple[RunRecord, np.ndarray, np.ndarray, np.ndarray]:
     """The record, the sample times, the robot's (x, y) and the stepper's (x, y)."""
     folder.mkdir(parents=True, exist_ok=True)
-    clause = f"start when robot within {WITHIN} of g_2_5" if trigger else ""
+    clause = f"when robot within {WITHIN} of g_2_5" if trigger else ""
     (folder / "hall.room").write_text(ROOM.replace("TRIGGER", clause), encoding="utf-8")
     (folder / "pass.mission").write_text(MISSION, encoding="utf-8")
     mission = generate_world(folder / "pass.mission", folder / "world")
