@@ -30,20 +30,20 @@ each side of the route; the first three movers come from the other side, so they
 front of the robot either way (the doorway's person comes from and stays on its side). None
 leaves the side to the random stream.
 
-Timing (emerge, oncoming, crossing): the encounter is timed from the robot's *planned* arrival — its
-route on the static map (the inflated floor graph, as the descriptors walk it) driven at
-``NOMINAL_SPEED`` after ``START_DELAY`` — so the mover reaches the meeting point when the
-planned robot is ``lead`` metres before it. The mover waits on its first tile until then: the
-room file lists the wait as vertices ``HOLD_STEP`` seconds apart (so the per-run start delay,
-at most one vertex interval, stays short) and ends it with two vertices ``SETTLE`` seconds
-apart (so the spline stands still while waiting, instead of swinging back and forth). The
-cart is scripted, so it is also timed to have cleared the robot's lane before the robot could
-get there at its top speed: a careful robot is never hit, it only has to wait. People added
-here are ``yielding`` humans (they stop for the robot and step aside), the fairness every
-generated human has.
+Timing (emerge, oncoming, crossing): the encounter is timed from the robot's *planned*
+arrival — its route on the static map (the inflated floor graph, as the descriptors walk
+it) driven at ``NOMINAL_SPEED`` after ``START_DELAY`` — so the mover reaches the meeting
+point when the planned robot is ``lead`` metres before it. The mover waits on its first
+tile until then: the room file lists the wait as vertices ``HOLD_STEP`` seconds apart (so
+the per-run start delay, at most one vertex interval, stays short) and ends it with two
+vertices ``SETTLE`` seconds apart (so the spline stands still while waiting, instead of
+swinging back and forth). The cart is scripted, so it is also timed to have cleared the
+robot's lane before the robot could get there at its top speed: a careful robot is never
+hit, it only has to wait. People added here are ``yielding`` humans (they stop for the
+robot and step aside), the fairness every generated human has.
 
 Timing (doorway): by the robot's real position. The person's trajectory starts when the
-robot's centre comes within ``DOORWAY_TRIGGER`` of the route tile level with the doorway —
+robot's centre comes within a distance D of the route tile level with the doorway — D
 chosen so that a robot at its top speed is ``DOORWAY_AHEAD`` before level when the person,
 ``DOORWAY_SEEN`` into its step, comes within REACTION_TIME's 1.05 m of the footprint; a
 slower robot is farther back then (the person is seen still more ahead). Nothing waits on
@@ -92,17 +92,18 @@ CART_LEAD = 1.2
 CART_CLEARANCE = 0.2
 """m the cart keeps from the robot at its top speed (footprint to footprint, at least)."""
 CORRIDOR_LENGTH = 3
+"""Tiles of the one-tile corridor."""
 DOORWAY_AHEAD = 0.2
 """m before level with the doorway a robot at its top speed is when the stepping person first
 comes within REACTION_TIME's react_zone (1.05 m) of its footprint: the person is then about
-70 degrees off its heading (ahead, in the front half-plane, and 60-120 degrees to its side)."""
+80 degrees off its heading (ahead, in the front half-plane, and 60-120 degrees to its side,
+its near edge too)."""
 DOORWAY_OFF_LINE = 0.2
 """m: the straight line between the first two goals passes at most this far from the centres
 of the route's straight stretch by the doorway (so the robot drives past it there)."""
 DOORWAY_SEEN = 0.6
 """m of its one-tile step the person has walked when it is within react_zone of a robot
 passing level with the doorway (1.4 m from the route's centre line, centre to centre)."""
-"""Tiles of the one-tile corridor."""
 ROW_TYPE = "table"
 """The catalogue type of the gap's row: 0.8 m along the row leaves a 0.2 m slot."""
 CART_TYPE = "cart"
@@ -472,9 +473,7 @@ def _gap(floors: set[Cell], goals: Sequence[Cell], leg: list[Cell], half: float,
         # Free of other objects: the opening and the tiles either side of it (the way round
         # stays open), and the slot's and the straight line's tiles (the slot stays the
         # point's shortest way, with nothing else on the way to it).
-        steps = max(abs(dx), abs(dy)) * 10
-        line = {(round(start[0] + dx * m / steps), round(start[1] + dy * m / steps))
-                for m in range(steps + 1)}
+        line = _line_cells(start, goal)
         keep = frozenset(t for t in line | {_add(u, cell(k, 0)) for u in (opening, *slot)
                                             for k in (-1, 0, 1)}
                          if t in floors) - set(tables)
