@@ -171,10 +171,24 @@ def run_one(nav: Navigator, inputs: list[Path], seed: int, repeat: int, workers:
     return CampaignOutcome(nav.name, seed, wall, tuple(outcome_of(r) for r in result.records))
 
 
-def suite(out: Path, count: int, preset: str, seed: int, examples: bool) -> list[Path]:
+def suite(out: Path, count: int, preset: str, seed: int, examples: bool,
+          stressor: str | None = None) -> list[Path]:
+    """The demo's suite; with ``stressor``, ``count`` stress rooms of that one stressor
+    instead (their movers' sides alternate over the suite, as in every suite)."""
     from rei.runtime.commands.demo import EXAMPLES, generate_suite  # noqa: PLC0415
 
-    inputs = generate_suite(out / f"suite-{preset}-{count}-seed{seed}", count, preset, seed)
+    if stressor is None:
+        inputs = generate_suite(out / f"suite-{preset}-{count}-seed{seed}", count, preset, seed)
+    else:
+        from rei.lang.cli import main as rei_gen  # noqa: PLC0415
+
+        folder = out / f"suite-stress-{stressor}-{count}-seed{seed}"
+        if not (folder / "index.csv").is_file():
+            status = rei_gen(["rooms", "-o", str(folder), "--preset", "stress", "--stressor",
+                              stressor, "--count", str(count), "--seed", str(seed)])
+            if status != 0:
+                raise SystemExit(status)
+        inputs = [folder / "index.csv"]
     return [*inputs, EXAMPLES] if examples and EXAMPLES not in inputs else inputs
 
 
@@ -336,6 +350,9 @@ def main() -> int:
     parser.add_argument("--repeat", type=int, default=2, help="runs per mission (demo: 2)")
     parser.add_argument("--preset", choices=("small", "medium", "large"), default="small",
                         help="room class of the suite (demo: small)")
+    parser.add_argument("--stressor", default=None, metavar="KIND",
+                        help="instead of the demo's suite, --count stress rooms of this one "
+                             "stressor (e.g. doorway)")
     parser.add_argument("--examples", action="store_true",
                         help="add the bundled examples (humans, a goal heading) to every "
                              "campaign")
@@ -356,7 +373,7 @@ def main() -> int:
     results: dict[str, list[CampaignOutcome]] = {n.name: [] for n in navs}
     started = time.perf_counter()
     for seed in seeds:
-        inputs = suite(out / "suites", count, args.preset, seed, args.examples)
+        inputs = suite(out / "suites", count, args.preset, seed, args.examples, args.stressor)
         for nav in navs:
             camp = run_one(nav, inputs, seed, repeat, args.workers,
                            out / "bugs" / f"seed{seed}" / nav.name, args.resume)
@@ -366,14 +383,16 @@ def main() -> int:
                   f"({camp.wall:.0f} s)", file=sys.stderr)
     summary = summarise(navs, results, seeds)
     settings = {"seeds": seeds, "count": count, "repeat": repeat, "preset": args.preset,
-                "examples": args.examples, "workers": args.workers, "quick": args.quick,
+                "examples": args.examples, "stressor": args.stressor,
+                "workers": args.workers, "quick": args.quick,
                 "resumed": args.resume,
                 "wall_seconds": time.perf_counter() - started}
     report = {"settings": settings, "summary": summary,
               "campaigns": [asdict(c) for camps in results.values() for c in camps]}
     out.mkdir(parents=True, exist_ok=True)
     (out / "bugs.json").write_text(json.dumps(report, indent=1) + "\n", encoding="utf-8")
-    print(f"{len(seeds)} seed(s) x {count} {args.preset} room(s) x {repeat} run(s)"
+    rooms = f"{args.stressor} stress" if args.stressor else args.preset
+    print(f"{len(seeds)} seed(s) x {count} {rooms} room(s) x {repeat} run(s)"
           f"{' + examples' if args.examples else ''}; {out / 'bugs.json'}\n")
     print(table(summary, args.markdown))
     return 0

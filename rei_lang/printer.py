@@ -39,6 +39,9 @@ def _object_line(obj: PlacedObject) -> list[str]:
     if traj.total_time is not None:
         options += f" total {_num(traj.total_time)}"
     options += " loop" if traj.loop else ""
+    if traj.trigger is not None:
+        options += (f" when robot within {_num(traj.trigger.distance)} of "
+                    f"{traj.trigger.floor.name}")
     lines = [head + f" trajectory{options} {{"]
     for vertex in traj.vertices:
         at = f" at {_num(vertex.time)}" if vertex.time is not None else ""

@@ -13,6 +13,7 @@ from rei.generators.concrete.model import (
     ConcreteObject,
     ConcreteWorld,
     Pose2D,
+    StartWhen,
     TimedPoint,
     TimedTrajectory,
 )
@@ -32,7 +33,11 @@ def _timed(traj: Trajectory, room: Room, cells: dict[str, tuple[int, int]]) -> T
     pts = [_xy(cells[v.floor.name], room.tile_size) for v in traj.vertices]
     times, pts = vertex_times(pts, [v.time for v in traj.vertices], traj.total_time, traj.loop)
     points = tuple(TimedPoint(t, x, y) for t, (x, y) in zip(times, pts, strict=True))
-    return TimedTrajectory(points, traj.loop)
+    start_when = None
+    if traj.trigger is not None:
+        name = traj.trigger.floor.name
+        start_when = StartWhen(name, *_xy(cells[name], room.tile_size), traj.trigger.distance)
+    return TimedTrajectory(points, traj.loop, start_when)
 
 
 def concretise_room(doc: RoomDocument) -> ConcreteWorld:

@@ -44,11 +44,24 @@ class TimedPoint:
 
 
 @dataclass(frozen=True)
+class StartWhen:
+    """The trajectory's clock starts when the robot's centre first comes within ``within``
+    metres of (x, y), the centre of the floor ``floor``."""
+
+    floor: str
+    x: float
+    y: float
+    within: float
+
+
+@dataclass(frozen=True)
 class TimedTrajectory:
     """Control vertices with their times; for a loop the last point repeats the first."""
 
     points: tuple[TimedPoint, ...]
     loop: bool
+    start_when: StartWhen | None = None
+    """None: the times count from the start of the run."""
 
     @property
     def duration(self) -> float:

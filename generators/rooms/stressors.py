@@ -9,30 +9,45 @@ perception, or planning without its footprint, runs into — and a careful one p
 * ``crossing``: a cart (a scripted dynamic object) crosses the route at a right angle from
   two tiles off it and is parked on the tile beside the route on the other side, where the
   robot passes it.
+* ``doorway``: a doorway beside a straight stretch of the route (wall stubs either side of
+  the tile beside it, and of the tile behind that), a person standing in it one tile back; the
+  person steps into the doorway, towards the route, when the robot comes within a
+  distance of the route tile level with it (a start trigger, ``when robot within D of
+  FLOOR``): the robot's laser first shows the person through the opening 60-120 degrees off
+  its heading, within a metre of its footprint. It is the one stressor timed by where the
+  robot really is, so it tests a navigator blind on that side, or late, at every pace.
 * ``gap``: a row of tables across the first leg, turned so two neighbours leave a slot
   narrower than the robot where the straight line between the goals crosses the row, and one
   open tile at least two tiles from the slot: the shortest way for a point goes through the
   slot, the robot's goes round through the opening.
 
-Sides (the first three): each mover ends up standing on a tile beside the robot's route —
+Sides (all but the gap): each mover ends up standing on a tile beside the robot's route —
 the emerging person where it stepped aside, the parked cart, the oncoming person past the
-corridor's near end — so the robot passes it within a metre, on its left or on its right.
-The caller says which (``side``, ``SIDES``): ``side_of`` alternates it over a suite's mover
-rooms, so a suite with two of them has an encounter on each side of the route; the mover
-comes from the other side, so it crosses in front of the robot either way. None leaves the
-side to the random stream.
+corridor's near end, the doorway's person in its doorway — so the robot passes it within a
+metre, on its left or on its right. The caller says which (``side``, ``SIDES``): ``side_of``
+alternates it over a suite's mover rooms, so a suite with two of them has an encounter on
+each side of the route; the first three movers come from the other side, so they cross in
+front of the robot either way (the doorway's person comes from and stays on its side). None
+leaves the side to the random stream.
 
-Timing (the first three): the encounter is timed from the robot's *planned* arrival — its
-route on the static map (the inflated floor graph, as the descriptors walk it) driven at
-``NOMINAL_SPEED`` after ``START_DELAY`` — so the mover reaches the meeting point when the
-planned robot is ``lead`` metres before it. The mover waits on its first tile until then: the
-room file lists the wait as vertices ``HOLD_STEP`` seconds apart (so the per-run start delay,
-at most one vertex interval, stays short) and ends it with two vertices ``SETTLE`` seconds
-apart (so the spline stands still while waiting, instead of swinging back and forth). The
-cart is scripted, so it is also timed to have cleared the robot's lane before the robot could
-get there at its top speed: a careful robot is never hit, it only has to wait. People added
-here are ``yielding`` humans (they stop for the robot and step aside), the fairness every
-generated human has.
+Timing (emerge, oncoming, crossing): the encounter is timed from the robot's *planned*
+arrival — its route on the static map (the inflated floor graph, as the descriptors walk
+it) driven at ``NOMINAL_SPEED`` after ``START_DELAY`` — so the mover reaches the meeting
+point when the planned robot is ``lead`` metres before it. The mover waits on its first
+tile until then: the room file lists the wait as vertices ``HOLD_STEP`` seconds apart (so
+the per-run start delay, at most one vertex interval, stays short) and ends it with two
+vertices ``SETTLE`` seconds apart (so the spline stands still while waiting, instead of
+swinging back and forth). The cart is scripted, so it is also timed to have cleared the
+robot's lane before the robot could get there at its top speed: a careful robot is never
+hit, it only has to wait. People added here are ``yielding`` humans (they stop for the
+robot and step aside), the fairness every generated human has.
+
+Timing (doorway): by the robot's real position. The person's trajectory starts when the
+robot's centre comes within a distance D of the route tile level with the doorway — D
+chosen so that a robot at its top speed is ``DOORWAY_AHEAD`` before level when the person,
+``DOORWAY_SEEN`` into its step, comes within REACTION_TIME's 1.05 m of the footprint; a
+slower robot is farther back then (the person is seen still more ahead). Nothing waits on
+a planned arrival, so the encounter is the same whatever pace or path the navigator takes.
 
 All randomness comes from the ``random.Random`` passed in; this module never touches files,
 never imports the runtime, and never changes a room without keeping its floor connected.
@@ -43,7 +58,7 @@ from __future__ import annotations
 import math
 import random
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from rei.catalogue import Catalogue
 from rei.generators.rooms.geometry import Cell, fast_route, is_connected
@@ -78,13 +93,24 @@ CART_CLEARANCE = 0.2
 """m the cart keeps from the robot at its top speed (footprint to footprint, at least)."""
 CORRIDOR_LENGTH = 3
 """Tiles of the one-tile corridor."""
+DOORWAY_AHEAD = 0.2
+"""m before level with the doorway a robot at its top speed is when the stepping person first
+comes within REACTION_TIME's react_zone (1.05 m) of its footprint: the person is then about
+80 degrees off its heading (ahead, in the front half-plane, and 60-120 degrees to its side,
+its near edge too)."""
+DOORWAY_OFF_LINE = 0.2
+"""m: the straight line between the first two goals passes at most this far from the centres
+of the route's straight stretch by the doorway (so the robot drives past it there)."""
+DOORWAY_SEEN = 0.6
+"""m of its one-tile step the person has walked when it is within react_zone of a robot
+passing level with the doorway (1.4 m from the route's centre line, centre to centre)."""
 ROW_TYPE = "table"
 """The catalogue type of the gap's row: 0.8 m along the row leaves a 0.2 m slot."""
 CART_TYPE = "cart"
 """The catalogue type of the crossing cart."""
 SIDES = ("left", "right")
 """The side of the robot's route (looking along it) a stressor's mover ends up beside."""
-MOVER_KINDS = ("emerge", "crossing", "oncoming")
+MOVER_KINDS = ("emerge", "crossing", "oncoming", "doorway")
 """The stressors with a mover (the gap has none)."""
 
 
@@ -153,6 +179,9 @@ class TimedMover:
     heading: float
     behaviour: str
     """'yielding' for people; dynamic objects are scripted."""
+    start_when: tuple[Cell, float] | None = None
+    """(tile, metres): the trajectory starts when the robot's centre comes within that
+    distance of the tile's centre (its vertex times count from then); None: with the run."""
 
 
 @dataclass(frozen=True)
@@ -263,6 +292,8 @@ def plan_layout(params: RoomParameters, floors: set[Cell], goals: Sequence[Cell]
         return _crossing(floors, leg, blocked, rng, side)
     if kind == "oncoming":
         return _oncoming(floors, leg, blocked, rng, side)
+    if kind == "doorway":
+        return _doorway(floors, goals, leg, blocked, rng, side)
     raise ValueError(kind)
 
 
@@ -295,6 +326,56 @@ def _emerge(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: random.
                               side=side_cell(toward, d, aside))
     raise StressorFailed("no straight stretch of the first leg with room for a wall stub "
                          "and a person behind it")
+
+
+def _line_cells(a: Cell, b: Cell) -> set[Cell]:
+    """The tiles the straight line between two tile centres passes through (sampled every
+    tenth of a tile)."""
+    steps = max(abs(b[0] - a[0]), abs(b[1] - a[1])) * 10
+    return {(round(a[0] + (b[0] - a[0]) * m / steps), round(a[1] + (b[1] - a[1]) * m / steps))
+            for m in range(steps + 1)} if steps else {a}
+
+
+def _off_line(c: Cell, a: Cell, b: Cell) -> float:
+    """Metres from the centre of tile c to the straight line through a and b."""
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    return abs(dx * (c[1] - a[1]) - dy * (c[0] - a[0])) / math.hypot(dx, dy)
+
+
+def _doorway(floors: set[Cell], goals: Sequence[Cell], leg: list[Cell], blocked: set[Cell],
+             rng: random.Random, side: str | None) -> StressorLayout:
+    # The robot's real way is not the grid route: a navigator planning any-angle paths
+    # drives the straight line between the goals where nothing is in its way. The doorway
+    # goes where that line runs along the route's straight stretch, so the robot passes the
+    # doorway's tile as the generator plans, whatever planner it has; the line's tiles are
+    # kept free of objects.
+    start, goal = goals[0], goals[1]
+    line = _line_cells(start, goal)
+    if not line <= floors:
+        raise StressorFailed("the straight line between the first goals leaves the floor")
+    runs = [(k, d) for k, d in _straight_runs(leg, 3, 1)
+            if all(_off_line(leg[m], start, goal) <= DOORWAY_OFF_LINE
+                   for m in range(k - 3, k + 2))]
+    rng.shuffle(runs)
+    for k, d in runs:
+        p = leg[k]
+        for n in _perpendiculars(d, rng, side):
+            door, back = _add(p, n), _add(p, n, 2)
+            if any(t not in floors or t in blocked for t in (door, back)):
+                continue
+            # Stubs either side of the doorway and of the tile behind it: the person is only
+            # seen through the opening, from beside it.
+            stubs = {_add(t, d, s) for t in (door, back) for s in (1, -1)} & floors
+            if stubs & (blocked | line) or not is_connected(floors - stubs):
+                continue
+            mover = MoverPath("doorway_person", "human", "human", (back, door), anchor=1,
+                              lead=0.0)
+            return StressorLayout("doorway", frozenset(stubs), (), mover, p,
+                                  tuple(leg[k - 3:k + 2]),
+                                  frozenset(leg) | line | {door, back},
+                                  side=side_cell(p, d, door))
+    raise StressorFailed("no straight stretch of the first leg with two free tiles beside it "
+                         "for a doorway")
 
 
 def _crossing(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: random.Random,
@@ -392,9 +473,7 @@ def _gap(floors: set[Cell], goals: Sequence[Cell], leg: list[Cell], half: float,
         # Free of other objects: the opening and the tiles either side of it (the way round
         # stays open), and the slot's and the straight line's tiles (the slot stays the
         # point's shortest way, with nothing else on the way to it).
-        steps = max(abs(dx), abs(dy)) * 10
-        line = {(round(start[0] + dx * m / steps), round(start[1] + dy * m / steps))
-                for m in range(steps + 1)}
+        line = _line_cells(start, goal)
         keep = frozenset(t for t in line | {_add(u, cell(k, 0)) for u in (opening, *slot)
                                             for k in (-1, 0, 1)}
                          if t in floors) - set(tables)
@@ -427,6 +506,25 @@ def hold_times(go: float) -> list[float]:
     return [*times, round(waiting, 2), go]
 
 
+def _time_doorway(layout: StressorLayout, mover: MoverPath, params: RoomParameters,
+                  arrival: float, top: float) -> StressorPlan:
+    """The doorway's step, started by the robot's position: within ``trigger`` of the tile
+    level with the doorway, where a robot at its top speed (the nearest any robot can be
+    when the person is seen) is DOORWAY_AHEAD before level when the person has walked
+    DOORWAY_SEEN of its step. ``arrival_s`` and ``meeting_s`` are the planned robot's, for
+    the reader: the run does not wait for them."""
+    step = route_lengths(mover.vertices)[-1]
+    walked = round(step / params.speed, 2)
+    trigger = round(DOORWAY_AHEAD + top * DOORWAY_SEEN / params.speed, 2)
+    timed = ((mover.vertices[0], 0.0), (mover.vertices[1], walked))
+    person = TimedMover(mover.name, mover.role, mover.type, timed, mover.heading, "yielding",
+                        (layout.point, trigger))
+    nominal = min(NOMINAL_SPEED, top)
+    meeting = arrival - trigger / nominal + walked
+    return StressorPlan(replace(layout, mover=replace(mover, lead=trigger)), person,
+                        round(arrival, 2), round(meeting, 2))
+
+
 def time_layout(layout: StressorLayout, route: Sequence[Cell], params: RoomParameters,
                 bodies: Bodies) -> StressorPlan:
     """The mover's vertex times from the final route; StressorFailed when the final route
@@ -444,6 +542,8 @@ def time_layout(layout: StressorLayout, route: Sequence[Cell], params: RoomParam
     limit = params.max_speed if params.max_speed is not None else bodies.top_speed
     nominal, top = min(NOMINAL_SPEED, limit), min(bodies.top_speed, limit)
     arrival = planned_arrival(final, layout.point, nominal)
+    if layout.kind == "doorway":
+        return _time_doorway(layout, mover, params, arrival, top)
     meeting = arrival - mover.lead / nominal
     walk = route_lengths(mover.vertices)
     speed = params.speed

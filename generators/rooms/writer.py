@@ -115,9 +115,14 @@ def _mover_lines(plan: RoomPlan) -> list[str]:
     else:
         head = f"    dynamic {mover.name} : {mover.type} on {start} heading {_fmt(mover.heading)}"
         tail = "    }"
-    lines = ["", f"    // stressor: {plan.params.stressor} (timed from the robot's planned "
-                 f"arrival, see docs/rooms.md)",
-             f"{head} trajectory stop {{"]
+    if mover.start_when is None:
+        timing, trigger = "timed from the robot's planned arrival", ""
+    else:
+        floor, within = mover.start_when
+        timing = "started by where the robot is"
+        trigger = f" when robot within {_fmt(within)} of {cell_name(floor)}"
+    lines = ["", f"    // stressor: {plan.params.stressor} ({timing}, see docs/rooms.md)",
+             f"{head} trajectory stop{trigger} {{"]
     lines += [f"        {cell_name(c)} at {_fmt(t)}" for c, t in mover.vertices]
     lines.append(tail)
     return lines

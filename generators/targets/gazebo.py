@@ -9,7 +9,11 @@ separation) and two frictionless casters, Gazebo's differential-drive system on
 catalogue's beams, field of view, range, rate, mount and noise on ``scan``. Humans with a
 trajectory are ``<actor>``s walking a scripted trajectory whose waypoints are sampled from the
 same Catmull-Rom spline REI's animator walks (rei.lang.room.spline), facing their
-direction of motion; humans without one stand as models. Dynamic objects stand at their start
+direction of motion; humans without one stand as models. An actor's script cannot start on
+the robot's position without a Gazebo plugin, so a trajectory with a start trigger (``start
+when robot within D of FLOOR``) starts at its *planned* time instead: when a robot driving
+straight from its start at its drive's top speed would first be within D of the floor (the
+earliest it could be), with a comment in the SDF saying so. Dynamic objects stand at their start
 pose (Gazebo has no scripted motion for a plain model). Option ``robot=none`` leaves the robot
 out. The text is checked to be well-formed XML here; tests check it with ``ign sdf -k``. This
 module must never write files itself or read the textX model.
@@ -26,6 +30,7 @@ import numpy as np
 from rei.catalogue import Box, Cylinder, ObjectType, Polygon
 from rei.catalogue.model import solid_inertia
 from rei.generators.concrete import ConcreteObject, ConcreteWorld
+from rei.generators.concrete.model import TimedTrajectory
 from rei.generators.errors import GenerationError
 from rei.generators.output import OutputTree
 from rei.generators.targets import GenerationRequest
@@ -142,6 +147,8 @@ class Actor:
     delay: float
     waypoints: tuple[Waypoint, ...]
     behaviour: str
+    trigger_note: str = ""
+    """Why the delay is a planned start time (a trajectory with a start trigger), or empty."""
 
 
 def _object_model(obj: ConcreteObject, comment: str, z: float = 0.0) -> SdfModel:
@@ -214,11 +221,31 @@ def robot_model(world: ConcreteWorld) -> RobotModel:
                       drive.max_angular, lidar)
 
 
-def actor_of(obj: ConcreteObject, floor_z: float) -> Actor:
+def planned_start(trajectory: TimedTrajectory, robot: ConcreteObject) -> tuple[float, str]:
+    """When a triggered trajectory starts in Gazebo (seconds), and the SDF comment saying
+    why: the earliest a robot driving straight from its start at its drive's top speed meets
+    the trigger. (0, "") for a trajectory without a trigger."""
+    start = trajectory.start_when
+    if start is None:
+        return 0.0, ""
+    drive = robot.type.drive
+    speed = drive.max_linear if drive is not None and drive.max_linear > 0 else 1.0
+    way = max(0.0, math.hypot(start.x - robot.pose.x, start.y - robot.pose.y) - start.within)
+    planned = way / speed
+    return planned, (f"In REI this trajectory starts when the robot comes within "
+                     f"{start.within:g} m of floor '{start.floor}'; an actor script cannot "
+                     f"wait for the robot without a plugin, so here it starts at the planned "
+                     f"time {planned:.3f} s (the robot driving straight there at "
+                     f"{speed:g} m/s).")
+
+
+def actor_of(obj: ConcreteObject, floor_z: float, robot: ConcreteObject | None = None) -> Actor:
     """The human's trajectory sampled from the animator's spline every WAYPOINT_STEP seconds
-    (and at every control vertex), facing its direction of motion."""
+    (and at every control vertex), facing its direction of motion; ``robot`` times a start
+    trigger (planned_start)."""
     trajectory = obj.trajectory
     assert trajectory is not None
+    planned, note = planned_start(trajectory, robot) if robot is not None else (0.0, "")
     times = np.array([p.t for p in trajectory.points], dtype=float)
     spline = CatmullRom(times, np.array([[p.x, p.y] for p in trajectory.points], dtype=float),
                         trajectory.loop)
@@ -237,7 +264,7 @@ def actor_of(obj: ConcreteObject, floor_z: float) -> Actor:
             yaw = math.atan2(vy, vx)
         x, y = spline.position(t)
         waypoints.append(Waypoint(t - t0, (x, y, floor_z + ACTOR_HIP_HEIGHT, 0.0, 0.0, yaw)))
-    return Actor(obj.name, trajectory.loop, t0, tuple(waypoints), obj.behaviour)
+    return Actor(obj.name, trajectory.loop, t0 + planned, tuple(waypoints), obj.behaviour, note)
 
 
 def world_models(world: ConcreteWorld) -> list[SdfModel]:
@@ -261,7 +288,7 @@ def world_models(world: ConcreteWorld) -> list[SdfModel]:
 
 
 def world_actors(world: ConcreteWorld) -> list[Actor]:
-    return [actor_of(o, world.floor(o.floor).type.height) for o in world.objects
+    return [actor_of(o, world.floor(o.floor).type.height, world.robot) for o in world.objects
             if o.role == "human" and o.trajectory is not None]
 
 

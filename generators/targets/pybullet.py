@@ -78,6 +78,10 @@ def _body(obj: ConcreteObject, urdf: str, fixed: bool, tile: float) -> dict[str,
     if obj.trajectory is not None:
         body["trajectory"] = {"loop": obj.trajectory.loop,
                               "points": [[p.t, p.x, p.y] for p in obj.trajectory.points]}
+        start = obj.trajectory.start_when
+        if start is not None:
+            body["trajectory"]["start_when"] = {"floor": start.floor, "x": start.x,
+                                                "y": start.y, "within": start.within}
         body["behaviour"] = obj.behaviour
     return body
 

@@ -31,13 +31,15 @@ OVERRIDES = (
     ("stressor", "a stress scenario on the first leg: none, emerge (a person steps out from "
                  "behind a corner), oncoming (a person in a one-tile corridor), crossing (a "
                  "cart crosses at a right angle), gap (a furniture gap narrower than the "
-                 "robot on the direct line)"),
+                 "robot on the direct line), doorway (a person steps out of a doorway "
+                 "beside the route as the robot comes level)"),
 )
 
 
 HELP_EXAMPLES = """\
 rei-gen rooms -o suite --count 20 --seed 1              # 20 rooms and missions
 rei-gen rooms -o dense --preset small --objects 10%,25% --humans 0,1
+rei-gen rooms -o doors --preset stress --stressor doorway --count 4   # people in doorways
 rei-gen rooms --describe examples/navigation/navigation.mission
 """
 

@@ -35,6 +35,12 @@ MONITOR_KEYWORDS = ("rate", "data", "Hz")
 """Words of a mission's monitor block, offered only inside it."""
 FAULT_KEYWORDS = ACTIVATION_KEYWORDS
 """Words of a fault entry, offered only inside a fault section."""
+TRAJECTORY_OPTIONS = ("total", "loop", "stop", "when")
+"""What may follow ``trajectory`` before its ``{``."""
+TRIGGER_NEXT = {"when": "robot", "robot": "within"}
+"""A start trigger (``when robot within D of FLOOR``) word by word."""
+TRIGGER_WORDS = ("when", "within", "of")
+"""Words of a start trigger only: offered in it, never as statements of a room."""
 
 
 @functools.cache
@@ -145,6 +151,9 @@ def room_completions(text_before: str, room: Room | None, catalogue: Catalogue |
         return _floors(room)
     if prev == "behaviour":
         return [Candidate(b, "keyword", "human behaviour") for b in BEHAVIOURS]
+    trigger = _trigger_completions(ctx.previous, room)
+    if trigger is not None:
+        return trigger
     if prev in SIDES:
         return _floors(room) + _walls(room)
     if prev == "at" or prev in ("tile", "heading", "total", "catalogue"):
@@ -161,8 +170,28 @@ def room_completions(text_before: str, room: Room | None, catalogue: Catalogue |
         return _keywords(("legend",))
     if block == "room":
         return _keywords(w for w in grammar_keywords("room")
-                         if w not in ("room", "legend", "empty") and w not in SIDES)
+                         if w not in ("room", "legend", "empty", *TRIGGER_WORDS)
+                         and w not in SIDES)
     return _keywords(("room",))
+
+
+def _trigger_completions(previous: tuple[str, ...], room: Room | None
+                         ) -> list[Candidate] | None:
+    """Between ``trajectory`` and its ``{``: its options, a start trigger word by word, and
+    the floors after its ``of``; None elsewhere."""
+    opening = max((i for i, t in enumerate(previous) if t == "trajectory"), default=None)
+    if opening is None or "{" in previous[opening:]:
+        return None
+    prev = previous[-1]
+    if prev == "of":
+        return _floors(room)
+    if prev in TRIGGER_NEXT and (prev != "robot" or previous[-2:-1] == ("when",)):
+        return _keywords((TRIGGER_NEXT[prev],))
+    if prev == "within" or prev == "total":
+        return []  # a number follows
+    if previous[-2:-1] == ("within",):
+        return _keywords(("of",))
+    return [Candidate(w, "keyword", "trajectory option") for w in TRAJECTORY_OPTIONS]
 
 
 def mission_completions(text_before: str, room: Room | None,

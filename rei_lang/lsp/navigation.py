@@ -98,6 +98,9 @@ def room_names(room: Room, index: LineIndex) -> Iterator[Written]:
         if obj.trajectory is not None:
             for vertex in obj.trajectory.vertices:
                 yield Written(vertex.floor.span, "block", vertex.floor.name)
+            trigger = obj.trajectory.trigger
+            if trigger is not None:
+                yield Written(trigger.floor.span, "block", trigger.floor.name)
 
 
 def _smallest_at(names: Iterator[Written], line: int, col: int) -> Written | None:
@@ -280,6 +283,10 @@ def _object_hover(doc: RoomDocument, obj: PlacedObject) -> str:
     if obj.trajectory is not None:
         route = " → ".join(v.floor.name for v in obj.trajectory.vertices)
         lines += ["", f"trajectory ({'loop' if obj.trajectory.loop else 'stop'}): {route}"]
+        trigger = obj.trajectory.trigger
+        if trigger is not None:
+            lines.append(f"starts when the robot is within {trigger.distance:g} m of "
+                         f"`{trigger.floor.name}`")
     return "\n".join(lines)
 
 

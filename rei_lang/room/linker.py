@@ -30,6 +30,7 @@ from rei.lang.room.model import (
     Role,
     Room,
     Side,
+    StartTrigger,
     Trajectory,
     Vertex,
     WallDecl,
@@ -43,6 +44,8 @@ RESERVED_NAMES = {"con", "prn", "aux", "nul", *(f"com{i}" for i in range(10)),
 MAX_NAME_LENGTH = 100
 MAX_TIME = 1.0e6
 MAX_TILE = 100.0
+MAX_TRIGGER_DISTANCE = 1.0e3
+"""m: a start trigger farther than this from its floor is a typo, not a room."""
 MIN_TILE = 0.05
 DEFAULT_TYPES: dict[Role, str] = {"human": "human"}
 
@@ -174,9 +177,20 @@ def _trajectory(linker: _Linker, raw: Any, owner: str) -> Trajectory | None:
     span = linker.span(raw)
     total: float | None = None
     loop: bool | None = None
+    trigger: StartTrigger | None = None
     for option in raw.options:
         kind = type(option).__name__
-        if kind == "TotalTime":
+        if kind == "StartTrigger":
+            if trigger is not None:
+                linker.error(linker.span(option), "OPTION-REPEAT",
+                             f"trajectory of '{owner}': expected one 'when robot within', found "
+                             f"another")
+            distance = linker.number(option.distance, option,
+                                     f"start distance of '{owner}'s trajectory (m)", low=0.0,
+                                     high=MAX_TRIGGER_DISTANCE, low_open=True)
+            trigger = StartTrigger(linker.ref(option.floor), distance or 0.0,
+                                   linker.span(option))
+        elif kind == "TotalTime":
             if total is not None:
                 linker.error(linker.span(option), "OPTION-REPEAT",
                              f"trajectory of '{owner}': expected one 'total', found another")
@@ -218,7 +232,7 @@ def _trajectory(linker: _Linker, raw: Any, owner: str) -> Trajectory | None:
                 linker.error(cur.span, "TRAJ-TIMES",
                              f"trajectory of '{owner}': expected times to increase, found "
                              f"{cur.time:g} after {prev.time:g}")
-    return Trajectory(vertices, total, bool(loop), span)
+    return Trajectory(vertices, total, bool(loop), span, trigger)
 
 
 def _behaviour(linker: _Linker, raw: Any, owner: str) -> Behaviour:
@@ -364,10 +378,14 @@ def _resolve_placements(linker: _Linker, floors: dict[str, FloorDecl],
         refs = [obj.floor]
         if obj.trajectory is not None:
             refs.extend(v.floor for v in obj.trajectory.vertices)
+        trigger = obj.trajectory.trigger if obj.trajectory is not None else None
+        if trigger is not None:
+            refs.append(trigger.floor)
         for ref in refs:
             if ref.name in floors:
                 continue
-            what = "to stand on" if ref is obj.floor else "as a trajectory vertex"
+            what = ("to stand on" if ref is obj.floor else "to start the trajectory near"
+                    if trigger is not None and ref is trigger.floor else "as a trajectory vertex")
             if ref.name in walls:
                 linker.error(ref.span, "REF-KIND",
                              f"'{obj.name}': expected a floor {what}, found the wall "

@@ -89,11 +89,23 @@ class Vertex:
 
 
 @dataclass(frozen=True)
+class StartTrigger:
+    """`when robot within DISTANCE of FLOOR`: the trajectory's clock starts when the
+    robot's centre first comes within ``distance`` metres of the floor's centre."""
+
+    floor: NameRef
+    distance: float
+    span: Span
+
+
+@dataclass(frozen=True)
 class Trajectory:
     vertices: tuple[Vertex, ...]
     total_time: float | None
     loop: bool
     span: Span
+    trigger: StartTrigger | None = None
+    """None: the clock starts with the run."""
 
 
 @dataclass(frozen=True)

@@ -11,6 +11,12 @@ How the path time runs is the body's behaviour (runtime/animator/reactive.py): a
 human's velocity comes from the social force model, towards a target point whose path time
 only advances while the human keeps up with it.
 
+A trajectory with a start trigger (``when robot within D of FLOOR``) keeps its clock
+at zero, so its body stands at its first vertex, until a control tick finds the robot's centre
+within D of the floor's centre; from that tick on its clock runs as a scripted one's does from
+the start of the run (a seeded variation keeps its speed scale but drops its start delay).
+Encounters are then timed by where the robot is, not by when.
+
 The body is never teleported, so collisions with the robot are real contacts. Humans turn to
 face their direction of motion. Loops repeat; open trajectories stop at their last vertex.
 This module only moves bodies: it is given the robot's ground-truth pose and velocity each
@@ -20,7 +26,7 @@ control tick, and must never decide anything about the robot or the mission.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -73,6 +79,9 @@ class Animated:
     variation: HumanVariation = NO_VARIATION
     radius: float = 0.25
     """m, the footprint's radius others keep away from."""
+    start_when: tuple[float, float, float] | None = None
+    """(x, y, within): the clock starts when the robot's centre first comes within
+    ``within`` m of (x, y); None: with the run."""
 
 
 @dataclass(frozen=True)
@@ -97,6 +106,10 @@ def spline_of(trajectory: Trajectory, name: str = "body") -> CatmullRom:
     return CatmullRom(times, pts[:, 1:3], trajectory.loop)
 
 
+def _triggered(body: BodySpec) -> bool:
+    return body.trajectory is not None and body.trajectory.start_when is not None
+
+
 def animated_bodies(objects: tuple[BodySpec, ...], body_ids: list[int], seed: int,
                     vary: bool) -> list[tuple[str, Animated]]:
     """The world's bodies with a trajectory, by name, in declaration order; humans get
@@ -105,11 +118,15 @@ def animated_bodies(objects: tuple[BodySpec, ...], body_ids: list[int], seed: in
     splines = [spline_of(b.trajectory, name) for name, _, b in named if b.trajectory is not None]
     humans = [k for k, (_, _, b) in enumerate(named) if b.role == "human"]
     drawn = draw_variations(seed, [splines[k] for k in humans]) if vary else ()
-    variation = dict(zip(humans, drawn, strict=False))
+    # A triggered human keeps its speed scale but not its start delay: the trigger places
+    # the encounter where the robot is, and a random delay would move it again.
+    variation = {k: replace(v, phase_s=0.0) if _triggered(named[k][2]) else v
+                 for k, v in zip(humans, drawn, strict=False)}
     return [(name, Animated(bid, splines[k], b.role == "human",
                             b.behaviour if b.role == "human" else DEFAULT_BEHAVIOUR,
                             variation.get(k, NO_VARIATION),
-                            max(b.footprint.half_extents())))
+                            max(b.footprint.half_extents()),
+                            b.trajectory.start_when if b.trajectory is not None else None))
             for k, (name, bid, b) in enumerate(named)]
 
 
@@ -165,16 +182,40 @@ class Animator:
         self._aside = [0.0] * len(items)
         """Yielding humans giving way: seconds since they began to."""
         self._last_correct: int | None = None
+        self._started: list[int | None] = [None if item.start_when is not None else 0
+                                           for item in items]
+        """The physics step each body's clock started at; None while its trigger waits."""
         self._path_speed = [item.variation.speed_scale * mean_speed(item.spline)
                             for item in items]
+
+    def clock(self, k: int, step: int) -> float | None:
+        """Seconds on body ``k``'s clock at ``step``; None while its start trigger waits."""
+        started = self._started[k]
+        return None if started is None else (step - started) / self.rate
+
+    def started_at(self, k: int) -> float | None:
+        """Seconds into the run body ``k``'s clock started at; None if it never did."""
+        started = self._started[k]
+        return None if started is None else started / self.rate
 
     def path_time(self, k: int, step: int) -> float:
         """Where along its spline body ``k`` is at ``step`` (reactive: after the last step)."""
         item = self.items[k]
         if item.behaviour != "scripted":
             return self._path_time[k]
-        v = item.variation
-        return max(0.0, v.speed_scale * (step / self.rate - v.phase_s))
+        v, clock = item.variation, self.clock(k, step)
+        return 0.0 if clock is None else max(0.0, v.speed_scale * (clock - v.phase_s))
+
+    def _trigger(self, step: int, robot_pose: Pose | None) -> None:
+        """Start the clocks whose robot-position trigger this tick meets."""
+        if robot_pose is None:
+            return
+        for k, item in enumerate(self.items):
+            if self._started[k] is None and item.start_when is not None:
+                x, y, within = item.start_when
+                if math.hypot(robot_pose[0] - x, robot_pose[1] - y) <= within:
+                    self._started[k] = step
+                    self._block = None  # the precomputed displacements assumed it stood
 
     def correct(self, step: int, poses: list[Pose], robot_pose: Pose | None = None,
                 robot_twist: Pose | None = None) -> None:
@@ -183,6 +224,7 @@ class Animator:
         which the social force uses to repel earlier from a robot coming closer)."""
         dt = 0.0 if self._last_correct is None else (step - self._last_correct) / self.rate
         self._last_correct = step
+        self._trigger(step, robot_pose)
         rvx, rvy = (robot_twist[0], robot_twist[1]) if robot_twist is not None else (0.0, 0.0)
         robot = (None if robot_pose is None
                  else Agent(robot_pose[0], robot_pose[1], self.robot_radius, rvx, rvy))
@@ -201,7 +243,8 @@ class Animator:
             cx, cy = _pull(x0 - pose[0], y0 - pose[1])
             vx, vy = item.spline.velocity(s)
             if item.behaviour == "yielding":
-                walking = step / self.rate >= item.variation.phase_s
+                clock = self.clock(k, step)
+                walking = clock is not None and clock >= item.variation.phase_s
                 # Before its start and at the end of an open path the human stands: then
                 # the robot waits on it when it is near on any side (its goal may be where
                 # the human stands), not only ahead.
@@ -280,8 +323,8 @@ class Animator:
         # a detour cut a corner) walks on, and the pull slows the human until it catches up.
         behind = ex * px + ey * py > 0.0
         lag = math.hypot(ex, ey) if behind else 0.0
-        walking = self._last_correct is not None and \
-            self._last_correct / self.rate >= item.variation.phase_s
+        clock = None if self._last_correct is None else self.clock(k, self._last_correct)
+        walking = clock is not None and clock >= item.variation.phase_s
         self._advance[k] = (min(1.0, max(0.0, (LEASH[1] - lag) / (LEASH[1] - LEASH[0])))
                             if walking else 0.0)
         scale = item.variation.speed_scale if walking else 0.0
@@ -323,12 +366,15 @@ class Animator:
         """The curve's per-step displacements of a block of steps, for every body at once."""
         steps = block * BLOCK + np.arange(BLOCK + 1)
         self._steps = []
-        for item in self.items:
+        for item, started in zip(self.items, self._started, strict=True):
             if item.behaviour != "scripted":
                 self._steps.append(([], []))
                 continue
+            if started is None:  # stands at its first vertex until its trigger starts it
+                self._steps.append(([0.0] * BLOCK, [0.0] * BLOCK))
+                continue
             v = item.variation
-            times = np.maximum(0.0, v.speed_scale * (steps / self.rate - v.phase_s))
+            times = np.maximum(0.0, v.speed_scale * ((steps - started) / self.rate - v.phase_s))
             moves = np.diff(item.spline.positions(times), axis=0) * self.rate
             self._steps.append((moves[:, 0].tolist(), moves[:, 1].tolist()))
         self._block = block

@@ -59,5 +59,10 @@ class AnimatorRun:
         self._seq += 1
 
     def variations(self) -> dict[str, dict[str, Any]]:
-        """Each body's drawn start delay and speed scale, for the run's measurements."""
-        return variations_record(self.named)
+        """Each body's drawn start delay and speed scale, for the run's measurements, and
+        when a triggered body's clock started (None: its trigger never met)."""
+        record = variations_record(self.named)
+        for k, (name, item) in enumerate(self.named):
+            if item.start_when is not None and name in record:
+                record[name]["started_s"] = self.paths.started_at(k)
+        return record

@@ -24,6 +24,9 @@ class Trajectory:
     loop: bool
     points: tuple[tuple[float, float, float], ...]
     """(t, x, y) control vertices; for a loop the last repeats the first."""
+    start_when: tuple[float, float, float] | None = None
+    """(x, y, within): the times count from when the robot's centre first comes within
+    ``within`` m of (x, y); None: from the start of the run."""
 
 
 @dataclass(frozen=True)
@@ -86,9 +89,14 @@ def _body(data: dict[str, Any], where: str) -> BodySpec:
         traj = data.get("trajectory")
         trajectory = None
         if traj is not None:
+            start = traj.get("start_when")
+            start_when = None if start is None else (
+                _num(start["x"], f"{where}.trajectory.start_when.x"),
+                _num(start["y"], f"{where}.trajectory.start_when.y"),
+                _num(start["within"], f"{where}.trajectory.start_when.within"))
             trajectory = Trajectory(bool(traj["loop"]), tuple(
                 (_num(p[0], f"{where}.trajectory"), _num(p[1], f"{where}.trajectory"),
-                 _num(p[2], f"{where}.trajectory")) for p in traj["points"]))
+                 _num(p[2], f"{where}.trajectory")) for p in traj["points"]), start_when)
         return BodySpec(str(data["name"]), str(data["role"]), str(data["type"]), str(data["urdf"]),
                         bool(data["fixed"]), _num(pose[0], f"{where}.pose"),
                         _num(pose[1], f"{where}.pose"), _num(pose[2], f"{where}.pose"),

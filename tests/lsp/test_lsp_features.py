@@ -12,6 +12,7 @@ import pytest_lsp
 from lsprotocol import types
 
 from rei.lang.workspace import Workspace
+from tests.lang.test_start_trigger import ROOM as TRIGGER_ROOM
 from tests.lsp.conftest import (
     CONFIG,
     Editor,
@@ -431,3 +432,35 @@ async def test_a_rooms_own_catalogue_problems_land_on_the_catalogue(client: Reco
     [loc] = await definition(client, room, position_of(OWN_ROOM, ": lamp", offset=3))
     assert loc.uri == uri(catalogue) and loc.range.start.line == 0
     await editor.close(room)
+
+
+# A trajectory's start trigger: diagnostics located on it, completion of its words and floors.
+async def test_trigger_diagnostics_and_completion(client: RecordingClient, tmp_path: Path
+                                                  ) -> None:
+    path = tmp_path / "hall.room"
+    editor = Editor(client)
+    good = TRIGGER_ROOM.replace("TRIGGER", "when robot within 1.2 of g_2_4")
+    assert await editor.open(path, good) == []
+
+    bad = TRIGGER_ROOM.replace("TRIGGER", "when robot within -2 of g_2_44")
+    published = await editor.change(path, bad)
+    found = {(str(d.code), d.range.start.line, d.range.start.character) for d in published}
+    line = bad.splitlines()[8]
+    assert ("NUM-RANGE", 8, line.index("when")) in found
+    assert ("REF-UNRESOLVED", 8, line.index("g_2_44")) in found
+
+    assert await editor.change(path, good) == []
+    # the trigger's floor is a name like any other: go to its definition; the human's hover
+    # says when it starts
+    [loc] = await definition(client, path, position_of(good, "of g_2_4", offset=4))
+    assert loc.range.start.line == 4  # the grid row holding g_2_4
+    hover = await hover_text(client, path, position_of(good, "human h", offset=6))
+    assert "starts when the robot is within 1.2 m of `g_2_4`" in hover
+    half = TRIGGER_ROOM.replace("TRIGGER", "when robot within 1.2 of ")
+    await editor.change(path, half)  # does not parse: floors come from the last good version
+    floors = await completion_labels(client, path, position_of(half, "of  total", offset=3))
+    assert {"g_2_4", "g_1_4"} <= set(floors) and "g_0_0" not in floors
+    typed = TRIGGER_ROOM.replace("TRIGGER", "when ")
+    await editor.change(path, typed)
+    assert await completion_labels(client, path, position_of(typed, "when ", offset=5)) == ["robot"]
+    await editor.close(path)

@@ -36,9 +36,9 @@ from rei.lang.room.checks import blocking_objects, rotated_half_extents
 from rei.lang.workspace import Workspace, load_mission
 
 REPO = Path(__file__).resolve().parents[2]
-KINDS = ("emerge", "crossing", "gap", "oncoming")
+KINDS = ("emerge", "crossing", "gap", "oncoming", "doorway")
 MOVERS = {"emerge": "emerging_person", "crossing": "crossing_cart",
-          "oncoming": "oncoming_person"}
+          "oncoming": "oncoming_person", "doorway": "doorway_person"}
 ENCOUNTER_M = {"emerge": 1.0, "crossing": 1.5, "oncoming": 1.5}
 """Centre-to-centre distance within which the mover and the robot count as having met (over
 32 reference runs of the stress preset, bench/RESULTS.md, the medians were 0.63 m, 1.01 m
@@ -391,7 +391,8 @@ def test_an_unknown_stressor_is_refused_naming_the_option(tmp_path: Path,
     status = rei_gen(["rooms", "-o", str(tmp_path / "out"), "--stressor", "emerj"])
     assert status == 2
     err = capsys.readouterr().err
-    assert "--stressor: expected one of none, emerge, oncoming, crossing, gap, found 'emerj'" in err
+    assert ("--stressor: expected one of none, emerge, oncoming, crossing, gap, doorway, "
+            "found 'emerj'") in err
     assert "did you mean 'emerge'" in err
     assert not (tmp_path / "out").exists()
 
