@@ -209,47 +209,47 @@ def test_keep_clear_stops_closing_in_and_keeps_the_motion_across() -> None:
     assert keep_clear(model, 0.0, 0.0, -0.5, 0.0, 0.25, [near]) == (-0.5, 0.0)
 
 
-# Issue 25: a social human passes what is ahead on its right. Met by a robot with a wall on
-# its right, it turned into the wall and, repelled, retreated ahead of the robot for as long
-# as it came on: the reference navigator herded a walker 3 m along the wall onto its own goal.
-HERDED = Path(__file__).parent / "scenes" / "herded.mission"
-HERDED_SEED = 686403023
-"""The search's seed: the walker meets the robot along the wall on its way back to goal_1."""
+# Issue 25: a social human passes what is ahead on its right, and does not see walls. Held
+# back by the robot it could stand in front of it for good (met with a wall on its right it
+# turned into the wall), and in this search candidate it stood 8 s beside the robot, then
+# walked into it.
+HELD_BACK = Path(__file__).parent / "scenes" / "held_back.mission"
+HELD_BACK_SEED = 1066328527
+"""The search's run seed: the walker meets the robot on its way to goal_2."""
 
 
-class DrivesStraight(Idle):
-    """Accepts goals and drives straight ahead at the mission's 0.18 m/s, whatever it sees."""
-
-    def step(self, observation: Observation) -> VelocityCommand:
-        super().step(observation)
-        return VelocityCommand(0.18, 0.0)
-
-
-def _herded(folder: Path, monkeypatch: pytest.MonkeyPatch, controller: object,
-            social: SocialForce) -> RunRecord:
-    """The first 100 s of the herding scene with ``social`` as the humans' model (the run's
-    humans take Reactions' defaults: patched here, the run is otherwise untouched)."""
+def _held_back(folder: Path, monkeypatch: pytest.MonkeyPatch, social: SocialForce
+               ) -> RunRecord:
+    """The first 50 s of the scene with the reference and ``social`` as the humans' model
+    (the run's humans take Reactions' defaults: patched here, the run is otherwise
+    untouched)."""
     from rei.runtime.animator import animator as paths  # noqa: PLC0415
     from rei.runtime.robot.select import make_controller  # noqa: PLC0415
 
     monkeypatch.setattr(paths, "Reactions", lambda: Reactions(social=social))
-    mission = generate_world(HERDED, folder / "world")
-    nav = make_controller(controller) if isinstance(controller, str) else controller
+    mission = generate_world(HELD_BACK, folder / "world")
     return run_mission(mission, load_manifest(folder / "world"),
-                       load_monitor_config(folder / "world"), nav, [],  # type: ignore[arg-type]
-                       RunConfig(seed=HERDED_SEED, watchdog=None, duration=100.0))
+                       load_monitor_config(folder / "world"), make_controller("reference"),
+                       [], RunConfig(seed=HELD_BACK_SEED, watchdog=None, duration=50.0))
 
 
 @pytest.mark.slow
-def test_a_social_human_met_along_a_wall_passes_on_its_free_side(
+def test_a_social_human_held_back_tries_its_other_side(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """With the side switch the walker passes the robot and nobody touches; without it
-    (patience never runs out: the old model) the robot pushes it along the wall until they
-    touch at 95.7 s."""
-    fair = _herded(tmp_path / "fair", monkeypatch, "reference", SocialForce())
+    (patience never runs out: the old model) they touch at 47 s."""
+    fair = _held_back(tmp_path / "fair", monkeypatch, SocialForce())
     assert fair.measurements["collisions"] == 0, fair.measurements["collided_with"]
-    old = _herded(tmp_path / "old", monkeypatch, "reference", SocialForce(patience=math.inf))
+    old = _held_back(tmp_path / "old", monkeypatch, SocialForce(patience=math.inf))
     assert old.measurements["collided_with"] == ["walker_1"]
+
+
+class DrivesStraight(Idle):
+    """Accepts goals and drives straight ahead at 0.18 m/s, whatever it sees."""
+
+    def step(self, observation: Observation) -> VelocityCommand:
+        super().step(observation)
+        return VelocityCommand(0.18, 0.0)
 
 
 # A one-tile passage: the walker comes towards the robot and has no side to pass on.
