@@ -38,8 +38,10 @@ from rei.runtime.animator.reactive import (
     YieldRule,
     gap_beside,
     gap_in_the_way,
+    held_back,
     keep_clear,
     limit_speed,
+    pass_side,
     social_acceleration,
     speed_share,
 )
@@ -176,6 +178,10 @@ class Animator:
         """Reactive bodies: share of full path speed their path time advances at."""
         self._velocity = [(0.0, 0.0)] * len(items)
         """Social humans: velocity from the social force model."""
+        self._side = [1.0] * len(items)
+        """Social humans: the side they pass others on (1 right, -1 left)."""
+        self._held = [0.0] * len(items)
+        """Social humans: seconds held back from where they want to walk."""
         self._stood = [0.0] * len(items)
         """Yielding humans: seconds stood with the robot in the way."""
         self._giving_way = [False] * len(items)
@@ -333,9 +339,14 @@ class Animator:
         desired = limit_speed(scale * px + cx, scale * py + cy, v_max)
         vx, vy = self._velocity[k]
         ax, ay = social_acceleration(model, pose[0], pose[1], vx, vy, item.radius, desired,
-                                     others, self._path_speed[k])
+                                     others, self._path_speed[k], self._side[k])
         vx, vy = limit_speed(vx + ax * dt, vy + ay * dt, v_max)
         vx, vy = keep_clear(model, pose[0], pose[1], vx, vy, item.radius, others)
+        # Held back (a wall on the side it turns to, the robot ahead): try the other side.
+        self._held[k] = self._held[k] + dt if held_back(model, vx, vy, desired) else 0.0
+        side = pass_side(model, self._side[k], self._held[k])
+        if side != self._side[k]:
+            self._side[k], self._held[k] = side, 0.0
         self._velocity[k] = (vx, vy)
         self._feedback[k] = (0.0, 0.0, _turn(item.face_motion, vx, vy, pose[2], FACING_SPEED))
 

@@ -32,7 +32,11 @@ as often as a human-blind one; reactive humans make the test fair.
   closes the gap to another body faster than (gap - clearance_margin) / clearance_time
   (``keep_clear``): it stops short of the robot instead of pressing into it.
   Walls are not part of the force: the spline keeps clear of them, and a pushed human
-  meets them as real contacts.
+  meets them as real contacts. So a human that meets the robot with a wall on its right
+  would turn into the wall and retreat ahead of the robot for as long as it comes on (a
+  reference run herded a walker 3 m along a wall onto its goal, issue 25): a human held
+  back from its way for ``patience`` seconds tries the other side (``pass_side``), as
+  people do when the first side is blocked.
 
 Everything here is a pure function of poses and velocities; the parameters are plain
 frozen records. This module must never import the simulator or judge the robot.
@@ -99,6 +103,12 @@ class SocialForce:
     clearance_margin: float = 0.05
     """m: the gap at which a human stops closing in (pybullet reports a contact a little
     before the footprints meet)."""
+    patience: float = 3.0
+    """s a human walks at less than ``held_share`` of its desired speed towards where it
+    wants to go before it switches the side it passes on."""
+    held_share: float = 0.25
+    """Share of its desired speed, along its desired direction, below which a human counts
+    as held back."""
     cutoff: float = 3.0
     """m between footprints beyond which another agent exerts no force (cheap, and smooth
     enough: A exp(-3/0.5) is 0.015 m/s^2)."""
@@ -160,10 +170,11 @@ def yield_factor(rule: YieldRule, x: float, y: float, radius: float, direction: 
 
 def social_acceleration(model: SocialForce, x: float, y: float, vx: float, vy: float,
                         radius: float, desired: Vec, others: list[Agent],
-                        walking_speed: float = 0.0) -> Vec:
+                        walking_speed: float = 0.0, side: float = 1.0) -> Vec:
     """dv/dt of a human at (x, y) with velocity (vx, vy) that wants to walk at ``desired``
     along a path walked at ``walking_speed`` (m/s; the repulsion's scale, see
-    ``SocialForce.reference_speed``)."""
+    ``SocialForce.reference_speed``), passing what is ahead on its right (``side`` 1) or
+    its left (-1)."""
     strength = model.strength * max(1.0, walking_speed / model.reference_speed)
     ax = (desired[0] - vx) / model.relaxation_time
     ay = (desired[1] - vy) / model.relaxation_time
@@ -186,7 +197,7 @@ def social_acceleration(model: SocialForce, x: float, y: float, vx: float, vy: f
         ax += push * nx
         ay += push * ny
         if cos_phi > 0.0:  # only what is ahead deflects the human sideways, to its right
-            turn = model.passing * push * cos_phi
+            turn = side * model.passing * push * cos_phi
             ax += turn * hy
             ay += turn * -hx
     return ax, ay
@@ -210,6 +221,20 @@ def keep_clear(model: SocialForce, x: float, y: float, vx: float, vy: float, rad
             vx -= (closing - allowed) * nx
             vy -= (closing - allowed) * ny
     return vx, vy
+
+
+def held_back(model: SocialForce, vx: float, vy: float, desired: Vec) -> bool:
+    """Whether a human walking at (vx, vy) makes less than ``held_share`` of the headway it
+    wants along ``desired`` (never, for one that wants to stand)."""
+    want = math.hypot(*desired)
+    if want < 1e-6:
+        return False
+    return (vx * desired[0] + vy * desired[1]) / want < model.held_share * want
+
+
+def pass_side(model: SocialForce, side: float, held_for: float) -> float:
+    """The side (1 right, -1 left) a human passes on after ``held_for`` seconds held back."""
+    return -side if held_for >= model.patience else side
 
 
 def elliptical_distance(dx: float, dy: float, sx: float, sy: float) -> float:
