@@ -465,6 +465,9 @@ def run(args: argparse.Namespace) -> int:
         if not (math.isfinite(args.bus_wait) and args.bus_wait > 0):
             raise RunError(f"--bus-wait: expected a positive number of seconds, found "
                            f"{args.bus_wait}")
+    if not args.mission.is_file():  # before an output folder is made for nothing
+        raise RunError(f"{args.mission}:1:1: INPUT-READ: expected an existing .mission file, "
+                       f"found {'a folder' if args.mission.is_dir() else 'no such file'}")
     parameters = parameter_values(args.param)
     if parameters:  # every name declared, every rule kept: before the outputs are touched
         from rei.lang.vepl.document import load_vepl  # noqa: PLC0415

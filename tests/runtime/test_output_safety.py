@@ -173,6 +173,11 @@ def test_bad_input_never_costs_the_outputs_of_an_earlier_run(tmp_path: Path) -> 
         assert ("bad." in done.stderr or "react_zon" in done.stderr), done.stderr
         assert {name: (out / name).read_bytes() for name in kept} == before, done.args
     assert not [p.name for p in out.iterdir() if p.name.endswith(".earlier")]
+    # a mission that is not there makes no output folder either
+    fresh = tmp_path / "fresh"
+    missing = rei("run", str(tmp_path / "nope.mission"), "-o", str(fresh))
+    assert missing.returncode == 2 and "nope.mission" in missing.stderr, missing.stderr
+    assert not fresh.exists()
     # a good run into the folder still replaces them
     done = rei("run", str(MISSION), "-o", str(out), "--duration", "0.5", "--quiet")
     assert done.returncode in (0, 1), done.stderr
