@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any, TypeAlias
 
 from rei.runtime.bus.access import DEFAULT_ACCESS, AccessRules
-from rei.runtime.bus.errors import BusError, zenoh_module
+from rei.runtime.bus.errors import BusError, NoAnswer, zenoh_module
 from rei.runtime.bus.router import check_private
 from rei.runtime.bus.schema import (
     ALL,
@@ -222,7 +222,20 @@ class BusSession:
     def query(self, name: str, timeout: float = QUERY_TIMEOUT) -> dict[str, Any]:
         """The configuration ``name`` (``CONFIG_NAMES``) as its answerer gives it."""
         key = config_key(name)
-        answer = loads(self.call(key, b"", timeout))
+        deadline = time.monotonic() + timeout
+        pause = 0.02
+        while True:  # the answerer may not have joined yet, or its answer not reached
+            try:     # the router: ask again (20 ms doubling to 0.5 s) until the deadline
+                data = self.call(key, b"", max(0.0, deadline - time.monotonic()))
+                break
+            except NoAnswer:
+                if time.monotonic() + pause >= deadline:
+                    raise BusError(f"{key}: no answer within {timeout:g} s (nobody answers "
+                                   f"it, or the router's rules keep the {self.role} role "
+                                   f"from asking)") from None
+                time.sleep(pause)
+                pause = min(0.5, pause * 2)
+        answer = loads(data)
         if not isinstance(answer, dict):
             raise BusError(f"{key}: a JSON object expected as the answer, found "
                            f"{type(answer).__name__}")
@@ -245,7 +258,7 @@ class BusSession:
                                f"{reply.err.payload.to_bytes().decode('utf-8', 'replace')}")
         except z.ZError as exc:
             raise BusError(f"{key}: {exc}") from None
-        raise BusError(f"{key}: no answer within {timeout:g} s (nobody answers it, or the "
+        raise NoAnswer(f"{key}: no answer within {timeout:g} s (nobody answers it, or the "
                        f"router's rules keep the {self.role} role from asking)")
 
     def answer(self, name: str, provider: Callable[[], dict[str, Any]]) -> None:

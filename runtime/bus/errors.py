@@ -15,6 +15,11 @@ class BusError(ReiError):
     """The bus could not be started, joined or used as asked."""
 
 
+class NoAnswer(BusError):
+    """A call found nobody to answer it before its deadline (the answerer not joined yet,
+    gone, or the router's rules keep the caller from asking): worth asking again."""
+
+
 INSTALL_HINT = ("the bus needs the Zenoh client library: "
                 "pip install 'rei-testbed[bus]' (PyPI eclipse-zenoh)")
 

@@ -31,7 +31,7 @@ import numpy as np
 
 from rei.runtime.bus.access import ROBOT_CALL
 from rei.runtime.bus.client import BusSession
-from rei.runtime.bus.errors import BusError
+from rei.runtime.bus.errors import BusError, NoAnswer
 from rei.runtime.bus.schema import dumps, loads
 from rei.runtime.errors import RunError
 from rei.runtime.messages import LaserScan
@@ -179,7 +179,7 @@ class BusController(RemoteController):
                     1.0, deadline - time.monotonic())))
                 break
             except BusError as exc:
-                if "no answer" not in str(exc) or time.monotonic() >= deadline:
+                if not isinstance(exc, NoAnswer) or time.monotonic() >= deadline:
                     raise RunError(f"--bus: no robot answered on {session.endpoint} within "
                                    f"{wait:g} s: start `rei robot --bus {session.endpoint} "
                                    f"--controller ...` ({exc})") from None

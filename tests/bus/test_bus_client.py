@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import stat
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -67,6 +68,20 @@ def test_configuration_is_asked_and_answered(join) -> None:  # type: ignore[no-u
     assert monitor.query("world", timeout=SAFETY) == {"world": "office", "tile_size": 1.0}
     with pytest.raises(BusError, match="configuration name expected to be one of world"):
         monitor.query("passwords")
+
+
+def test_a_question_asked_before_its_answerer_joins_waits_for_it(join) -> None:  # type: ignore[no-untyped-def]
+    """A monitor started before the simulation asks again until the answer comes (the
+    first asks find nobody to answer); a question nobody ever answers ends at its timeout."""
+    sim, monitor = join("simulation"), join("monitor")
+    later = threading.Timer(0.5, sim.answer, ("world", lambda: {"world": "late"}))
+    later.start()
+    try:
+        assert monitor.query("world", timeout=SAFETY) == {"world": "late"}
+    finally:
+        later.cancel()
+    with pytest.raises(BusError, match="rei/v1/config/robot: no answer within 0.3 s"):
+        monitor.query("robot", timeout=0.3)
 
 
 def test_mission_events_and_signals_round_trip(join) -> None:  # type: ignore[no-untyped-def]
