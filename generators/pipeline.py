@@ -40,9 +40,9 @@ def build_request(source: Path, options: Mapping[str, str] | None = None,
                   ) -> tuple[GenerationRequest, list[Diagnostic]]:
     """The checked, concretised request for ``source`` (with a .vepl's ``parameters`` from
     `--param`); LanguageError with every problem."""
-    if parameters and source.suffix != ".vepl":
-        raise GenerationError(f"{PARAM_OPTION}: expected a .vepl file to set parameters of, "
-                              f"found '{source.name}'")
+    if parameters and source.suffix not in (".vepl", ".mission"):
+        raise GenerationError(f"{PARAM_OPTION}: expected a .vepl file to set parameters of "
+                              f"(or a .mission for target 'launch'), found '{source.name}'")
     ws = workspace or Workspace()
     diagnostics = ws.check(source)
     errors = [d for d in diagnostics if d.is_error]
@@ -55,7 +55,7 @@ def build_request(source: Path, options: Mapping[str, str] | None = None,
         return GenerationRequest(source, world, None, opts), warnings
     if source.suffix == ".mission":
         mission = concretise_mission(ws.mission(source))
-        return GenerationRequest(source, mission.world, mission, opts), warnings
+        return GenerationRequest(source, mission.world, mission, opts, parameters), warnings
     if parameters:
         load_vepl(source, parameters)  # each name declared, every rule kept (LanguageError)
     return GenerationRequest(source, None, None, opts, parameters), warnings
@@ -87,6 +87,12 @@ def plan(source: Path, target: str, options: Mapping[str, str] | None = None,
     """
     targets = choose_targets(Path(source), target)
     check_options(targets, options or {})
+    if parameters and Path(source).suffix == ".mission":
+        refusing = [t.name for t in targets if not getattr(t, "runs_missions", False)]
+        if refusing:
+            raise GenerationError(f"{PARAM_OPTION}: expected a .vepl file to set parameters "
+                                  f"of, or a .mission for target 'launch' (its run.json), "
+                                  f"found '{Path(source).name}' for target '{refusing[0]}'")
     request, warnings = build_request(Path(source), options, workspace, parameters)
     tree = render_targets(request, targets, subfolders=target == ALL)
     return GenerationPlan(tree, tuple(t.name for t in targets), tuple(warnings))

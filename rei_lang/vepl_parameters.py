@@ -32,14 +32,15 @@ PARAM_HELP = ("set a parameter of the specification's `parameters` block to VALU
 PARAM_METAVAR = "NAME=VALUE"
 LIMIT = 1e9
 
-_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+"""A parameter's name, as the .vepl grammar spells it."""
 
 
 def parse_parameter(text: str) -> tuple[str, float]:
     """``NAME=VALUE`` as (name, value); ValueError saying what was expected and found."""
     name, sep, value = text.partition("=")
     name, value = name.strip(), value.strip()
-    if not sep or not _NAME.match(name):
+    if not sep or not NAME.match(name):
         raise ValueError(f"expected NAME=VALUE with NAME a parameter's name, found '{text}'")
     try:
         number = float(value)

@@ -30,7 +30,7 @@ ROS 2 rather than ROS 1: SDF 1.9 worlds are read by Gazebo Sim, which ROS 2 driv
 Options (a .mission only): ``seed`` (whole number, default 0), ``monitor`` (a .vepl path
 relative to the input file, default ``default``: REI's bundled specification),
 ``controller`` (default ``reference``), ``duration`` (seconds; default the mission's time
-limit). This module must never write files itself or read the textX model.
+limit); `--param NAME=VALUE` sets run.json's ``parameters`` (checked against that .vepl). This module must never write files itself or read the textX model.
 """
 
 from __future__ import annotations
@@ -139,8 +139,19 @@ def copy_sources(files: list[Path]) -> dict[str, bytes]:
     return copies
 
 
-def run_config(sources: list[str], has_vepl: bool, opts: RunOptions) -> dict[str, Any]:
-    """run.json: the same run as `rei run MISSION -o DIR` with these options."""
+def check_parameters(vepl: Path | None, parameters: tuple[tuple[str, float], ...]) -> None:
+    """`--param` values against the run's .vepl (None: REI's default one): each name
+    declared, every parameter rule kept, as `rei run` will check them (LanguageError)."""
+    from rei.lang.vepl.document import load_vepl  # noqa: PLC0415  (textX: only when asked)
+
+    load_vepl(vepl, parameters)
+
+
+def run_config(sources: list[str], has_vepl: bool, opts: RunOptions,
+               parameters: tuple[tuple[str, float], ...] = ()) -> dict[str, Any]:
+    """run.json: the same run as `rei run MISSION -o DIR [--param ...]` with these options
+    (``parameters`` only when some are set, so a file without them reads as before)."""
+    extra = {"parameters": dict(parameters)} if parameters else {}
     return {
         "format": RUN_FORMAT,
         "mission": sources[0],
@@ -153,6 +164,7 @@ def run_config(sources: list[str], has_vepl: bool, opts: RunOptions) -> dict[str
         "laser_noise": None,
         "variation": True,
         "monitor": True,
+        **extra,
     }
 
 
@@ -203,6 +215,8 @@ class LaunchTarget:
     accepts: tuple[str, ...] = (".room", ".mission")
     options: tuple[str, ...] = RUN_OPTIONS
     """The --option keys this target reads."""
+    runs_missions: bool = True
+    """`--param` with a .mission goes into run.json's ``parameters`` (the run's .vepl)."""
     loader: jinja2.BaseLoader | None = field(default=None, compare=False)
 
     def generate(self, request: GenerationRequest) -> OutputTree:
@@ -213,11 +227,15 @@ class LaunchTarget:
         tree = OutputTree()
         if mission is not None:
             opts = run_options(request.options)
-            copies = copy_sources(source_files(request, opts))
+            files = source_files(request, opts)
+            if request.parameters:
+                check_parameters(files[-1] if opts.monitor is not None else None,
+                                 request.parameters)
+            copies = copy_sources(files)
             for rel, data in copies.items():
                 tree.add_bytes(rel, data)
             tree.add_text(RUN, dump_json(run_config(list(copies), opts.monitor is not None,
-                                                    opts)))
+                                                    opts, request.parameters)))
         else:
             given = sorted(set(request.options) & set(RUN_OPTIONS))
             if given:

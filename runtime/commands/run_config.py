@@ -22,6 +22,9 @@ Fields (``format`` and ``mission`` are required; the others default like `rei ru
 ``laser_noise``         metres (0 to 1), or ``null``: the robot's catalogue value
 ``variation``           ``true`` (default): the seed varies the start pose and the humans
 ``monitor``             ``true`` (default): monitor and judge the run
+``parameters``          an object of the .vepl's parameters set for this run, name ->
+                        finite number (``{"react_zone": 0.7}``), as ``--param``; a
+                        ``--param`` on the command line overrides the same name
 ======================  ==============================================================
 
 This module must never run anything: it only turns the file into arguments.
@@ -39,6 +42,7 @@ from typing import Any
 
 from rei.lang.source import UnreadableInput, bounded_text, repeated_key
 from rei.lang.suggest import did_you_mean
+from rei.lang.vepl_parameters import NAME, parse_parameter
 from rei.runtime.errors import RunError
 
 FORMAT = "rei-run/1"
@@ -102,8 +106,15 @@ FIELDS: Mapping[str, Field] = {
                        lambda v, _b: not v),
     "monitor": Field("no_monitor", "true or false", lambda v: isinstance(v, bool),
                      lambda v, _b: not v),
+    "parameters": Field("param", "an object of parameter names and finite numbers, such as "
+                        "{\"react_zone\": 0.7}", lambda v: isinstance(v, dict),
+                        lambda v, _b: sorted(v.items())),
 }
 """Every field but ``format``, by name."""
+
+
+MERGED = ("param",)
+"""Repeatable options the file's field adds to, entry by entry, instead of setting."""
 
 
 MAX_CONFIG_BYTES = 1024 * 1024
@@ -160,7 +171,24 @@ def load_run_config(path: Path) -> dict[str, Any]:
             raise RunError(f"{path}: field '{key}': expected {spec.expected}, found "
                            f"{_text(value)}")
         values[spec.dest] = spec.convert(value, base)
+    for name, value in values.get("param", []):
+        _check_parameter(path, name, value)
     return values
+
+
+def _check_parameter(path: Path, name: str, value: Any) -> None:
+    """One entry of ``parameters``: checked as ``--param NAME=VALUE`` is (whether the .vepl
+    declares NAME is the linker's to say, as for the option)."""
+    if not NAME.match(name):
+        raise RunError(f"{path}: field 'parameters': expected parameter names (a letter or _, "
+                       f"then letters, digits, _), found {_text(name)}")
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise RunError(f"{path}: field 'parameters.{name}': expected a finite number, found "
+                       f"{_text(value)}")
+    try:
+        parse_parameter(f"{name}={value!r}")
+    except ValueError as exc:
+        raise RunError(f"{path}: field 'parameters': {exc}") from None
 
 
 def _reject_constant(path: Path, name: str) -> Any:
@@ -173,11 +201,13 @@ def defer_defaults(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--config", type=Path, default=None, metavar="RUN_JSON",
                         help="take the run from a run.json (format rei-run/1, e.g. written by "
                              "`rei-gen generate --target launch`): mission, vepl, controller, "
-                             "seed, duration, rates, noise, variation, monitor. Options given "
-                             "explicitly on the command line override the file; MISSION may "
+                             "seed, duration, rates, noise, variation, monitor, parameters. "
+                             "Options given explicitly on the command line override the "
+                             "file (--param: name by name); MISSION may "
                              f"then be left out, and -o defaults to '{DEFAULT_OUTPUT}/' beside "
                              "the file. Fields: docs/generators.md")
-    defaults = {spec.dest: parser.get_default(spec.dest) for spec in FIELDS.values()}
+    defaults = {spec.dest: parser.get_default(spec.dest) for spec in FIELDS.values()
+                if spec.dest not in MERGED}
     parser.set_defaults(**{dest: value if isinstance(value, Unset) else Unset(value)
                            for dest, value in defaults.items()})
 
@@ -191,6 +221,8 @@ def apply_run_config(args: argparse.Namespace) -> argparse.Namespace:
     for dest, value in vars(args).items():
         if isinstance(value, Unset):
             setattr(resolved, dest, fields.get(dest, value.value))
+    for dest in MERGED:  # the file's entries first: an option for the same name wins
+        setattr(resolved, dest, [*fields.get(dest, []), *getattr(args, dest, [])])
     if resolved.mission is None:
         raise RunError("rei run: expected a MISSION file or --config RUN_JSON, found neither")
     if getattr(resolved, "output", None) is None:

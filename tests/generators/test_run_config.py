@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest
 
 from rei.generators.pipeline import generate
+from rei.lang.vepl_parameters import parameter_values
 from rei.lang.cli_support import build_parser
 from rei.runtime.cli import DESCRIPTION, main
 from rei.runtime.commands.run_config import apply_run_config
@@ -69,6 +70,16 @@ def test_explicit_flags_override_the_file_even_with_default_values(tmp_path: Pat
     assert args.mission == tmp_path / "other.mission" and args.output == tmp_path / "out"
 
 
+def test_parameters_are_added_to_and_overridden_name_by_name(tmp_path: Path) -> None:
+    config = write_config(tmp_path, parameters={"react_zone": 0.7, "slow_zone": 0.4})
+    assert parsed("--config", str(config)).param == [("react_zone", 0.7), ("slow_zone", 0.4)]
+    # --param for the same name wins (given last); other names are added
+    args = parsed("--config", str(config), "--param", "slow_zone=0.3", "--param", "moving=0.1")
+    assert parameter_values(args.param) == (("moving", 0.1), ("react_zone", 0.7),
+                                            ("slow_zone", 0.3))
+    assert parsed("a.mission", "-o", "out").param == []
+
+
 def test_without_a_config_the_defaults_are_rei_runs() -> None:
     args = parsed("a.mission", "-o", "out")
     assert (args.seed, args.controller, args.duration, args.physics_rate, args.vepl) == (
@@ -89,6 +100,15 @@ def test_without_a_config_the_defaults_are_rei_runs() -> None:
     ({"mission": "x.room"}, "field 'mission': expected a path to a .mission file"),
     ({"controller": ""}, "field 'controller': expected a controller name"),
     ({"format": "rei-run/2"}, "field 'format': expected 'rei-run/1', found 'rei-run/2'"),
+    ({"parameters": [0.7]}, "field 'parameters': expected an object of parameter names and "
+                            "finite numbers"),
+    ({"parameters": {"react_zone": "0.7"}}, "field 'parameters.react_zone': expected a finite "
+                                            "number, found '0.7'"),
+    ({"parameters": {"react_zone": True}}, "field 'parameters.react_zone': expected a finite "
+                                           "number, found true"),
+    ({"parameters": {"react zone": 1}}, "field 'parameters': expected parameter names"),
+    ({"parameters": {"react_zone": 1e10}}, "field 'parameters': react_zone: expected a number "
+                                           ">= -1e.09 and <= 1e.09"),
 ])
 def test_bad_fields_name_the_file_the_field_and_what_was_found(
     tmp_path: Path, fields: dict[str, object], message: str,
@@ -110,6 +130,8 @@ def test_bad_fields_name_the_file_the_field_and_what_was_found(
     ('{"format": "rei-run/1", "seed": 0, "seed": 5}', "field 'seed': expected once, found 2 "
                                                       "times"),
     ("[" * 100_000 + "]" * 100_000, "found JSON nested too deep to read"),
+    ('{"format": "rei-run/1", "mission": "a.mission", "parameters": {"react_zone": 1e999}}',
+     "field 'parameters': react_zone: expected a finite number, found 'inf'"),
 ])
 def test_broken_files_are_located_errors(tmp_path: Path, text: str, message: str) -> None:
     config = tmp_path / "run.json"

@@ -151,9 +151,31 @@ def test_rei_gen_generates_automata_with_the_value(tmp_path: Path,
     mission = str(EXAMPLES / "simple_wall" / "simple_wall.mission")
     assert rei_gen(["generate", mission, "-t", "monitor", "-o", str(tmp_path / "bad"),
                     "--param", "slow_zone=0.3"]) == 2
-    assert "--param: expected a .vepl file to set parameters of, found 'simple_wall.mission'" \
-        in capsys.readouterr().err
+    assert ("--param: expected a .vepl file to set parameters of, or a .mission for target "
+            "'launch' (its run.json), found 'simple_wall.mission' for target 'monitor'"
+            in capsys.readouterr().err)
+    assert rei_gen(["generate", mission, "-t", "launch", "-o", str(tmp_path / "bad"),
+                    "--param", "react_zon=0.7"]) == 2
+    assert "did you mean 'react_zone'?" in capsys.readouterr().err
     assert not (tmp_path / "bad").exists()  # nothing written on bad input
+
+
+def test_the_launch_targets_run_json_carries_the_values(tmp_path: Path) -> None:
+    """`rei-gen generate M -t launch --param ...` writes them into run.json's `parameters`,
+    which `rei run --config` reads back as the same --param (tests/generators/
+    test_run_config.py); without --param the field is left out, as before."""
+    mission = str(EXAMPLES / "navigation" / "navigation.mission")
+    assert rei_gen(["generate", mission, "-t", "launch", "-o", str(tmp_path / "set"),
+                    "--param", "slow_zone=0.4", "--param", "react_zone=0.7"]) == 0
+    run = json.loads((tmp_path / "set" / "run.json").read_text(encoding="utf-8"))
+    assert run["parameters"] == {"react_zone": 0.7, "slow_zone": 0.4}
+    assert rei_gen(["generate", mission, "-t", "launch", "-o", str(tmp_path / "plain")]) == 0
+    assert "parameters" not in json.loads((tmp_path / "plain" / "run.json").read_text(
+        encoding="utf-8"))
+    # checked against the .vepl the run will use (option monitor), not the default one
+    assert rei_gen(["generate", mission, "-t", "launch", "-o", str(tmp_path / "own"),
+                    "--option", "monitor=human_safety.vepl", "--param", "max_path_ratio=2"]) == 2
+    assert not (tmp_path / "own").exists()
 
 
 # ---- the cache -----------------------------------------------------------------------------
