@@ -131,23 +131,49 @@ def read_bounded(path: str | Path, limit: int = MAX_SOURCE_BYTES) -> bytes | Dia
     return data
 
 
-def _read_bounded(path: str | Path, limit: int = MAX_SOURCE_BYTES) -> bytes | Diagnostic:
-    """At most ``limit + 1`` bytes of a regular file, or one diagnostic saying why not.
-
-    The file is checked with ``stat`` before it is opened (a FIFO would block ``open``),
-    opened with O_NONBLOCK (in case it was swapped for a FIFO in between) and checked again
-    through the open descriptor; the read stops after ``limit + 1`` bytes whatever the size
-    ``stat`` reported.
-    """
+def unreadable(path: str | Path) -> Diagnostic | None:
+    """Why ``path`` cannot be read as a source file (one INPUT-READ diagnostic: no name, no
+    such file, not a regular file, a loop of links, ...), or None when it is a regular file.
+    Looks only (``stat``): what a command checks before it starts work on a file it will read
+    later, with the words the file's reader would use."""
     shown = str(path)
     if shown == "":
         return Diagnostic(Span.point(shown), "INPUT-READ",
                           "expected a file name, found an empty string")
     try:
         kind = file_kind(os.stat(path).st_mode)
-        if kind is not None:
+    except (OSError, ValueError) as exc:
+        return _not_read(shown, exc)
+    if kind is not None:
+        return Diagnostic(Span.point(shown), "INPUT-READ", f"expected a regular file, found {kind}")
+    return None
+
+
+def _not_read(shown: str, exc: OSError | ValueError) -> Diagnostic:
+    if isinstance(exc, FileNotFoundError):
+        return Diagnostic(Span.point(shown), "INPUT-READ", "no such file")
+    if isinstance(exc, OSError):
+        if exc.errno == errno.ELOOP:
             return Diagnostic(Span.point(shown), "INPUT-READ",
-                              f"expected a regular file, found {kind}")
+                              "expected a file, found a loop of symbolic links")
+        return Diagnostic(Span.point(shown), "INPUT-READ",
+                          f"cannot read the file: {exc.strerror or exc}")
+    return Diagnostic(Span.point(shown), "INPUT-READ", f"cannot read the file: {exc}")  # NUL
+
+
+def _read_bounded(path: str | Path, limit: int = MAX_SOURCE_BYTES) -> bytes | Diagnostic:
+    """At most ``limit + 1`` bytes of a regular file, or one diagnostic saying why not.
+
+    The file is checked with ``stat`` before it is opened (``unreadable``: a FIFO would block
+    ``open``), opened with O_NONBLOCK (in case it was swapped for a FIFO in between) and
+    checked again through the open descriptor; the read stops after ``limit + 1`` bytes
+    whatever the size ``stat`` reported.
+    """
+    problem = unreadable(path)
+    if problem is not None:
+        return problem
+    shown = str(path)
+    try:
         fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
         try:
             info = os.fstat(fd)
@@ -168,16 +194,8 @@ def _read_bounded(path: str | Path, limit: int = MAX_SOURCE_BYTES) -> bytes | Di
             return b"".join(chunks)
         finally:
             os.close(fd)
-    except FileNotFoundError:
-        return Diagnostic(Span.point(shown), "INPUT-READ", "no such file")
-    except OSError as exc:
-        if exc.errno == errno.ELOOP:
-            return Diagnostic(Span.point(shown), "INPUT-READ",
-                              "expected a file, found a loop of symbolic links")
-        return Diagnostic(Span.point(shown), "INPUT-READ",
-                          f"cannot read the file: {exc.strerror or exc}")
-    except ValueError as exc:  # a NUL character in the name
-        return Diagnostic(Span.point(shown), "INPUT-READ", f"cannot read the file: {exc}")
+    except (OSError, ValueError) as exc:  # gone or changed since it was looked at
+        return _not_read(shown, exc)
 
 
 def repeated_key(pairs: list[tuple[str, object]]) -> tuple[str, int] | None:

@@ -30,7 +30,8 @@ ROS 2 rather than ROS 1: SDF 1.9 worlds are read by Gazebo Sim, which ROS 2 driv
 Options (a .mission only): ``seed`` (whole number, default 0), ``monitor`` (a .vepl path
 relative to the input file, default ``default``: REI's bundled specification),
 ``controller`` (default ``reference``), ``duration`` (seconds; default the mission's time
-limit); `--param NAME=VALUE` sets run.json's ``parameters`` (checked against that .vepl). This module must never write files itself or read the textX model.
+limit); `--param NAME=VALUE` sets run.json's ``parameters`` (checked against that
+.vepl). This module must never write files itself or read the textX model.
 """
 
 from __future__ import annotations

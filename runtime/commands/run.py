@@ -43,6 +43,7 @@ from rei.lang.mission.faults import (
     fault_argument,
     parse_fault_option,
 )
+from rei.lang.source import unreadable
 from rei.lang.vepl_parameters import (
     ParameterValues,
     add_parameter_option,
@@ -52,6 +53,7 @@ from rei.lang.vepl_parameters import (
 from rei.runtime.commands.run_config import apply_run_config, defer_defaults
 from rei.runtime.errors import RunError
 from rei.runtime.results import PAGE_POLICIES, RunSummary, judge
+from rei.runtime.supervisor import INTERNAL_ERROR_LOG
 
 if TYPE_CHECKING:
     from rei.runtime.collector import SampleSink
@@ -246,10 +248,13 @@ def _make_folder(out_dir: Path) -> None:
         raise RunError(f"cannot create the output folder '{out_dir}': {exc.strerror}") from None
 
 
-EARLIER_OUTPUTS = (SUMMARY, TRACE, TRACE + ".partial", EVENTS, PAGE, RECORDING,
-                   "internal-error.txt")
-"""What a run writes into its folder besides world/ and automata/ (which generation
-replaces only once the inputs are checked)."""
+RUN_OUTPUTS = (SUMMARY, TRACE, EVENTS, PAGE, RECORDING)
+"""What the running process writes into its folder besides run.log, world/ and automata/
+(which generation replaces only once the inputs are checked)."""
+EARLIER_OUTPUTS = (*RUN_OUTPUTS, TRACE + ".partial", INTERNAL_ERROR_LOG)
+"""Everything of an earlier run `rei run` sets aside: the outputs, and what a run that died
+leaves (its unfinished trace, ``TraceWriter.partial``; the supervisor's report of an
+internal error)."""
 ASIDE = ".earlier"
 
 
@@ -368,9 +373,8 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
 
         robot = open_run_bus(bus, bus_credentials, watchdog, bus_wait, wait_monitor, world_dir)
         controller = f"bus:{robot.name}"
-    for stale in (out_dir / SUMMARY, out_dir / TRACE, out_dir / EVENTS, out_dir / PAGE,
-                  out_dir / RECORDING):
-        stale.unlink(missing_ok=True)
+    for stale in RUN_OUTPUTS:
+        (out_dir / stale).unlink(missing_ok=True)
     trace_writer = TraceWriter(out_dir / TRACE)
     if bus is not None:  # right after the trace writer: it publishes the line just written
         bus_sinks.append(robot.publisher(trace_writer))
@@ -465,9 +469,9 @@ def run(args: argparse.Namespace) -> int:
         if not (math.isfinite(args.bus_wait) and args.bus_wait > 0):
             raise RunError(f"--bus-wait: expected a positive number of seconds, found "
                            f"{args.bus_wait}")
-    if not args.mission.is_file():  # before an output folder is made for nothing
-        raise RunError(f"{args.mission}:1:1: INPUT-READ: expected an existing .mission file, "
-                       f"found {'a folder' if args.mission.is_dir() else 'no such file'}")
+    problem = unreadable(args.mission)  # before an output folder is made for nothing
+    if problem is not None:
+        raise RunError(str(problem))
     parameters = parameter_values(args.param)
     if parameters:  # every name declared, every rule kept: before the outputs are touched
         from rei.lang.vepl.document import load_vepl  # noqa: PLC0415

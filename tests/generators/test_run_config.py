@@ -11,8 +11,8 @@ from pathlib import Path
 import pytest
 
 from rei.generators.pipeline import generate
-from rei.lang.vepl_parameters import parameter_values
 from rei.lang.cli_support import build_parser
+from rei.lang.vepl_parameters import parameter_values
 from rei.runtime.cli import DESCRIPTION, main
 from rei.runtime.commands.run_config import apply_run_config
 from rei.runtime.errors import RunError

@@ -10,7 +10,7 @@ import pytest
 
 from rei.lang.cli import main
 from rei.lang.parsing import parse
-from rei.lang.source import MAX_SOURCE_BYTES, SourceText
+from rei.lang.source import MAX_SOURCE_BYTES, SourceText, read_bounded, unreadable
 from rei.lang.workspace import Workspace
 
 
@@ -40,6 +40,25 @@ def test_huge_file_is_refused_before_reading(write) -> None:  # type: ignore[no-
     assert rules_of(path) == ["INPUT-SIZE"]
 
 
+def test_looking_says_what_reading_would(tmp_path: Path) -> None:
+    """``unreadable`` (a command's check before it starts work) gives the reader's diagnostic
+    word for word, and None for a file the reader reads."""
+    import os
+
+    good = tmp_path / "ok.mission"
+    good.write_text("x")
+    os.mkfifo(tmp_path / "pipe.mission")
+    (tmp_path / "dir.mission").mkdir()
+    (tmp_path / "loop.mission").symlink_to(tmp_path / "loop.mission")
+    assert unreadable(good) is None and read_bounded(good) == b"x"
+    for name in ("nope.mission", "pipe.mission", "dir.mission", "loop.mission", ""):
+        path = tmp_path / name if name else ""
+        problem = unreadable(path)
+        assert problem is not None and problem.rule == "INPUT-READ", name
+        assert str(problem) == str(read_bounded(path)), name
+    assert "found a FIFO" in str(unreadable(tmp_path / "pipe.mission"))
+
+
 def test_missing_file_folder_and_unknown_suffix(tmp_path: Path, write) -> None:  # type: ignore[no-untyped-def]
     assert rules_of(tmp_path / "nope.room") == ["INPUT-READ"]
     folder = tmp_path / "dir.room"
@@ -52,7 +71,8 @@ def test_deep_nesting_becomes_a_diagnostic() -> None:
     # The .room grammar does not nest, so provoke the parser's recursion limit directly.
     import inspect
 
-    limit = sys.getrecursionlimit()
+    parse("room", SourceText("warm.room", "room r { floor a }"))  # lazy imports done first:
+    limit = sys.getrecursionlimit()                                # not under the low limit
     source = SourceText("deep.room", "room r {" + " floor a" * 20 + " }")
     try:
         sys.setrecursionlimit(len(inspect.stack()) + 20)
