@@ -223,10 +223,14 @@ class BusSession:
         """The configuration ``name`` (``CONFIG_NAMES``) as its answerer gives it."""
         key = config_key(name)
         deadline = time.monotonic() + timeout
-        pause = 0.02
-        while True:  # the answerer may not have joined yet, or its answer not reached
-            try:     # the router: ask again (20 ms doubling to 0.5 s) until the deadline
-                data = self.call(key, b"", max(0.0, deadline - time.monotonic()))
+        pause, wait = 0.02, 1.0
+        # The answerer may not have joined yet, its queryable not reached the router, or the
+        # router may route an ask to an answerer that just left: ask again (pauses of 20 ms
+        # doubling to 0.5 s; each ask waits 1 s doubling to 8 s) until the deadline. A
+        # configuration answer is a ready payload: it takes milliseconds when it comes.
+        while True:
+            try:
+                data = self.call(key, b"", max(0.0, min(wait, deadline - time.monotonic())))
                 break
             except NoAnswer:
                 if time.monotonic() + pause >= deadline:
@@ -234,7 +238,7 @@ class BusSession:
                                    f"it, or the router's rules keep the {self.role} role "
                                    f"from asking)") from None
                 time.sleep(pause)
-                pause = min(0.5, pause * 2)
+                pause, wait = min(0.5, pause * 2), min(8.0, wait * 2)
         answer = loads(data)
         if not isinstance(answer, dict):
             raise BusError(f"{key}: a JSON object expected as the answer, found "
