@@ -185,12 +185,10 @@ def placed(plan: RoomPlan, values: Mapping[str, float], catalogue: Catalogue) ->
             towards(g, blocked, values[GOAL_SHIFT], room, room) for g in plan.goals[1:])))
     if PATH_SHIFT in values and plan.humans:
         shift = values[PATH_SHIFT]
-        humans = []
-        for h in plan.humans:
-            room = TILE / 2 - max(catalogue.types["human"].footprint.half_extents())
-            humans.append(replace(h, offsets=tuple(towards(v, route, shift, room, room)
-                                                   for v in h.vertices)))
-        plan = replace(plan, humans=tuple(humans))
+        room = TILE / 2 - max(catalogue.types["human"].footprint.half_extents())
+        plan = replace(plan, humans=tuple(
+            replace(h, offsets=tuple(towards(v, route, shift, room, room) for v in h.vertices))
+            for h in plan.humans))
     return plan
 
 

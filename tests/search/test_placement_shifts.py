@@ -22,7 +22,7 @@ from rei.generators.rooms.scenario import MAX_PLACEMENT, TILE, towards
 from rei.generators.rooms.writer import read_metadata
 from rei.lang.room.checks import rotated_half_extents
 from rei.runtime.search.run import CandidateResult, SearchConfig, search_table
-from tests.search.test_scenario_dimensions import ONE_HUMAN, candidate, checked
+from tests.search.test_scenario_dimensions import ONE_HUMAN, candidate, checked, written
 
 OFFSET = re.compile(r" offset (-?[\d.]+) (-?[\d.]+)")
 
@@ -153,12 +153,9 @@ def test_towards_is_cut_short_by_the_room_on_each_axis() -> None:
 def test_same_row_same_bytes_and_the_table_lists_each_shift(tmp_path: Path) -> None:
     scenario = [("object_shift", "-0.3:0.3"), ("goal_shift", "0:0.25"),
                 ("path_shift", "-0.2:0.2")]
-
-    def files(name: str, u: float) -> dict[str, bytes]:
-        candidate(tmp_path / name, scenario, u)
-        return {p.name: p.read_bytes() for p in sorted((tmp_path / name).iterdir())}
-
-    first, again, other = files("a", 0.7), files("b", 0.7), files("c", 0.8)
+    first, again, other = (written(tmp_path / "a", scenario, 0.7),
+                           written(tmp_path / "b", scenario, 0.7),
+                           written(tmp_path / "c", scenario, 0.8))
     assert first == again
     assert other != first  # the comparison can fail: another point, other bytes
     config = SearchConfig(levels=ONE_HUMAN, scenario=tuple(scenario), layout=3)
@@ -169,3 +166,48 @@ def test_same_row_same_bytes_and_the_table_lists_each_shift(tmp_path: Path) -> N
     assert head.endswith("object_shift,goal_shift,path_shift,problem")
     assert ",0.12,0.175,0.08," in row
     assert "object_shift=0.12" in (tmp_path / "t" / "index.csv").read_text()
+
+
+@pytest.mark.slow
+def test_a_real_search_with_the_shifts_runs_the_moved_scenario(tmp_path: Path) -> None:
+    """`rei search` with the three shifts (two real pybullet runs): every candidate is built,
+    checked and run, search.csv has a column per shift, the world each run simulated has the
+    objects where the candidate's offsets put them, off their tiles' centres, and the same
+    command again resumes to the same bytes."""
+    import json  # noqa: PLC0415
+    import subprocess  # noqa: PLC0415
+    import sys  # noqa: PLC0415
+
+    from tests.search.test_search_runs import SAFETY_LIMIT, outputs, table  # noqa: PLC0415
+
+    out = tmp_path / "out"
+    argv = [sys.executable, "-m", "rei.runtime.cli", "search", "-o", str(out), "--layout", "5",
+            *(a for k, v in ONE_HUMAN for a in (f"--{k.replace('_', '-')}", v)),
+            "--object-shift", "0.1:0.3", "--goal-shift", "0:0.25", "--path-shift=-0.2:0.2",
+            "--budget", "2", "--batch", "2", "--workers", "1", "--strategy", "random",
+            "--no-report", "-q"]
+    done = subprocess.run(argv, capture_output=True, text=True, timeout=SAFETY_LIMIT)
+    assert done.returncode in (0, 1), done.stderr  # a verdict, not bad input or an error
+    rows = table(out)
+    assert len(rows) == 2 and all(r["verdict"] in ("pass", "fail") for r in rows), rows
+    for row in rows:
+        assert 0.1 <= float(row["object_shift"]) <= 0.3
+        assert 0 <= float(row["goal_shift"]) <= 0.25
+        assert -0.2 <= float(row["path_shift"]) <= 0.2
+        mission = out / "candidates" / f"{row['candidate']}_0001.mission"
+        concrete = load_concrete_mission(mission).world
+        world = json.loads((out / "runs" / row["run_id"] / "world" / "world.json").read_text())
+        simulated = {o["name"]: o["pose"][:2] for o in world["objects"]}
+        statics = [o for o in concrete.objects if o.role == "static"]
+        assert statics
+        off = []
+        for body in statics:
+            centre = concrete.floor(body.floor)
+            assert simulated[body.name] == pytest.approx([body.pose.x, body.pose.y], abs=1e-3)
+            off.append(math.dist((body.pose.x, body.pose.y), (centre.x, centre.y)))
+        assert max(off) > 0.05, off  # moved (a big table may have no room on its tile)
+    # Run again: the search replays its recorded batch and changes no byte.
+    before = outputs(out)
+    again = subprocess.run(argv, capture_output=True, text=True, timeout=SAFETY_LIMIT)
+    assert again.returncode == done.returncode, again.stderr
+    assert outputs(out) == before

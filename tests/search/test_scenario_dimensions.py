@@ -43,6 +43,12 @@ def candidate(folder: Path, scenario: Sequence[tuple[str, str]], u: float,
     return built
 
 
+def written(folder: Path, scenario: Sequence[tuple[str, str]], u: float) -> dict[str, bytes]:
+    """The bytes of every file the candidate at ``u`` writes, by name."""
+    candidate(folder, scenario, u)
+    return {p.name: p.read_bytes() for p in sorted(folder.iterdir())}
+
+
 def checked(folder: Path, built: Candidate) -> tuple[Path, Path]:
     pair = built.pair
     assert pair is not None, built.problem
@@ -154,12 +160,9 @@ def test_fault_parameters_go_into_the_missions_fault_section(tmp_path: Path) -> 
 
 def test_same_row_same_bytes_and_the_table_lists_each_dimension(tmp_path: Path) -> None:
     scenario = [("phase", "0:20"), ("laser_noise.sigma", "0.01:0.2")]
-
-    def files(name: str, u: float) -> dict[str, bytes]:
-        candidate(tmp_path / name, scenario, u)
-        return {p.name: p.read_bytes() for p in sorted((tmp_path / name).iterdir())}
-
-    first, again, other = files("a", 0.4), files("b", 0.4), files("c", 0.6)
+    first, again, other = (written(tmp_path / "a", scenario, 0.4),
+                           written(tmp_path / "b", scenario, 0.4),
+                           written(tmp_path / "c", scenario, 0.6))
     assert first == again
     assert other != first  # the comparison can fail: another point, other bytes
     config = SearchConfig(levels=ONE_HUMAN, scenario=tuple(scenario), layout=3)
