@@ -76,6 +76,7 @@ def room_text(name: str, plan: RoomPlan, provenance: Provenance) -> str:
                      f"{offset_text(obj.offset)}{heading}")
     for human in plan.humans:
         end = "loop" if human.loop else "stop"
+        start = _vertex_offsets(human)[0]  # stands where its path starts
         lines.append("")
         if human.start_s:
             # A start phase: every vertex timed, the first at start_s, the rest as `total`
@@ -84,13 +85,13 @@ def room_text(name: str, plan: RoomPlan, provenance: Provenance) -> str:
             points = [(i + dx, j + dy) for (i, j), (dx, dy) in zip(human.vertices, shifts,
                                                                   strict=True)]
             times, _ = vertex_times(points, [None] * len(points), human.total_time, human.loop)
-            lines.append(f"    human {human.name} on {cell_name(human.vertices[0])} "
+            lines.append(f"    human {human.name} on {cell_name(human.vertices[0])}{start} "
                          f"trajectory {end} {{")
             lines += [f"        {cell_name(v)}{o} at {_fmt(round(human.start_s + t, 3))}"
                       for v, o, t in zip(human.vertices, _vertex_offsets(human), times,
                                          strict=False)]
         else:
-            lines.append(f"    human {human.name} on {cell_name(human.vertices[0])} "
+            lines.append(f"    human {human.name} on {cell_name(human.vertices[0])}{start} "
                          f"trajectory total {_fmt(human.total_time)} {end} {{")
             lines += [f"        {cell_name(v)}{o}"
                       for v, o in zip(human.vertices, _vertex_offsets(human), strict=True)]

@@ -113,7 +113,7 @@ class Trajectory:
 @dataclass(frozen=True)
 class PlacedObject:
     """A static object, dynamic object, human or robot standing on a floor (at its centre,
-    unless a static object's ``offset`` moves it within the tile)."""
+    unless a static object's or a human's ``offset`` moves it within the tile)."""
 
     name: str
     role: Role
@@ -126,7 +126,8 @@ class PlacedObject:
     behaviour: Behaviour = DEFAULT_BEHAVIOUR
     """Humans only; every other role is moved by its trajectory alone."""
     offset: tuple[float, float] = (0.0, 0.0)
-    """Metres (x, y) from the floor's centre (``offset DX DY``, static objects only)."""
+    """Metres (x, y) from the floor's centre (``offset DX DY``: static objects
+    and humans, whose first trajectory vertex is usually where they stand)."""
 
 
 @dataclass(frozen=True)

@@ -110,6 +110,8 @@ def test_path_vertices_move_within_their_tiles(tmp_path: Path) -> None:
     first = walker.trajectory.points[0]
     centre = world.floor(f"area_{-human.vertices[0][1]}_{human.vertices[0][0]}")
     assert (first.x - centre.x, first.y - centre.y) == pytest.approx(human.offsets[0])
+    # and the human stands there at the start (no jump to its path on the first tick)
+    assert (walker.pose.x, walker.pose.y) == pytest.approx((first.x, first.y))
     # The generator keeps its curves 0.35 m off walls and objects and the vertices move
     # towards the route (free floor), so the largest shift is built in every one of these
     # layouts; a curve it would push into something is refused by the checker
