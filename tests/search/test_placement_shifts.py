@@ -21,8 +21,12 @@ from rei.generators.rooms.construct import ROBOT_TYPE, RoomPlan
 from rei.generators.rooms.scenario import MAX_PLACEMENT, TILE, towards
 from rei.generators.rooms.writer import read_metadata
 from rei.lang.room.checks import rotated_half_extents
-from rei.runtime.search.run import CandidateResult, SearchConfig, search_table
-from tests.search.test_scenario_dimensions import ONE_HUMAN, candidate, checked, written
+from tests.search.test_scenario_dimensions import (
+    ONE_HUMAN,
+    candidate,
+    checked,
+    same_bytes_and_table_row,
+)
 
 OFFSET = re.compile(r" offset (-?[\d.]+) (-?[\d.]+)")
 
@@ -155,16 +159,7 @@ def test_towards_is_cut_short_by_the_room_on_each_axis() -> None:
 def test_same_row_same_bytes_and_the_table_lists_each_shift(tmp_path: Path) -> None:
     scenario = [("object_shift", "-0.3:0.3"), ("goal_shift", "0:0.25"),
                 ("path_shift", "-0.2:0.2")]
-    first, again, other = (written(tmp_path / "a", scenario, 0.7),
-                           written(tmp_path / "b", scenario, 0.7),
-                           written(tmp_path / "c", scenario, 0.8))
-    assert first == again
-    assert other != first  # the comparison can fail: another point, other bytes
-    config = SearchConfig(levels=ONE_HUMAN, scenario=tuple(scenario), layout=3)
-    _, dims = config.dimensions()
-    assert [d.name for d in dims] == ["object_shift", "goal_shift", "path_shift"]
-    built = candidate(tmp_path / "t", scenario, 0.7)
-    head, row = search_table([CandidateResult(built, None, 10.0)], dims).splitlines()
+    head, row = same_bytes_and_table_row(tmp_path, scenario, 0.7, 0.8)
     assert head.endswith("object_shift,goal_shift,path_shift,problem")
     assert ",0.12,0.175,0.08," in row
     assert "object_shift=0.12" in (tmp_path / "t" / "index.csv").read_text()
