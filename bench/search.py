@@ -28,8 +28,8 @@ only) are reported with the load average, since the machine is shared.
 Usage: python bench/search.py [--only NAME ...] [--strategies S ...] [--seeds S ...]
        [--reference-seeds S ...] [--reference-strategies S ...] [--reference-budget N]
        [--budget N] [--batch K] [--workers N] [--preset small] [--speed LOW:HIGH]
-       [--factor NAME=LEVELS ...] [--shrink [--shrink-runs N]] [--resume] [--markdown]
-       [--out DIR]
+       [--factor NAME=LEVELS ...] [--scenario NAME=LOW:HIGH ...] [--shrink [--shrink-runs N]]
+       [--resume] [--markdown] [--out DIR]
 """
 
 from __future__ import annotations
@@ -119,7 +119,9 @@ def one_search(nav: str, spec: str, strategy: str, seed: int, args: argparse.Nam
     shutil.rmtree(root, ignore_errors=True)
     levels = tuple(tuple(f.split("=", 1)) for f in args.factor)
     levels = (*levels, ("speed", args.speed)) if args.speed else levels
+    scenario = tuple(tuple(f.split("=", 1)) for f in args.scenario)
     config = SearchConfig(preset=args.preset, levels=levels,  # type: ignore[arg-type]
+                          scenario=scenario,  # type: ignore[arg-type]
                           strategy=strategy, seed=seed, budget=budget, batch=args.batch,
                           controller=None if spec == REFERENCE else spec)
     verdicts: dict[str, bool] = {}
@@ -274,6 +276,10 @@ def main() -> int:
     parser.add_argument("--factor", action="append", default=[], metavar="NAME=LEVELS",
                         help="a factor's levels or LOW:HIGH range, as `rei search --NAME` "
                              "takes them (e.g. stressor=emerge)")
+    parser.add_argument("--scenario", action="append", default=[], metavar="NAME=LOW:HIGH",
+                        help="a scenario parameter searched too (rei search's --phase, "
+                             "--object-shift, ...: phase, object_shift, goal_shift, "
+                             "path_shift, stress_shift, KIND.PARAM), e.g. object_shift=0:0.3")
     parser.add_argument("--shrink", action="store_true",
                         help="shrink every confirmed failure with rei shrink (3 seeds)")
     parser.add_argument("--shrink-runs", type=int, default=120, metavar="N",
@@ -311,7 +317,8 @@ def main() -> int:
     def key_of(nav: str) -> dict[str, Any]:
         return {"budget": reference_budget if nav == REFERENCE else args.budget,
                 "batch": args.batch, "preset": args.preset, "speed": args.speed,
-                "factor": args.factor}
+                "factor": args.factor, **({"scenario": args.scenario} if args.scenario
+                                           else {})}
 
     outcomes: list[SearchOutcome] = []
     if (args.resume or args.summary_only) and log.is_file():

@@ -39,3 +39,20 @@ def read_number(
         )
         return None
     return value
+
+
+MAX_OFFSET = 50.0
+"""m: the largest `offset` either way (half the largest tile); the room's own tile size
+bounds it further (rei.lang.room.checks.offset_problem)."""
+NO_OFFSET = (0.0, 0.0)
+
+
+def read_offset(dx: str, dy: str, span: Span, what: str,
+                diagnostics: list[Diagnostic]) -> tuple[float, float]:
+    """An ``offset DX DY`` (metres from a floor's centre); (0, 0) with a diagnostic when a
+    number is unusable, so the rest of the file is still checked."""
+    x = read_number(dx, span, f"{what} (x, metres)", diagnostics, low=-MAX_OFFSET,
+                    high=MAX_OFFSET)
+    y = read_number(dy, span, f"{what} (y, metres)", diagnostics, low=-MAX_OFFSET,
+                    high=MAX_OFFSET)
+    return (x if x is not None else 0.0, y if y is not None else 0.0)

@@ -25,11 +25,15 @@ def _num(value: float) -> str:
     return repr(float(value))
 
 
+def _offset(offset: tuple[float, float]) -> str:
+    return f" offset {_num(offset[0])} {_num(offset[1])}" if offset != (0.0, 0.0) else ""
+
+
 def _object_line(obj: PlacedObject) -> list[str]:
     head = f"    {_KEYWORD[obj.role]} {obj.name}"
     if obj.role != "human" or obj.type != "human":
         head += f" : {obj.type}"
-    head += f" on {obj.floor.name}"
+    head += f" on {obj.floor.name}" + _offset(obj.offset)
     if obj.heading_deg is not None:
         head += f" heading {_num(obj.heading_deg)}"
     traj = obj.trajectory
@@ -45,7 +49,7 @@ def _object_line(obj: PlacedObject) -> list[str]:
     lines = [head + f" trajectory{options} {{"]
     for vertex in traj.vertices:
         at = f" at {_num(vertex.time)}" if vertex.time is not None else ""
-        lines.append(f"        {vertex.floor.name}{at}")
+        lines.append(f"        {vertex.floor.name}{_offset(vertex.offset)}{at}")
     lines.append("    }")
     return lines
 
@@ -91,7 +95,7 @@ def print_mission(mission: Mission, room_path: str) -> str:
         lines.extend(f"        {fault.text()}" for fault in mission.faults)
         lines.append("    }")
     for goal in mission.goals:
-        line = f"    goal {goal.name} at {goal.floor.name}"
+        line = f"    goal {goal.name} at {goal.floor.name}{_offset(goal.offset)}"
         if goal.tolerance != DEFAULT_TOLERANCE:
             line += f" tolerance {_num(goal.tolerance)}"
         if goal.heading_deg is not None:

@@ -60,7 +60,9 @@ RULES: tuple[Rule, ...] = (
     Rule("ROBOT-COUNT", "room", "exactly one robot, on a floor", "thesis 4.1.2"),
     Rule("ROBOT-FIT", "room", "the robot can turn in place on one tile"),
     Rule("OBJECT-FIT", "room", "an object's footprint fits its tile (objects stand at a floor's "
-         "centre)", "thesis 4.1.2"),
+         "centre, or moved by an `offset` that keeps the footprint on the tile)", "thesis 4.1.2"),
+    Rule("OFFSET-TILE", "room, mission", "an `offset DX DY` of a trajectory vertex or a goal "
+         "keeps the point on its floor's tile (at most half a tile either way)"),
     Rule("OBJECT-OVERLAP", "room", "at most one object on a floor at the start"),
     Rule("CATALOGUE-TYPE", "room", "every type is in the catalogue (with 'did you mean')"),
     Rule("CATALOGUE-KIND", "room", "a type's kind matches its use (a table is not a robot)"),

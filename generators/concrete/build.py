@@ -25,12 +25,14 @@ from rei.lang.room.spline import vertex_times
 from rei.lang.workspace import Workspace, load_mission
 
 
-def _xy(cell: tuple[int, int], tile: float) -> tuple[float, float]:
-    return cell[0] * tile, cell[1] * tile
+def _xy(cell: tuple[int, int], tile: float,
+        offset: tuple[float, float] = (0.0, 0.0)) -> tuple[float, float]:
+    """A floor's centre in metres, moved by an ``offset`` written in the file."""
+    return cell[0] * tile + offset[0], cell[1] * tile + offset[1]
 
 
 def _timed(traj: Trajectory, room: Room, cells: dict[str, tuple[int, int]]) -> TimedTrajectory:
-    pts = [_xy(cells[v.floor.name], room.tile_size) for v in traj.vertices]
+    pts = [_xy(cells[v.floor.name], room.tile_size, v.offset) for v in traj.vertices]
     times, pts = vertex_times(pts, [v.time for v in traj.vertices], traj.total_time, traj.loop)
     points = tuple(TimedPoint(t, x, y) for t, (x, y) in zip(times, pts, strict=True))
     start_when = None
@@ -57,7 +59,7 @@ def concretise_room(doc: RoomDocument) -> ConcreteWorld:
     objects: list[ConcreteObject] = []
     robot: ConcreteObject | None = None
     for obj in room.objects:
-        x, y = _xy(cells[obj.floor.name], tile)
+        x, y = _xy(cells[obj.floor.name], tile, obj.offset)
         pose = Pose2D(x, y, math.radians(obj.heading_deg or 0.0))
         trajectory = _timed(obj.trajectory, room, cells) if obj.trajectory is not None else None
         concrete = ConcreteObject(obj.name, obj.role, _type(catalogue, obj.type), obj.floor.name,
@@ -85,7 +87,8 @@ def concretise_mission(doc: MissionDocument) -> ConcreteMission:
     for goal in mission.goals:
         floor = world.floor(goal.floor.name)
         yaw = math.radians(goal.heading_deg) if goal.heading_deg is not None else None
-        goals.append(ConcreteGoal(goal.name, floor.name, floor.x, floor.y, yaw, goal.tolerance,
+        goals.append(ConcreteGoal(goal.name, floor.name, floor.x + goal.offset[0],
+                                  floor.y + goal.offset[1], yaw, goal.tolerance,
                                   goal.timeout, math.radians(goal.heading_tolerance_deg)))
     return ConcreteMission(mission.name, mission.path, world, tuple(goals), mission.cycles,
                            mission.effective_time_limit(), mission.max_speed,

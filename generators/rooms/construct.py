@@ -84,6 +84,8 @@ class PlacedObjectPlan:
     type: str
     cell: Cell
     heading: float
+    offset: tuple[float, float] = (0.0, 0.0)
+    """m from the tile's centre (a search's object shift, generators/rooms/scenario.py)."""
 
 
 @dataclass(frozen=True)
@@ -96,6 +98,8 @@ class HumanPlan:
     start_s: float = 0.0
     """When the human passes its first vertex (a search's start phase,
     generators/rooms/scenario.py); 0 keeps the ``total`` form the generator writes."""
+    offsets: tuple[tuple[float, float], ...] = ()
+    """m from each vertex's tile centre (a search's path shift); () for none."""
 
 
 @dataclass(frozen=True)
@@ -112,6 +116,8 @@ class RoomPlan:
     route: tuple[Cell, ...]
     descriptors: Descriptors
     stressor: StressorPlan | None = None
+    goal_offsets: tuple[tuple[float, float], ...] = ()
+    """m from each goal's tile centre (a search's goal shift); () for none."""
 
 
 @dataclass(frozen=True)

@@ -12,6 +12,19 @@ faults the mission injects. `rei search` searches them as dimensions of the unit
   file's mover times and its ``// stressor: meeting_s=`` carry it. A crossing cart is never
   delayed (it is timed to clear the robot's lane before a robot at top speed could be
   there); a shift that leaves a mover less than the generator's shortest wait is refused.
+* ``object_shift``, ``goal_shift``, ``path_shift`` (m): continuous placement, each one
+  number for the whole room (a per-element offset would add two dimensions per object and
+  vertex, more than a search of a few hundred runs can learn; one signed distance per kind
+  of element says what matters to a navigator: nearer the robot's way or farther from it).
+  Every generated object (not a stressor's row) moves that far towards the nearest tile of
+  the robot's planned route (away when negative); every goal but the first (the robot's
+  start) towards the nearest wall or object; every generated human's trajectory vertex
+  towards the nearest route tile. Each move is cut short where it would take the body off
+  its own tile (an object's rotated footprint, the robot standing on a goal, a human's disc
+  at a vertex), so nothing is moved into a wall, another object or the robot's start, and
+  the pair is written with ``offset DX DY`` (grammars/common.tx). A human's curve may still
+  graze something between vertices: the `rei-gen check` rules then refuse the candidate.
+  The generator's descriptors (``// descriptors:``) are those of the layout before the move.
 * ``KIND.PARAM`` (a fault kind of rei.lang.mission.faults and one of its parameters, e.g.
   ``laser_noise.sigma``): the mission gets a ``fault { }`` section with one entry per kind,
   active the whole run, its parameters set to the values chosen.
@@ -23,14 +36,18 @@ kinds' limits are the mission language's). The pair is written again and checked
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 
-from rei.generators.rooms.construct import RoomPlan
+from rei.catalogue import Catalogue
+from rei.generators.rooms.construct import ROBOT_TYPE, PlacedObjectPlan, RoomPlan
 from rei.generators.rooms.descriptors import format_number
+from rei.generators.rooms.geometry import Cell
 from rei.generators.rooms.space import Interval, ParameterError, parse_range
 from rei.generators.rooms.stressors import MIN_WAIT, TimedMover, hold_times
 from rei.lang.mission.faults import KINDS
+from rei.lang.room.checks import rotated_half_extents
 
 PHASE = "phase"
 STRESS_SHIFT = "stress_shift"
@@ -38,6 +55,16 @@ MAX_PHASE = 600.0
 """s: the latest start phase (a generated mission lasts minutes)."""
 MAX_SHIFT = 60.0
 """s: the largest stressor shift either way."""
+OBJECT_SHIFT = "object_shift"
+GOAL_SHIFT = "goal_shift"
+PATH_SHIFT = "path_shift"
+PLACEMENT_SHIFTS = (OBJECT_SHIFT, GOAL_SHIFT, PATH_SHIFT)
+TILE = 1.0
+"""m: the generator's tile (writer.room_text writes ``tile 1.0``)."""
+MAX_PLACEMENT = TILE / 2
+"""m: the largest placement shift either way; a body never leaves its tile anyway."""
+ROW_PREFIX = "row_"
+"""A stressor's row objects (their gap is the stressor): never shifted."""
 
 
 class ScenarioRefused(Exception):
@@ -57,6 +84,9 @@ def parse_scenario(name: str, text: str) -> Interval:
         return parse_range("phase", name, text, 0.0, MAX_PHASE, False)
     if name == STRESS_SHIFT:
         return parse_range("stress-shift", name, text, -MAX_SHIFT, MAX_SHIFT, False)
+    if name in PLACEMENT_SHIFTS:
+        return parse_range(name.replace("_", "-"), name, text, -MAX_PLACEMENT, MAX_PLACEMENT,
+                           False)
     option = "fault-range"
     pair = fault_parameter(name)
     if pair is None:
@@ -90,9 +120,15 @@ def check_faults(ranges: Sequence[Interval]) -> None:
                                  f"only {', '.join(sorted(params))}")
 
 
-def apply_to_plan(plan: RoomPlan, values: Mapping[str, float]) -> RoomPlan:
-    """The plan with the humans' phase and the stressor's shift put in; ScenarioRefused
-    when this room cannot take them."""
+def apply_to_plan(plan: RoomPlan, values: Mapping[str, float],
+                  catalogue: Catalogue | None = None) -> RoomPlan:
+    """The plan with the humans' phase, the stressor's shift and the placement shifts put
+    in; ScenarioRefused when this room cannot take them. ``catalogue`` (the bodies' sizes)
+    is needed for the placement shifts."""
+    if any(name in values for name in PLACEMENT_SHIFTS):
+        if catalogue is None:
+            raise ValueError("placement shifts need the catalogue's footprints")
+        plan = placed(plan, values, catalogue)
     if PHASE in values:
         plan = replace(plan, humans=tuple(replace(h, start_s=values[PHASE])
                                           for h in plan.humans))
@@ -125,6 +161,69 @@ def shifted(mover: TimedMover, shift: float) -> TimedMover:
     return replace(mover, vertices=(*((first, t) for t in hold_times(go)), *walk))
 
 
+def placed(plan: RoomPlan, values: Mapping[str, float], catalogue: Catalogue) -> RoomPlan:
+    """The plan with ``object_shift``, ``goal_shift`` and ``path_shift`` among ``values``
+    put in as offsets (see the module's docstring)."""
+    route = tuple(dict.fromkeys(plan.route))
+    if OBJECT_SHIFT in values:
+        shift = values[OBJECT_SHIFT]
+
+        def moved(o: PlacedObjectPlan) -> PlacedObjectPlan:
+            if o.name.startswith(ROW_PREFIX):
+                return o
+            hx, hy = rotated_half_extents(catalogue.types[o.type], o.heading)
+            return replace(o, offset=towards(o.cell, route, shift, TILE / 2 - hx,
+                                             TILE / 2 - hy))
+        plan = replace(plan, objects=tuple(moved(o) for o in plan.objects))
+    if GOAL_SHIFT in values and len(plan.goals) > 1:
+        radius = catalogue.types[ROBOT_TYPE].footprint.circumradius()
+        room = TILE / 2 - radius
+        standing = {o.cell for o in plan.objects}
+        blocked = tuple(sorted(c for c in _around(plan.goals)
+                               if c not in plan.floors or c in standing))
+        plan = replace(plan, goal_offsets=((0.0, 0.0), *(
+            towards(g, blocked, values[GOAL_SHIFT], room, room) for g in plan.goals[1:])))
+    if PATH_SHIFT in values and plan.humans:
+        shift = values[PATH_SHIFT]
+        room = TILE / 2 - max(catalogue.types["human"].footprint.half_extents())
+        plan = replace(plan, humans=tuple(
+            replace(h, offsets=tuple(towards(v, route, shift, room, room) for v in h.vertices))
+            for h in plan.humans))
+    return plan
+
+
+def _around(cells: Sequence[Cell], reach: int = 3) -> set[Cell]:
+    return {(i + di, j + dj) for i, j in cells
+            for di in range(-reach, reach + 1) for dj in range(-reach, reach + 1)}
+
+
+def towards(cell: Cell, targets: Sequence[Cell], shift: float, room_x: float,
+            room_y: float) -> tuple[float, float]:
+    """The offset (m) moving a thing on ``cell`` ``shift`` metres towards the nearest of
+    ``targets`` (away when negative; the first in order when several are as near), cut
+    short so it moves at most ``room_x`` / ``room_y`` either way; rounded towards the
+    tile's centre to the millimetre, so the bytes are the same everywhere. (0, 0) when
+    there is no target or the thing is on one."""
+    if not targets or shift == 0.0:
+        return (0.0, 0.0)
+    target = min(targets, key=lambda t: math.dist(t, cell))
+    gap = math.dist(target, cell)
+    if gap == 0.0:
+        return (0.0, 0.0)
+    ux, uy = (target[0] - cell[0]) / gap, (target[1] - cell[1]) / gap
+    step = abs(shift)
+    for u, room in ((ux, room_x), (uy, room_y)):
+        if abs(u) > 1e-12:
+            step = min(step, max(room, 0.0) / abs(u))
+    sign = 1.0 if shift > 0 else -1.0
+    return (_mm(sign * step * ux), _mm(sign * step * uy))
+
+
+def _mm(value: float) -> float:
+    """Metres truncated to whole millimetres (towards 0: never past the room allowed)."""
+    return math.trunc(round(value * 1000.0, 6)) / 1000.0 + 0.0
+
+
 def fault_section(values: Mapping[str, float]) -> list[str]:
     """The mission's ``fault { }`` lines for the fault parameters among ``values``."""
     entries: dict[str, list[str]] = {}
@@ -153,6 +252,7 @@ def comment(values: Mapping[str, float]) -> str:
     return "// scenario: " + " ".join(f"{k}={format_number(v)}" for k, v in sorted(values.items()))
 
 
-__all__ = ["MAX_PHASE", "MAX_SHIFT", "PHASE", "STRESS_SHIFT",
+__all__ = ["GOAL_SHIFT", "MAX_PHASE", "MAX_PLACEMENT", "MAX_SHIFT", "OBJECT_SHIFT",
+           "PATH_SHIFT", "PHASE", "PLACEMENT_SHIFTS", "STRESS_SHIFT",
            "ScenarioRefused", "apply_to_plan", "check_faults", "comment",
-           "fault_section", "parse_scenario", "with_faults"]
+           "fault_section", "parse_scenario", "placed", "towards", "with_faults"]

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from rei.generators.rooms.construct import GRID, ROBOT_TYPE, RoomPlan, cell_name
+from rei.generators.rooms.construct import GRID, ROBOT_TYPE, HumanPlan, RoomPlan, cell_name
 from rei.generators.rooms.descriptors import format_number
 from rei.lang.room.spline import vertex_times
 
@@ -33,6 +33,17 @@ class Provenance:
 
 def _fmt(value: float) -> str:
     return format_number(float(value))
+
+
+def offset_text(offset: tuple[float, float]) -> str:
+    """`` offset DX DY`` after a floor name, or nothing for a tile's centre."""
+    if offset == (0.0, 0.0):
+        return ""
+    return f" offset {_fmt(offset[0])} {_fmt(offset[1])}"
+
+
+def _vertex_offsets(human: HumanPlan) -> list[str]:
+    return [offset_text(o) for o in human.offsets] or [""] * len(human.vertices)
 
 
 def room_text(name: str, plan: RoomPlan, provenance: Provenance) -> str:
@@ -61,23 +72,29 @@ def room_text(name: str, plan: RoomPlan, provenance: Provenance) -> str:
         lines.append("")
     for obj in plan.objects:
         heading = f" heading {_fmt(obj.heading)}" if obj.heading else ""
-        lines.append(f"    object {obj.name} : {obj.type} on {cell_name(obj.cell)}{heading}")
+        lines.append(f"    object {obj.name} : {obj.type} on {cell_name(obj.cell)}"
+                     f"{offset_text(obj.offset)}{heading}")
     for human in plan.humans:
         end = "loop" if human.loop else "stop"
+        start = _vertex_offsets(human)[0]  # stands where its path starts
         lines.append("")
         if human.start_s:
             # A start phase: every vertex timed, the first at start_s, the rest as `total`
             # would share the time out (rei.lang.room.spline.vertex_times), start_s later.
-            points = [(float(i), float(j)) for i, j in human.vertices]
+            shifts = human.offsets or ((0.0, 0.0),) * len(human.vertices)
+            points = [(i + dx, j + dy) for (i, j), (dx, dy) in zip(human.vertices, shifts,
+                                                                  strict=True)]
             times, _ = vertex_times(points, [None] * len(points), human.total_time, human.loop)
-            lines.append(f"    human {human.name} on {cell_name(human.vertices[0])} "
+            lines.append(f"    human {human.name} on {cell_name(human.vertices[0])}{start} "
                          f"trajectory {end} {{")
-            lines += [f"        {cell_name(v)} at {_fmt(round(human.start_s + t, 3))}"
-                      for v, t in zip(human.vertices, times, strict=False)]
+            lines += [f"        {cell_name(v)}{o} at {_fmt(round(human.start_s + t, 3))}"
+                      for v, o, t in zip(human.vertices, _vertex_offsets(human), times,
+                                         strict=False)]
         else:
-            lines.append(f"    human {human.name} on {cell_name(human.vertices[0])} "
+            lines.append(f"    human {human.name} on {cell_name(human.vertices[0])}{start} "
                          f"trajectory total {_fmt(human.total_time)} {end} {{")
-            lines += [f"        {cell_name(v)}" for v in human.vertices]
+            lines += [f"        {cell_name(v)}{o}"
+                      for v, o in zip(human.vertices, _vertex_offsets(human), strict=True)]
         lines.append(f"    }} behaviour {human.behaviour}")
     lines += _mover_lines(plan)
     lines.append("}")
@@ -161,8 +178,9 @@ def mission_text(name: str, room_file: str, plan: RoomPlan) -> str:
         heading = ""
         if p.heading and k == last and k > 0:
             heading = f" heading {_fmt(arrival_heading(plan.goals[k - 1], goal))}"
-        lines.append(f"    goal goal_{k + 1} at {cell_name(goal)} tolerance {GOAL_TOLERANCE:g}"
-                     f"{heading} timeout {_fmt(timeout)}")
+        shift = offset_text(plan.goal_offsets[k]) if plan.goal_offsets else ""
+        lines.append(f"    goal goal_{k + 1} at {cell_name(goal)}{shift} tolerance "
+                     f"{GOAL_TOLERANCE:g}{heading} timeout {_fmt(timeout)}")
     lines.append("}")
     return "\n".join(lines) + "\n"
 

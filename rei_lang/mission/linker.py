@@ -27,9 +27,9 @@ from rei.lang.mission.model import (
     Goal,
     Mission,
 )
-from rei.lang.numbers import read_number
+from rei.lang.numbers import NO_OFFSET, read_number, read_offset
 from rei.lang.parsing import span_of
-from rei.lang.room.checks import passable_floors
+from rei.lang.room.checks import offset_problem, passable_floors
 from rei.lang.room.document import RoomDocument
 from rei.lang.room.linker import MAX_TIME
 from rei.lang.room.model import NameRef
@@ -194,11 +194,14 @@ def _goal(item: Any, index: int, span: Any, number: Any, diagnostics: list[Diagn
         else:
             timeout = number(option.seconds, option, f"timeout of goal '{name}' (seconds)",
                              low=0.0, high=MAX_TIME, low_open=True)
+    offset = NO_OFFSET if item.offset is None else read_offset(
+        item.offset.dx, item.offset.dy, span(item.offset), f"offset of goal '{name}'",
+        diagnostics)
     return Goal(name, NameRef(item.floor.name, span(item.floor)),
                 tolerance if tolerance is not None else DEFAULT_TOLERANCE, heading,
                 timeout if timeout is not None else DEFAULT_TIMEOUT, goal_span,
                 heading_tolerance if heading_tolerance is not None
-                else DEFAULT_HEADING_TOLERANCE)
+                else DEFAULT_HEADING_TOLERANCE, offset)
 
 
 def _check_against_room(mission: Mission, room_doc: RoomDocument) -> list[Diagnostic]:
@@ -230,6 +233,10 @@ def _check_against_room(mission: Mission, room_doc: RoomDocument) -> list[Diagno
     for goal in mission.goals:
         name = goal.floor.name
         if name in room.floors:
+            problem = offset_problem(goal.offset, room.tile_size, 0.0)
+            if problem:
+                out.append(Diagnostic(goal.span, "OFFSET-TILE",
+                                      f"goal '{goal.name}': expected {problem}"))
             if room_doc.ok and name not in reachable:
                 blockers = [o.name for o in room.objects_on(name)
                             if o.role in ("static", "dynamic")]

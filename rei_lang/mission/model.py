@@ -40,6 +40,8 @@ class Goal:
     timeout: float
     span: Span
     heading_tolerance_deg: float = DEFAULT_HEADING_TOLERANCE
+    offset: tuple[float, float] = (0.0, 0.0)
+    """Metres (x, y) from the floor's centre (``offset DX DY``)."""
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,7 @@ import numpy as np
 from rei.catalogue import Catalogue, ObjectType, Tile
 from rei.lang.errors import Diagnostic
 from rei.lang.room.layout import Layout
-from rei.lang.room.model import PlacedObject, Room
+from rei.lang.room.model import PlacedObject, Room, Vertex
 from rei.lang.room.motion import walkable
 from rei.lang.room.spline import CatmullRom, vertex_times, walked_path
 from rei.lang.suggest import did_you_mean
@@ -26,6 +26,21 @@ def rotated_half_extents(otype: ObjectType, heading_deg: float | None) -> tuple[
     a = math.radians(heading_deg or 0.0)
     c, s = abs(math.cos(a)), abs(math.sin(a))
     return c * hx + s * hy, s * hx + c * hy
+
+
+def offset_problem(offset: tuple[float, float], tile: float, half_x: float,
+                   half_y: float | None = None) -> str:
+    """'' when a body of half extents (half_x, half_y) moved ``offset`` from its floor's
+    centre stays on that tile, else what was expected and found (for a diagnostic)."""
+    dx, dy = offset
+    hy = half_x if half_y is None else half_y
+    room_x, room_y = tile / 2 - half_x, tile / 2 - hy
+    if abs(dx) <= room_x + _FIT_SLACK and abs(dy) <= room_y + _FIT_SLACK:
+        return ""
+    what = "a point" if half_x == 0 and hy == 0 else \
+        f"a footprint {2 * half_x:.2f} x {2 * hy:.2f} m"
+    return (f"an offset keeping {what} on its {tile:g} m tile (at most {max(room_x, 0):.3g} m "
+            f"in x and {max(room_y, 0):.3g} m in y), found offset {dx:g} {dy:g}")
 
 
 def blocking_objects(room: Room) -> list[PlacedObject]:
@@ -83,7 +98,12 @@ def check_types(room: Room, catalogue: Catalogue) -> list[Diagnostic]:
                                       f"{room.tile_size:g} m"))
             continue
         hx, hy = rotated_half_extents(otype, obj.heading_deg)
-        if max(hx, hy) > half_tile + _FIT_SLACK:
+        if obj.offset != (0.0, 0.0) and max(hx, hy) <= half_tile + _FIT_SLACK:
+            problem = offset_problem(obj.offset, room.tile_size, hx, hy)
+            if problem:
+                out.append(Diagnostic(obj.span, "OBJECT-FIT", f"'{obj.name}' ({obj.type}): "
+                                                              f"expected {problem}"))
+        elif max(hx, hy) > half_tile + _FIT_SLACK:
             out.append(Diagnostic(obj.span, "OBJECT-FIT",
                                   f"'{obj.name}' ({obj.type}, {2 * hx:.2f} x {2 * hy:.2f} m) "
                                   f"expected to fit its {room.tile_size:g} m tile, found it "
@@ -120,6 +140,10 @@ def check_placement(room: Room, layout: Layout) -> list[Diagnostic]:
             name = vertex.floor.name
             if name not in room.floors:
                 continue
+            problem = offset_problem(vertex.offset, room.tile_size, 0.0)
+            if problem:
+                out.append(Diagnostic(vertex.span, "OFFSET-TILE",
+                                      f"trajectory of '{obj.name}': expected {problem}"))
             if name in blocked:
                 out.append(Diagnostic(vertex.span, "TRAJ-BLOCKED",
                                       f"trajectory of '{obj.name}': expected a free floor, found "
@@ -129,6 +153,12 @@ def check_placement(room: Room, layout: Layout) -> list[Diagnostic]:
                                       f"trajectory of '{obj.name}': expected a vertex the robot "
                                       f"can reach, found '{name}' cut off from the robot's floor"))
     return out
+
+
+def vertex_point(vertex: Vertex, layout: Layout, tile: float) -> tuple[float, float]:
+    """Where a trajectory vertex is (metres): its floor's centre moved by its offset."""
+    i, j = layout.cells[vertex.floor.name]
+    return i * tile + vertex.offset[0], j * tile + vertex.offset[1]
 
 
 _PATH_STEP = 0.02
@@ -161,8 +191,7 @@ def check_trajectories(room: Room, layout: Layout, catalogue: Catalogue) -> list
         if any(v.floor.name not in layout.cells or v.floor.name not in room.floors
                for v in vertices):
             continue  # unresolved vertices are reported by the linker
-        cells = [layout.cells[v.floor.name] for v in vertices]
-        times, points = vertex_times([(i * tile, j * tile) for i, j in cells],
+        times, points = vertex_times([vertex_point(v, layout, tile) for v in vertices],
                                      [v.time for v in vertices], traj.total_time, traj.loop)
         if not walkable(times, points):
             continue  # TRAJ-SPEED says which segment the animator cannot walk
@@ -218,7 +247,7 @@ def _standing_obstacles(room: Room, layout: Layout, catalogue: Catalogue
             continue
         hx, hy = (tile / 2, tile / 2) if isinstance(otype.footprint, Tile) else \
             rotated_half_extents(otype, obj.heading_deg)
-        found[cell] = ((cell[0] * tile, cell[1] * tile, hx, hy),
+        found[cell] = ((cell[0] * tile + obj.offset[0], cell[1] * tile + obj.offset[1], hx, hy),
                        f"'{obj.name}' standing on '{obj.floor.name}'")
     return found
 

@@ -15,7 +15,7 @@ from types import MappingProxyType
 from typing import Any
 
 from rei.lang.errors import Diagnostic, Span
-from rei.lang.numbers import read_number
+from rei.lang.numbers import NO_OFFSET, read_number, read_offset
 from rei.lang.parsing import span_at, span_of
 from rei.lang.room.model import (
     BEHAVIOURS,
@@ -69,6 +69,11 @@ class _Linker:
         if text is None:
             return None
         return read_number(text, self.span(obj), what, self.diagnostics, **bounds)
+
+    def offset(self, raw: Any, what: str) -> tuple[float, float]:
+        if raw is None:
+            return NO_OFFSET
+        return read_offset(raw.dx, raw.dy, self.span(raw), what, self.diagnostics)
 
     def declare(self, name: str, span: Span) -> None:
         if name in self.declared:
@@ -206,7 +211,8 @@ def _trajectory(linker: _Linker, raw: Any, owner: str) -> Trajectory | None:
         Vertex(linker.ref(v.floor),
                linker.number(v.time, v, f"time of a vertex of '{owner}'s trajectory",
                              low=0.0, high=MAX_TIME),
-               linker.span(v))
+               linker.span(v),
+               linker.offset(v.offset, f"offset of a vertex of '{owner}'s trajectory"))
         for v in raw.vertices
     )
     if len(vertices) < 2:
@@ -310,8 +316,9 @@ def link_room(textx_room: Any, source: SourceText) -> tuple[Room, list[Diagnosti
             trajectory = _trajectory(linker, getattr(item, "trajectory", None), item.name)
             type_name = item.type or DEFAULT_TYPES.get(role, "")
             behaviour = _behaviour(linker, getattr(item, "behaviour", None), item.name)
+            offset = linker.offset(getattr(item, "offset", None), f"offset of '{item.name}'")
             objects.append(PlacedObject(item.name, role, type_name, span, linker.ref(item.floor),
-                                        heading, trajectory, span, behaviour))
+                                        heading, trajectory, span, behaviour, offset))
 
     neighbours = _resolve_links(linker, floors, walls)
     _resolve_placements(linker, floors, walls, objects)

@@ -86,6 +86,8 @@ class Vertex:
     floor: NameRef
     time: float | None
     span: Span
+    offset: tuple[float, float] = (0.0, 0.0)
+    """Metres (x, y) from the floor's centre (``offset DX DY``)."""
 
 
 @dataclass(frozen=True)
@@ -110,7 +112,8 @@ class Trajectory:
 
 @dataclass(frozen=True)
 class PlacedObject:
-    """A static object, dynamic object, human or robot standing on a floor's centre."""
+    """A static object, dynamic object, human or robot standing on a floor (at its centre,
+    unless a static object's or a human's ``offset`` moves it within the tile)."""
 
     name: str
     role: Role
@@ -122,6 +125,9 @@ class PlacedObject:
     span: Span
     behaviour: Behaviour = DEFAULT_BEHAVIOUR
     """Humans only; every other role is moved by its trajectory alone."""
+    offset: tuple[float, float] = (0.0, 0.0)
+    """Metres (x, y) from the floor's centre (``offset DX DY``: static objects
+    and humans, whose first trajectory vertex is usually where they stand)."""
 
 
 @dataclass(frozen=True)

@@ -54,8 +54,8 @@ def check_motion(room: Room, cells: Mapping[str, tuple[int, int]]) -> list[Diagn
         if traj.total_time is None and any(b.time <= a.time for a, b in pairwise(written)
                                            if a.time is not None and b.time is not None):
             continue  # TRAJ-TIMES: times must increase
-        points = [(cells[v.floor.name][0] * tile, cells[v.floor.name][1] * tile)
-                  for v in written]
+        points = [(cells[v.floor.name][0] * tile + v.offset[0],
+                   cells[v.floor.name][1] * tile + v.offset[1]) for v in written]
         times, pts = vertex_times(points, [v.time for v in written], traj.total_time,
                                   traj.loop)
         for i, ((t0, t1), (p0, p1)) in enumerate(zip(pairwise(times), pairwise(pts),

@@ -29,6 +29,8 @@ rei search -o out/slow --preset stress --strategy map-elites --requirement HUMAN
 rei search -o out/limit --max-speed 0.05:0.3 --requirement SPEED_LIMIT --budget 12 --batch 4
 rei search -o out/phase --phase 0:20 --speed 0.6:1.0 --requirement HUMAN_SLOW_ZONE
 rei search -o out/emerge --preset stress --stressor emerge --stress-shift=-4:4 --budget 24
+rei search -o out/place --object-shift=-0.1:0.3 --goal-shift 0:0.25 --budget 16
+rei search -o out/walk --path-shift=-0.2:0.2 --phase 0:10 --requirement HUMAN_SLOW_ZONE
 rei search -o out/noise --fault-range laser_noise.sigma=0.01:0.2 --requirement REACTION_TIME
 rei search -o out/search --controller my_nav:Navigator --budget 200   # again: resumes
 rei search -o out/slow07 --preset stress --requirement REACTION_TIME --param react_zone=0.7
@@ -40,7 +42,11 @@ EXIT_HELP = ("Exit status (the campaign's rule): 0 no run failed (nothing found)
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    from rei.generators.rooms.scenario import MAX_PHASE, MAX_SHIFT  # noqa: PLC0415
+    from rei.generators.rooms.scenario import (  # noqa: PLC0415
+        MAX_PHASE,
+        MAX_PLACEMENT,
+        MAX_SHIFT,
+    )
     from rei.lang.commands.rooms import OVERRIDES  # noqa: PLC0415
     from rei.runtime.commands.campaign import _seconds, add_engine_arguments  # noqa: PLC0415
     from rei.runtime.commands.run import CONTROLLER_HELP  # noqa: PLC0415
@@ -62,10 +68,12 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                     "candidate with its margin and verdict. Factor options take levels as "
                     "`rei-gen rooms` does; --speed, --spacing and --max-speed also take a "
                     "range LOW:HIGH searched as a continuous value, and so do the scenario's "
-                    "--phase, --stress-shift and --fault-range. The layout (object "
-                    "placement, the humans' paths, the goals' tiles) is searched as a seed "
-                    "unless --layout fixes it. Same options and seed give the same candidates "
-                    "and results, with any number of workers. " + EXIT_HELP)
+                    "--phase, --stress-shift, --object-shift, --goal-shift, --path-shift "
+                    "and --fault-range. The layout (which tiles hold the objects, the "
+                    "humans' paths and the goals) is searched as a seed unless --layout "
+                    "fixes it; the shifts move them within their tiles. Same options and "
+                    "seed give the same candidates and results, with any number of "
+                    "workers. " + EXIT_HELP)
     parser.add_argument("-o", "--output", type=Path, required=True, metavar="DIR",
                         help="search folder (created; an existing one is resumed)")
     parser.add_argument("--strategy", choices=STRATEGIES, default="tpe",
@@ -100,6 +108,23 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                              f"(negative: earlier, -{MAX_SHIFT:g} to {MAX_SHIFT:g}) than "
                              "timed, which moves the encounter along the robot's first leg; "
                              "write --stress-shift=-4:4 for a negative LOW")
+    most = f"{MAX_PLACEMENT:g}"
+    parser.add_argument("--object-shift", default=None, metavar="LOW:HIGH",
+                        help=f"search object placement: metres (-{most} to {most}) every "
+                             "generated object moves towards the nearest tile of the robot's "
+                             "route (away when negative), as far as its footprint stays on "
+                             "its tile; written as `offset DX DY`")
+    parser.add_argument("--goal-shift", default=None, metavar="LOW:HIGH",
+                        help=f"search goal positions: metres (-{most} to {most}) every goal but "
+                             "the start moves towards the nearest wall or object (away when "
+                             "negative), as far as the robot standing there stays on the "
+                             "goal's tile")
+    parser.add_argument("--path-shift", default=None, metavar="LOW:HIGH",
+                        help=f"search the humans' paths: metres (-{most} to {most}) every vertex "
+                             "of a generated human's trajectory moves towards the nearest "
+                             "tile of the robot's route (away when negative), within its "
+                             "tile; a curve that then grazes a wall or object is refused "
+                             "(docs/search.md)")
     parser.add_argument("--fault-range", action="append", default=[],
                         metavar="KIND.PARAM=LOW:HIGH",
                         help="search a sensor fault's parameter (repeatable): the missions "
@@ -151,6 +176,9 @@ def config_of(args: argparse.Namespace) -> SearchConfig:
         scenario.append(("phase", args.phase))
     if args.stress_shift is not None:
         scenario.append(("stress_shift", args.stress_shift))
+    for name in ("object_shift", "goal_shift", "path_shift"):
+        if getattr(args, name) is not None:
+            scenario.append((name, getattr(args, name)))
     for text in args.fault_range:
         name, sep, value = text.partition("=")
         if not sep or not name.strip():

@@ -4,7 +4,8 @@
 A candidate is built by the room generator exactly as `rei-gen rooms` builds a room
 (``rei.generators.rooms.generate`` on a one-level-per-factor space, the layout seed as the
 suite seed): valid by construction and checked with the `rei-gen check` rules before it is
-written. A row's scenario parameters (start phase, stressor shift, sensor faults:
+written. A row's scenario parameters (start phase, stressor shift, placement shifts,
+sensor faults:
 generators/rooms/scenario.py) are then put into the pair, which is written and checked
 again. A row the generator refuses (an impossible combination, or scenario values the room
 cannot take) is a candidate with a ``problem`` and no files; it never runs. This module
@@ -19,6 +20,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from rei.catalogue import default_catalogue
 from rei.generators.errors import GenerationError
 from rei.generators.output import write_atomic
 from rei.generators.rooms.design import SearchRow
@@ -82,11 +84,11 @@ def build_candidate(row: SearchRow, number: int, batch: int, point: tuple[float,
 
 def with_scenario(suite: Suite, row: SearchRow, folder: Path) -> Suite:
     """The suite's pair with the row's scenario parameters put in (start phase, stressor
-    shift, faults), written again and checked with the `rei-gen check` rules;
+    shift, placement shifts, faults), written again and checked with the `rei-gen check` rules;
     ScenarioRefused when the room cannot take them or the checker refuses the result."""
     pair = suite.pairs[0]
     values = {name: float(text) for name, text in row.scenario}
-    plan = apply_to_plan(pair.plan, values)
+    plan = apply_to_plan(pair.plan, values, default_catalogue())
     request = suite.request
     provenance = Provenance(request.version, request.strategy, suite.design.design,
                             request.seed, pair.index, pair.design_row, pair.attempts)

@@ -43,6 +43,12 @@ def candidate(folder: Path, scenario: Sequence[tuple[str, str]], u: float,
     return built
 
 
+def written(folder: Path, scenario: Sequence[tuple[str, str]], u: float) -> dict[str, bytes]:
+    """The bytes of every file the candidate at ``u`` writes, by name."""
+    candidate(folder, scenario, u)
+    return {p.name: p.read_bytes() for p in sorted(folder.iterdir())}
+
+
 def checked(folder: Path, built: Candidate) -> tuple[Path, Path]:
     pair = built.pair
     assert pair is not None, built.problem
@@ -152,23 +158,29 @@ def test_fault_parameters_go_into_the_missions_fault_section(tmp_path: Path) -> 
     assert "laser_poisson.rate=11 laser_poisson.gain=0.3 laser_dropout.share=0.2" in index
 
 
-def test_same_row_same_bytes_and_the_table_lists_each_dimension(tmp_path: Path) -> None:
-    scenario = [("phase", "0:20"), ("laser_noise.sigma", "0.01:0.2")]
-
-    def files(name: str, u: float) -> dict[str, bytes]:
-        candidate(tmp_path / name, scenario, u)
-        return {p.name: p.read_bytes() for p in sorted((tmp_path / name).iterdir())}
-
-    first, again, other = files("a", 0.4), files("b", 0.4), files("c", 0.6)
+def same_bytes_and_table_row(tmp_path: Path, scenario: Sequence[tuple[str, str]], u: float,
+                             v: float) -> tuple[str, str]:
+    """Check that the candidate at ``u`` writes the same bytes twice and another at ``v``
+    other bytes, and that the search's dimensions are the scenario's in order; the header
+    and the row search.csv gives the candidate at ``u``."""
+    first, again, other = (written(tmp_path / "a", scenario, u),
+                           written(tmp_path / "b", scenario, u),
+                           written(tmp_path / "c", scenario, v))
     assert first == again
     assert other != first  # the comparison can fail: another point, other bytes
     config = SearchConfig(levels=ONE_HUMAN, scenario=tuple(scenario), layout=3)
     _, dims = config.dimensions()
-    assert [d.name for d in dims] == ["phase", "laser_noise.sigma"]
+    assert [d.name for d in dims] == [name for name, _ in scenario]
     from rei.runtime.search.run import CandidateResult  # noqa: PLC0415
 
-    built = candidate(tmp_path / "t", scenario, 0.4)
+    built = candidate(tmp_path / "t", scenario, u)
     head, row = search_table([CandidateResult(built, None, 10.0)], dims).splitlines()
+    return head, row
+
+
+def test_same_row_same_bytes_and_the_table_lists_each_dimension(tmp_path: Path) -> None:
+    scenario = [("phase", "0:20"), ("laser_noise.sigma", "0.01:0.2")]
+    head, row = same_bytes_and_table_row(tmp_path, scenario, 0.4, 0.6)
     assert head.endswith("phase,laser_noise.sigma,problem")
     assert ",8,0.086," in row
 
