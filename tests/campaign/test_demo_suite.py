@@ -72,3 +72,14 @@ def test_smaller_demos_keep_their_rooms_and_the_default_adds_the_doorway_pair() 
                       8: (3, 3, 2), 10: (5, 3, 2)}
     assert DEMO_ROOMS == 8
     assert stress_share(8, "medium") == doorway_share(8, "medium") == 0
+
+
+def test_the_demo_suite_is_a_pure_function_of_the_seed(tmp_path: Path) -> None:
+    def files(folder: Path) -> dict[str, bytes]:
+        generate_suite(folder, DEMO_ROOMS, "small", 2)
+        return {p.relative_to(folder).as_posix(): p.read_bytes()
+                for p in sorted(folder.rglob("*")) if p.is_file()}
+
+    first, again = files(tmp_path / "a"), files(tmp_path / "b")
+    assert first == again
+    assert sum(name.startswith("doorway/") and name.endswith(".room") for name in first) == 2
