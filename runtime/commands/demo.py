@@ -49,11 +49,12 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.add_argument("-o", "--output", type=Path, required=True, metavar="DIR",
                         help="folder for the suite (DIR/suite) and the campaign (DIR/campaign)")
     parser.add_argument("--count", type=positive_int, default=DEMO_ROOMS, metavar="N",
-                        help=f"rooms to generate (default {DEMO_ROOMS}; with the small preset "
-                             f"half of them, at most {STRESS_ROOMS}, are stress rooms, and "
-                             f"from {DOORWAY_FROM} rooms on {DOORWAY_ROOMS} more are doorway "
-                             "rooms: a person steps out beside the route, on the robot's left "
-                             "in one and on its right in the other)")
+                        help=f"rooms to generate (default {DEMO_ROOMS}: 3 small, 3 stress, "
+                             f"2 doorway; with the small preset half of them, at most "
+                             f"{STRESS_ROOMS}, are stress rooms and, from {DOORWAY_FROM} rooms "
+                             f"on, {DOORWAY_ROOMS} of the others are doorway rooms: a person "
+                             "steps out beside the route, on the robot's left in one and on its "
+                             "right in the other)")
     parser.add_argument("--repeat", type=positive_int, default=2, metavar="K",
                         help="runs per mission, each with its own seed (default 2)")
     parser.add_argument("--preset", choices=("small", "medium", "large", "stress"),
