@@ -346,7 +346,7 @@ def main() -> int:
                         help="only these defects (the reference always runs)")
     parser.add_argument("--quick", action="store_true",
                         help="smoke test: first seed, 2 rooms, one run per mission")
-    parser.add_argument("--count", type=int, default=6, help="rooms per suite (demo: 6)")
+    parser.add_argument("--count", type=int, default=8, help="rooms per suite (demo: 8)")
     parser.add_argument("--repeat", type=int, default=2, help="runs per mission (demo: 2)")
     parser.add_argument("--preset", choices=("small", "medium", "large"), default="small",
                         help="room class of the suite (demo: small)")

@@ -2,6 +2,9 @@
 or seeded random picks — two strategies over one parameter space — and, for `rei search`,
 the row at a point of the unit cube (``decode_point``).
 
+Random rows are balanced (``balanced_rows``): each factor's levels come in seeded
+shuffled blocks, so a suite of as many rooms as a factor has levels uses every level.
+
 The pairwise array is built by IPOG (Lei & Tai's In-Parameter-Order): start from every pair
 of the first two factors, then add one factor at a time, first choosing its level in each
 existing row to cover the most new pairs (horizontal growth), then adding rows for the pairs
@@ -111,17 +114,37 @@ def uncovered_pairs(sizes: Sequence[int], rows: Sequence[Sequence[int]]
             for a in range(sizes[i]) for b in range(sizes[j]) if (i, a, j, b) not in seen]
 
 
+def balanced_rows(space: ParameterSpace, count: int, seed: int) -> tuple[tuple[int, ...], ...]:
+    """``count`` random rows in which each factor's levels are cycled in seeded blocks: rooms
+    ``b*n .. b*n + n - 1`` of a factor with n levels take every level once, in an order the
+    seed shuffles (per factor and block). So any suite of at least n rooms has every level of
+    that factor, where independent picks can leave one out of a small suite (a small-preset
+    suite of three rooms without a speed-limited mission). Row ``i`` depends only on the seed
+    and ``i``: a longer suite starts with the rows of a shorter one."""
+    blocks: dict[tuple[int, int], list[int]] = {}
+
+    def level(factor: int, size: int, index: int) -> int:
+        block = index // size
+        key = (factor, block)
+        if key not in blocks:
+            order = list(range(size))
+            random.Random(derived_seed(seed, "block", space.factors[factor].name,
+                                       block)).shuffle(order)
+            blocks[key] = order
+        return blocks[key][index % size]
+
+    sizes = [len(f.levels) for f in space.factors]
+    return tuple(tuple(level(f, size, index) for f, size in enumerate(sizes))
+                 for index in range(count))
+
+
 def design_suite(space: ParameterSpace, strategy: Strategy, count: int | None, seed: int,
                  max_grid: int, design: str = "auto") -> tuple[SuiteDesign, int]:
     """The design rows and the number of rooms to generate (``count`` or the design's size)."""
     sizes = [len(f.levels) for f in space.factors]
     if strategy == "random":
         n = count if count is not None else 10
-        rows = []
-        for index in range(n):
-            rng = random.Random(derived_seed(seed, "row", index))
-            rows.append(tuple(rng.randrange(size) for size in sizes))
-        return SuiteDesign("random", tuple(rows)), n
+        return SuiteDesign("random", balanced_rows(space, n, seed)), n
     use_full = design == "full" or (design == "auto" and space.grid_size <= max_grid)
     chosen: list[tuple[int, ...]] = full_grid(sizes) if use_full else pairwise(sizes)
     return (SuiteDesign("full" if use_full else "pairwise", tuple(chosen)),

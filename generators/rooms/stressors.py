@@ -458,6 +458,10 @@ def _gap(floors: set[Cell], goals: Sequence[Cell], leg: list[Cell], half: float,
         run.sort()
         if any(t in goals for t in run):
             continue
+        # The row's end tables leave a narrow gap to the wall too; next to the slot, that gap
+        # can be a point's shorter way than the slot itself (seen in an L room's inner corner).
+        if run[0] in slot or run[-1] in slot:
+            continue
         openings = [t for t in run if min(abs(t[lat] - low), abs(t[lat] - low - 1)) >= 2
                     and _add(t, cell(1, 0)) in floors and _add(t, cell(-1, 0)) in floors]
         if not openings:

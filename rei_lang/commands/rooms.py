@@ -71,7 +71,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                              "robot's planned arrival (default: medium)")
     parser.add_argument("--strategy", choices=("systematic", "random"), default="random",
                         help="systematic: full grid of levels, or a pairwise covering array "
-                             "when the grid is larger than --max-grid; random: seeded picks")
+                             "when the grid is larger than --max-grid; random: seeded picks, "
+                             "balanced (every level of a factor with n levels once in each "
+                             "block of n rooms)")
     parser.add_argument("--design", choices=("auto", "full", "pairwise"), default="auto",
                         help="for systematic: force the full grid or the pairwise array")
     parser.add_argument("--max-grid", type=int, default=256, metavar="N",

@@ -48,16 +48,20 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                     "the same command again to resume an interrupted demo. " + EXIT_STATUS_HELP)
     parser.add_argument("-o", "--output", type=Path, required=True, metavar="DIR",
                         help="folder for the suite (DIR/suite) and the campaign (DIR/campaign)")
-    parser.add_argument("--count", type=positive_int, default=6, metavar="N",
-                        help="rooms to generate (default 6; with the small preset half of "
-                             f"them, at most {STRESS_ROOMS}, are stress rooms)")
+    parser.add_argument("--count", type=positive_int, default=DEMO_ROOMS, metavar="N",
+                        help=f"rooms to generate (default {DEMO_ROOMS}: 3 small, 3 stress, "
+                             f"2 doorway; with the small preset half of them, at most "
+                             f"{STRESS_ROOMS}, are stress rooms and, from {DOORWAY_FROM} rooms "
+                             f"on, {DOORWAY_ROOMS} of the others are doorway rooms: a person "
+                             "steps out beside the route, on the robot's left in one and on its "
+                             "right in the other)")
     parser.add_argument("--repeat", type=positive_int, default=2, metavar="K",
                         help="runs per mission, each with its own seed (default 2)")
     parser.add_argument("--preset", choices=("small", "medium", "large", "stress"),
                         default="small",
                         help="room class of the suite (default small, with stress rooms: a "
                              "person emerging from behind a corner, a crossing cart, a gap "
-                             "narrower than the robot)")
+                             "narrower than the robot, and people stepping out of doorways)")
     parser.add_argument("--seed", type=int, default=0, metavar="S",
                         help="seed of the generated suite and of the campaign's runs (default 0)")
     parser.add_argument("--workers", type=positive_int, default=None, metavar="N",
@@ -80,26 +84,49 @@ preset's first systematic rows, a person emerging from behind a corner, a crossi
 a gap narrower than the robot."""
 
 
+DOORWAY_ROOMS = 2
+"""Doorway rooms the demo adds (`--stressor doorway`): a person steps out of a doorway beside
+the route as the robot comes level, first seen 60-120 degrees off its heading. Two rooms, so
+the suite's alternating sides (stressors.side_of) put one doorway on the robot's left and one
+on its right on every seed: a navigator blind on either side meets its blind side in every
+demo. Two rooms rather than one room with a doorway on each side: each encounter then starts
+from a robot that has seen nothing nearby, where a second doorway down the same leg could
+find the robot still slowed for the first person (the reference keeps its slow zone 3 s)."""
+DOORWAY_FROM = 8
+"""The smallest ``--count`` with the doorway pair: smaller demos keep their rooms as before."""
+DEMO_ROOMS = 8
+"""The default ``--count``: 3 small rooms, 3 stress rooms, the doorway pair."""
+
+
 def stress_share(count: int, preset: str) -> int:
-    """How many of the demo's ``count`` rooms are stress rooms."""
+    """How many of the demo's ``count`` rooms are the stress preset's systematic rows."""
     return min(STRESS_ROOMS, count // 2) if preset == "small" else 0
+
+
+def doorway_share(count: int, preset: str) -> int:
+    """How many of the demo's ``count`` rooms are doorway rooms (DOORWAY_ROOMS or none)."""
+    return DOORWAY_ROOMS if preset == "small" and count >= DOORWAY_FROM else 0
 
 
 def generate_suite(out: Path, count: int, preset: str, seed: int) -> list[Path]:
     """The suite's indexes, generated with `rei-gen rooms`: ``count`` rooms of ``preset``,
-    with the small preset ``stress_share`` of them stress rooms (in DIR/suite/stress); the
-    bundled examples without the generator."""
+    with the small preset ``stress_share`` of them stress rooms (in DIR/suite/stress) and
+    ``doorway_share`` doorway rooms (in DIR/suite/doorway); the bundled examples without the
+    generator."""
     try:
         from rei.lang.cli import main as rei_gen  # noqa: PLC0415
         from rei.lang.commands import rooms  # noqa: F401, PLC0415
     except ImportError:
         print(f"rei demo: `rei-gen rooms` is not installed; using {EXAMPLES}", file=sys.stderr)
         return [EXAMPLES]
-    stress = stress_share(count, preset)
-    suites = [(out, ["--count", str(count - stress), "--preset", preset])]
+    stress, doorways = stress_share(count, preset), doorway_share(count, preset)
+    suites = [(out, ["--count", str(count - stress - doorways), "--preset", preset])]
     if stress:
         suites.append((out / "stress", ["--count", str(stress), "--preset", "stress",
                                         "--strategy", "systematic", "--prefix", "stress"]))
+    if doorways:
+        suites.append((out / "doorway", ["--count", str(doorways), "--preset", "stress",
+                                         "--stressor", "doorway", "--prefix", "doorway"]))
     indexes = []
     for folder, options in suites:
         index = folder / "index.csv"
@@ -138,9 +165,12 @@ def run(args: argparse.Namespace) -> int:
         if not args.quiet:
             print(text, file=sys.stderr)
 
-    stress = stress_share(args.count, args.preset)
-    rooms = (f"{args.count - stress} {args.preset} and {stress} stress" if stress
-             else f"{args.count} {args.preset}")
+    stress, doorways = stress_share(args.count, args.preset), doorway_share(args.count,
+                                                                            args.preset)
+    shares = [(args.count - stress - doorways, args.preset), (stress, "stress"),
+              (doorways, "doorway")]
+    named = [f"{n} {kind}" for n, kind in shares if n]
+    rooms = ", ".join(named[:-1]) + " and " + named[-1] if len(named) > 1 else named[0]
     say(f"1/3 generating {rooms} rooms into {out / 'suite'}")
     inputs = generate_suite(out / "suite", args.count, args.preset, args.seed)
     plan = plan_campaign(inputs, repeat=args.repeat, seed=args.seed, controller=args.controller,
