@@ -9,6 +9,7 @@ gives the same bytes. This module never touches the disk.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 from rei.generators.rooms.construct import GRID, ROBOT_TYPE, HumanPlan, RoomPlan, cell_name
@@ -145,10 +146,17 @@ def _mover_lines(plan: RoomPlan) -> list[str]:
     return lines
 
 
-def arrival_heading(previous: tuple[int, int], goal: tuple[int, int]) -> float:
-    """Degrees: the way from the previous goal, rounded to a quarter turn, so the robot
-    must turn at the goal to meet it (a heading requirement that can pass and can fail)."""
-    angle = math.degrees(math.atan2(goal[1] - previous[1], goal[0] - previous[0]))
+def arrival_heading(route: Sequence[tuple[int, int]], previous: tuple[int, int],
+                    goal: tuple[int, int]) -> float:
+    """Degrees: a quarter turn to the left of the way the robot arrives at ``goal`` (the
+    last step into it on the planned ``route``; the straight way from ``previous`` when the
+    route never steps into it), rounded to a quarter turn, so the robot must turn at the goal
+    to meet it: a navigator that ignores the heading fails, one that turns passes. (The way
+    from the previous goal itself was the rule before: where the route ends straight the
+    robot arrived facing it, and ignoring the heading cost nothing.)"""
+    last = max((k for k, cell in enumerate(route) if cell == goal and k > 0), default=None)
+    before = route[last - 1] if last is not None else previous
+    angle = math.degrees(math.atan2(goal[1] - before[1], goal[0] - before[0])) + 90.0
     return float((round(angle / 90.0) * 90) % 360)
 
 
@@ -177,7 +185,7 @@ def mission_text(name: str, room_file: str, plan: RoomPlan) -> str:
                                               / speed / 10.0)
         heading = ""
         if p.heading and k == last and k > 0:
-            heading = f" heading {_fmt(arrival_heading(plan.goals[k - 1], goal))}"
+            heading = f" heading {_fmt(arrival_heading(plan.route, plan.goals[k - 1], goal))}"
         shift = offset_text(plan.goal_offsets[k]) if plan.goal_offsets else ""
         lines.append(f"    goal goal_{k + 1} at {cell_name(goal)}{shift} tolerance "
                      f"{GOAL_TOLERANCE:g}{heading} timeout {_fmt(timeout)}")

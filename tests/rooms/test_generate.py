@@ -4,6 +4,7 @@ of walls and objects, the same seed gives the same bytes, descriptors ignore nam
 from __future__ import annotations
 
 import csv
+import math
 import os
 import re
 import subprocess
@@ -327,3 +328,24 @@ def test_the_small_preset_exercises_heading_speed_limit_doorway_and_crossing(
     # The joined shape's doorway across 5 tiles is one tile wide: a narrow passage.
     assert any(p.params.shape == "joined" and p.plan.descriptors.narrowest_m <= 1.1
                for p in suite.pairs)
+
+
+def test_a_final_heading_is_a_quarter_turn_from_the_way_the_robot_arrives(
+        tmp_path: Path) -> None:
+    """A goal heading is worth checking only if reaching the goal does not meet it by itself:
+    the heading is a quarter turn from the last step of the planned route into the goal,
+    so a navigator that ignores headings arrives at least 45 degrees off (it once matched the
+    way from the previous goal, and a straight last leg met it for free)."""
+    checked = 0
+    for seed in range(12):
+        for pair in generate(_suite("medium", seed, 4, heading="yes"), tmp_path / f"{seed}").pairs:
+            (written,) = re.findall(r" heading (\d+)", pair.mission_text)
+            goal = pair.plan.goals[-1]
+            route = pair.plan.route
+            last = max(k for k, cell in enumerate(route) if cell == goal)
+            before = route[last - 1]
+            arrival = math.degrees(math.atan2(goal[1] - before[1], goal[0] - before[0]))
+            off = abs((float(written) - arrival + 180.0) % 360.0 - 180.0)
+            assert off >= 45.0, (seed, pair.plan.params.name, written, arrival)
+            checked += 1
+    assert checked == 48
