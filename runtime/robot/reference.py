@@ -138,6 +138,7 @@ class ReferenceNavigator:
     """Metres from the footprint within which an unmapped laser point slows the robot (its
     forward protective field; a subclass tuned otherwise sets its own, and the default
     .vepl's ``react_zone`` is this value, to be set with `--param` for such a robot)."""
+    turn_commitment = TURN_COMMITMENT
 
     def __init__(self) -> None:
         self._tracker = GoalTracker()
@@ -536,7 +537,7 @@ class ReferenceNavigator:
         over = np.maximum(v - self._vmax * slow, 0.0)
         score = (-1.0 * to_target - 0.35 * heading_err + 0.6 * clearance
                  + 0.25 * v / self._vmax - 3.0 * over - 0.4 * (v < 0)
-                 - TURN_COMMITMENT * ((w * self._turn_side < 0) & (v != 0.0)))
+                 - self.turn_commitment * ((w * self._turn_side < 0) & (v != 0.0)))
         score = np.where(hit, -np.inf, score)
         # Standing still is admissible but never progress: only chosen when nothing else is.
         score = np.where((v == 0.0) & (w == 0.0), -np.inf, score)
