@@ -327,3 +327,15 @@ def test_the_small_preset_exercises_heading_speed_limit_doorway_and_crossing(
     # The joined shape's doorway across 5 tiles is one tile wide: a narrow passage.
     assert any(p.params.shape == "joined" and p.plan.descriptors.narrowest_m <= 1.1
                for p in suite.pairs)
+
+
+def test_no_open_human_path_ends_on_a_goal(tmp_path: Path) -> None:
+    """Issue 22: a human stands at its open path's last vertex for the rest of the run; on a
+    goal's tile (in medium room 394 a corner) it stood on the robot's goal until the
+    reference aborted it, in both repeats. Medium seed 0's first 30 rooms held one such path
+    (room 30) before the generator refused them."""
+    suite = generate(_suite("medium", 0, 30), tmp_path)
+    open_paths = [(p.name, h.vertices[-1], p.plan.goals) for p in suite.pairs
+                  for h in p.plan.humans if not h.loop]
+    assert len(open_paths) > 10  # the check below has something to judge
+    assert [(name, end) for name, end, goals in open_paths if end in goals] == []
