@@ -10,7 +10,6 @@ navigator as it was (no commitment): the side these tests show failing.
 
 from __future__ import annotations
 
-
 import numpy as np
 
 from rei.runtime.robot import NavGoal
