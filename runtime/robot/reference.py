@@ -75,13 +75,15 @@ TIGHT_MARGIN = 0.01
 """Metres kept from laser points by the local planner for ``TIGHT_FOR`` s after a recovery."""
 TIGHT_FOR = 10.0
 TURN_COMMITMENT = 0.05
-"""Score a driving roll-out loses for turning against the local planner's last driving
-turn. With a person or an obstacle straight ahead, the arcs past either side score within a
-centimetre or two of each other, and the laser's noise tipped the choice from tick to tick:
-the robot weaved in front of a person who had stopped for it (issue 22: SMOOTH_MOTION in 2
-of 1,000 medium runs). The hysteresis of Nav2 DWB's oscillation critic, as a cost: a side
-is kept unless the other is clearly better (a real bend of the path always is). Turning on
-the spot is no weaving and neither pays nor sets it."""
+"""Score a driving roll-out loses, while the slow zone holds, for turning against the local
+planner's last driving turn. A person straight ahead is not in the global plan (the path
+runs through them, where it passes the map's obstacles on one side), so nothing breaks the
+tie: the arcs past either side scored within a centimetre or two, the laser's noise tipped
+the choice from tick to tick, and the robot weaved in front of a person who had stopped for
+it (issue 22: SMOOTH_MOTION in 2 of 1,000 medium runs). The hysteresis of Nav2 DWB's
+oscillation critic, as a cost: a side is kept unless the other is clearly better. Turning on
+the spot is no weaving and neither pays nor sets it; away from people the planner is as
+before."""
 SLOW_ZONE_RADIUS = 0.8
 """Metres from the footprint: an unmapped laser point this close puts the robot in its slow
 zone (the promise requirements may check, with ``SLOW_ZONE_SPEED``)."""
@@ -425,7 +427,8 @@ class ReferenceNavigator:
                 return self._start_recovery(now, pose, points, goal)
             return cmd
         margin = TIGHT_MARGIN if now < self._tight_until else MARGIN
-        chosen = self._choose(pose, points, dist, margin)
+        chosen = self._choose(pose, points, dist, margin,
+                              self.turn_commitment if now < self._slow_until else 0.0)
         heading = self._path_heading((x, y))
         aligned = heading is not None and abs(math.remainder(heading - yaw, math.tau)) < 0.5
         # Turning on the spot although already facing the path is the local planner's way
@@ -518,7 +521,10 @@ class ReferenceNavigator:
         return self._points
 
     def _choose(self, pose: tuple[float, float, float], points: np.ndarray,
-                dist: float, margin: float = MARGIN) -> VelocityCommand | None:
+                dist: float, margin: float = MARGIN, commit: float = 0.0
+                ) -> VelocityCommand | None:
+        """The best admissible velocity pair, None when none is; ``commit``: the score an
+        arc turning against the last driving turn loses (``TURN_COMMITMENT``)."""
         x, y, yaw = pose
         target = self._lookahead((x, y))
         c, s = math.cos(yaw), math.sin(yaw)
@@ -537,7 +543,7 @@ class ReferenceNavigator:
         over = np.maximum(v - self._vmax * slow, 0.0)
         score = (-1.0 * to_target - 0.35 * heading_err + 0.6 * clearance
                  + 0.25 * v / self._vmax - 3.0 * over - 0.4 * (v < 0)
-                 - self.turn_commitment * ((w * self._turn_side < 0) & (v != 0.0)))
+                 - commit * ((w * self._turn_side < 0) & (v != 0.0)))
         score = np.where(hit, -np.inf, score)
         # Standing still is admissible but never progress: only chosen when nothing else is.
         score = np.where((v == 0.0) & (w == 0.0), -np.inf, score)
