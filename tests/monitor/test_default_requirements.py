@@ -252,7 +252,7 @@ def test_driving_off_right_after_turning_left_on_the_spot_is_no_weaving(tmp_path
     smooth, _ = run(tmp_path / "spin", FAR_WALL, [tick(i, v, w)
                                                   for i, (v, w) in enumerate(recovery)])
     assert smooth["SMOOTH_MOTION"].status == "pass"
-    # the same with the left turn driven (0.1 s of it is enough): weaving
+    # the same with the left turn driven (0.4 s at 0.26 m/s): weaving
     driven = [(v if w != 0.69 else 0.26, w) for v, w in recovery]
     weave, _ = run(tmp_path / "arc", FAR_WALL, [tick(i, v, w) for i, (v, w) in enumerate(driven)])
     assert weave["SMOOTH_MOTION"].status == "fail"
