@@ -226,8 +226,8 @@ def _choose_goals(params: RoomParameters, floors: set[Cell], rng: random.Random)
 
 
 def _human(params: RoomParameters, index: int, floors: set[Cell], outside: CellMask,
-           taken: set[Cell], robot: Cell, base_route: list[Cell], rng: random.Random
-           ) -> tuple[HumanPlan, set[Cell]]:
+           taken: set[Cell], robot: Cell, base_route: list[Cell], rng: random.Random,
+           goals: frozenset[Cell] = frozenset()) -> tuple[HumanPlan, set[Cell]]:
     ordered = sorted(floors)
     convex = params.shape == "rect"
     for _ in range(HUMAN_TRIES):
@@ -269,6 +269,12 @@ def _human(params: RoomParameters, index: int, floors: set[Cell], outside: CellM
         if len(vertices) < params.vertices:
             continue
         if params.loop and math.dist(vertices[-1], vertices[0]) < 1.0:
+            continue
+        # An open path's last vertex is where the human stands for the rest of the run: on a
+        # goal's tile it stands on the robot's goal for ever, and where that tile is a
+        # corner no reactive human can leave it with the robot waiting (issue 22: medium
+        # room 394's walker stood on goal_4 until the reference aborted, in both repeats).
+        if not params.loop and vertices[-1] in goals:
             continue
         points = [(float(i), float(j)) for i, j in vertices]
         spline = catmull_rom(points, params.loop, CHECK_STEP)
@@ -327,7 +333,7 @@ def construct(params: RoomParameters, facts: CatalogueFacts, rng: random.Random,
         if layout.mover is not None:
             taken |= set(layout.mover.vertices)
     for k in range(params.humans):
-        human, swept = _human(params, k, floors, outside, taken, robot, base, rng)
+        human, swept = _human(params, k, floors, outside, taken, robot, base, rng, frozenset(goals))
         humans.append(human)
         taken.add(human.vertices[0])
         reserved |= swept | set(human.vertices)

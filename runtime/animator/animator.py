@@ -36,6 +36,7 @@ from rei.runtime.animator.reactive import (
     Agent,
     SocialForce,
     YieldRule,
+    fits_past,
     gap_beside,
     gap_in_the_way,
     held_back,
@@ -153,6 +154,13 @@ def _turn(face_motion: bool, vx: float, vy: float, yaw: float, threshold: float)
     return math.remainder(math.atan2(vy, vx) - yaw, math.tau) / TURN_TIME
 
 
+def wall_boxes(bodies: tuple[BodySpec, ...]) -> np.ndarray:
+    """(x, y, yaw, half x, half y) of each fixed body (a cylinder as its bounding square):
+    what ``fits_past`` looks at."""
+    rows = [(b.x, b.y, b.yaw, *b.footprint.half_extents()) for b in bodies]
+    return np.array(rows, dtype=float).reshape(-1, 5)
+
+
 class Animator:
     """Drives every animated body: the curve's displacement each physics step, plus a pull
     back to the curve and a turn towards the walking direction, refreshed at the control rate.
@@ -164,7 +172,9 @@ class Animator:
     """
 
     def __init__(self, items: list[Animated], physics_rate: float, robot_radius: float = 0.0,
-                 reactions: Reactions | None = None) -> None:
+                 reactions: Reactions | None = None, walls: np.ndarray | None = None) -> None:
+        self.walls = walls if walls is not None else np.zeros((0, 5))
+        """The fixed bodies as ``wall_boxes``: social humans pass the robot where they fit."""
         self.items = items
         self.rate = physics_rate
         self.robot_radius = robot_radius
@@ -242,7 +252,7 @@ class Animator:
         for k, (item, pose) in enumerate(zip(self.items, poses, strict=True)):
             if item.behaviour == "social":
                 others = [a for j, a in humans if j != k] + ([robot] if robot else [])
-                self._social(k, item, pose, dt, others)
+                self._social(k, item, pose, dt, others, robot)
                 continue
             s = self.path_time(k, step)
             x0, y0 = item.spline.position(s)
@@ -319,7 +329,7 @@ class Animator:
         return rule.give_way_speed * ux, rule.give_way_speed * uy
 
     def _social(self, k: int, item: Animated, pose: Pose, dt: float,
-                others: list[Agent]) -> None:
+                others: list[Agent], robot: Agent | None = None) -> None:
         model = self.reactions.social
         s = self._path_time[k]
         tx, ty = item.spline.position(s)
@@ -338,6 +348,12 @@ class Animator:
         v_max = model.max_speed_factor * max(self._path_speed[k], WALKING_SPEEDS[0])
         desired = limit_speed(scale * px + cx, scale * py + cy, v_max)
         vx, vy = self._velocity[k]
+        # Pass the robot on the side where it fits (the other, if only that one does).
+        if robot is not None and not fits_past(model, self.walls, pose[0], pose[1], item.radius,
+                                               desired, robot, self._side[k]) \
+                and fits_past(model, self.walls, pose[0], pose[1], item.radius, desired, robot,
+                              -self._side[k]):
+            self._side[k], self._held[k] = -self._side[k], 0.0
         ax, ay = social_acceleration(model, pose[0], pose[1], vx, vy, item.radius, desired,
                                      others, self._path_speed[k], self._side[k])
         vx, vy = limit_speed(vx + ax * dt, vy + ay * dt, v_max)

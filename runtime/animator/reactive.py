@@ -36,7 +36,10 @@ as often as a human-blind one; reactive humans make the test fair.
   would turn into the wall and retreat ahead of the robot for as long as it comes on (a
   reference run herded a walker 3 m along a wall onto its goal, issue 25): a human held
   back from its way for ``patience`` seconds tries the other side (``pass_side``), as
-  people do when the first side is blocked.
+  people do when the first side is blocked. Walls and fixed objects decide the side from
+  the start where one side is too narrow (``fits_past``): passing a standing robot on the
+  side of a wall it did not fit past, a human slid along the wall, which turned its way
+  round the robot into the robot (issue 22, medium room 123).
 
 Everything here is a pure function of poses and velocities; the parameters are plain
 frozen records. This module must never import the simulator or judge the robot.
@@ -46,6 +49,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+
+import numpy as np
 
 Vec = tuple[float, float]
 
@@ -235,6 +240,36 @@ def held_back(model: SocialForce, vx: float, vy: float, desired: Vec) -> bool:
 def pass_side(model: SocialForce, side: float, held_for: float) -> float:
     """The side (1 right, -1 left) a human passes on after ``held_for`` seconds held back."""
     return -side if held_for >= model.patience else side
+
+
+def wall_distance(walls: np.ndarray, x: float, y: float) -> float:
+    """Distance from (x, y) to the nearest of the boxes ``walls`` (rows of x, y, yaw, half
+    x, half y); inf when there are none."""
+    if not len(walls):
+        return math.inf
+    c, s = np.cos(walls[:, 2]), np.sin(walls[:, 2])
+    dx, dy = x - walls[:, 0], y - walls[:, 1]
+    qx = np.abs(c * dx + s * dy) - walls[:, 3]
+    qy = np.abs(-s * dx + c * dy) - walls[:, 4]
+    return float(np.hypot(np.maximum(qx, 0.0), np.maximum(qy, 0.0)).min())
+
+
+def fits_past(model: SocialForce, walls: np.ndarray, x: float, y: float, radius: float,
+              desired: Vec, robot: Agent, side: float) -> bool:
+    """Whether a human at (x, y) walking towards ``desired`` fits past the robot on ``side``
+    (1 its right, -1 its left): the place beside the robot it would pass through, the
+    clearance margin off the robot's footprint, keeps its radius from every wall (``walls``
+    as in ``wall_distance``). True when the robot is not ahead of it within the social
+    force's cutoff (nothing to pass)."""
+    norm = math.hypot(*desired)
+    dx, dy = robot.x - x, robot.y - y
+    if norm < 1e-9 or dx * desired[0] + dy * desired[1] <= 0.0 \
+            or math.hypot(dx, dy) - radius - robot.radius > model.cutoff:
+        return True
+    hx, hy = desired[0] / norm, desired[1] / norm
+    beside = robot.radius + radius + model.clearance_margin
+    return wall_distance(walls, robot.x + side * hy * beside,
+                         robot.y - side * hx * beside) >= radius
 
 
 def elliptical_distance(dx: float, dy: float, sx: float, sy: float) -> float:

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from rei.runtime.animator import Animator as Paths
-from rei.runtime.animator.animator import animated_bodies, variations_record
+from rei.runtime.animator.animator import animated_bodies, variations_record, wall_boxes
 from rei.runtime.loop.board import Board
 from rei.runtime.loop.scheduler import Clock
 from rei.runtime.messages import BodyVelocities
@@ -43,8 +43,10 @@ class AnimatorRun:
         self.items = [a for _, a in self.named]
         self.bodies = tuple(item.body for item in self.items)
         """pybullet ids of the animated bodies, in the order ``TrackedBodies`` carries."""
+        fixed = spec.manifest.walls + tuple(o for o in spec.manifest.objects if o.fixed)
         self.paths = Paths(self.items, spec.physics_rate,
-                           spec.manifest.robot.footprint.circumradius())
+                           spec.manifest.robot.footprint.circumradius(),
+                           walls=wall_boxes(fixed))
         self._seq = 0
 
     def step(self, clock: Clock) -> None:

@@ -543,17 +543,18 @@ class FloorMap:
 
 def interpolate(a: QueryInputs, b: QueryInputs, f: float) -> QueryInputs:
     """The inputs a fraction ``f`` of the way from sample ``a`` to sample ``b`` (the
-    continuous measures only; states come from ``b``)."""
+    continuous measures only; states come from ``b``).
+
+    Distances move linearly, as the bodies do at constant velocity between two samples; the
+    robot's velocities are therefore ``b``'s throughout (the command sent at ``a`` is what
+    it drives until ``b``, and ``b``'s twist is the one it drove with). Interpolating them
+    as well made up motions the robot never made: between a turn on the spot to the left
+    and an arc to the right, a left turn while driving (issue 22: a false SMOOTH_MOTION
+    failure, medium room 261)."""
     return replace(b, distance=a.distance + f * (b.distance - a.distance),
                    laser_min=a.laser_min + f * (b.laser_min - a.laser_min),
                    laser_clearance=a.laser_clearance + f * (b.laser_clearance
                                                             - a.laser_clearance),
-                   speed=a.speed + f * (b.speed - a.speed),
-                   turn_rate=a.turn_rate + f * (b.turn_rate - a.turn_rate),
-                   yaw_rate=a.yaw_rate + f * (b.yaw_rate - a.yaw_rate),
-                   own_speed=a.own_speed + f * (b.own_speed - a.own_speed),
-                   own_turn_rate=a.own_turn_rate + f * (b.own_turn_rate - a.own_turn_rate),
-                   own_yaw_rate=a.own_yaw_rate + f * (b.own_yaw_rate - a.own_yaw_rate),
                    settle_travel=a.settle_travel + f * (b.settle_travel - a.settle_travel),
                    time=a.time + f * (b.time - a.time),
                    odom_error=a.odom_error + f * (b.odom_error - a.odom_error))

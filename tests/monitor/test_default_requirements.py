@@ -239,6 +239,25 @@ def test_weaving_fails_smooth_motion_and_a_steady_turn_does_not(tmp_path: Path) 
     assert run(tmp_path / "spot", FAR_WALL, spot)[0]["SMOOTH_MOTION"].status == "pass"
 
 
+def test_driving_off_right_after_turning_left_on_the_spot_is_no_weaving(tmp_path: Path) -> None:
+    """Issue 22 (medium room 261): an arc right, a recovery's left turn on the spot, and an
+    arc right again. The robot executes a command from the tick it is sent, so between two
+    samples it moves with the later one's twist (the poses, interpolated linearly, say so
+    too); interpolating the twist as well put a left turn while driving between the spin and
+    the arc, a motion the robot never made, and SMOOTH_MOTION failed."""
+    def tick(i: int, v: float, w: float) -> Tick:
+        return Tick((0.02 * i, 0.0, 0.0), (v, 0.0, w), (v, w))
+    recovery = [(0.0, 0.0)] * 3 + [(0.26, -0.33)] * 2 + [(0.0, 0.0)] * 5 + [(0.0, 0.69)] * 4 \
+        + [(0.26, -0.64)] * 5 + [(0.0, 0.0)] * 3
+    smooth, _ = run(tmp_path / "spin", FAR_WALL, [tick(i, v, w)
+                                                  for i, (v, w) in enumerate(recovery)])
+    assert smooth["SMOOTH_MOTION"].status == "pass"
+    # the same with the left turn driven (0.4 s at 0.26 m/s): weaving
+    driven = [(v if w != 0.69 else 0.26, w) for v, w in recovery]
+    weave, _ = run(tmp_path / "arc", FAR_WALL, [tick(i, v, w) for i, (v, w) in enumerate(driven)])
+    assert weave["SMOOTH_MOTION"].status == "fail"
+
+
 def test_the_back_and_forth_requirement_applies_only_to_cycles_of_two_goals(
         tmp_path: Path) -> None:
     # thesis 5.1.2: m = (g1, g2)*

@@ -349,3 +349,15 @@ def test_a_final_heading_is_a_quarter_turn_from_the_way_the_robot_arrives(
             assert off >= 45.0, (seed, pair.plan.params.name, written, arrival)
             checked += 1
     assert checked == 48
+
+
+def test_no_open_human_path_ends_on_a_goal(tmp_path: Path) -> None:
+    """Issue 22: a human stands at its open path's last vertex for the rest of the run; on a
+    goal's tile (in medium room 394 a corner) it stood on the robot's goal until the
+    reference aborted it, in both repeats. Medium seed 0's first 30 rooms held one such path
+    (room 30, before the balanced rows of wp-design) before the generator refused them."""
+    suite = generate(_suite("medium", 0, 30), tmp_path)
+    open_paths = [(p.name, h.vertices[-1], p.plan.goals) for p in suite.pairs
+                  for h in p.plan.humans if not h.loop]
+    assert len(open_paths) > 10  # the check below has something to judge
+    assert [(name, end) for name, end, goals in open_paths if end in goals] == []

@@ -10,6 +10,9 @@ alarms"), each shown with the real simulator and, where a law holds, with the mo
 * a social human met by the robot with a wall on its right (the side it passes on) turned
   into the wall and retreated ahead of the robot for as long as it came on (issue 25: the
   reference pushed one 3 m along a wall onto its goal): now it tries its other side.
+* a social human passing a standing robot on the side of a wall it did not fit past slid
+  along the wall, which turned its way round the robot into the robot (issue 22: medium
+  room 123): now it passes on the side where it fits.
 
 The other side is kept: a robot that drives into a person is still blamed, and a navigator
 that never moves still never reaches a goal a person has stepped away from.
@@ -29,6 +32,7 @@ from rei.runtime.animator.animator import Animated, Animator, Reactions
 from rei.runtime.animator.reactive import (
     Agent,
     SocialForce,
+    fits_past,
     held_back,
     keep_clear,
     limit_speed,
@@ -218,15 +222,17 @@ HELD_BACK_SEED = 1066328527
 """The search's run seed: the walker meets the robot on its way to goal_2."""
 
 
-def _held_back(folder: Path, monkeypatch: pytest.MonkeyPatch, social: SocialForce
-               ) -> RunRecord:
+def _held_back(folder: Path, monkeypatch: pytest.MonkeyPatch, social: SocialForce,
+               blind_to_walls: bool = False) -> RunRecord:
     """The first 50 s of the scene with the reference and ``social`` as the humans' model
     (the run's humans take Reactions' defaults: patched here, the run is otherwise
-    untouched)."""
+    untouched); ``blind_to_walls``: humans pass on their side whether they fit or not."""
     from rei.runtime.animator import animator as paths  # noqa: PLC0415
     from rei.runtime.robot.select import make_controller  # noqa: PLC0415
 
     monkeypatch.setattr(paths, "Reactions", lambda: Reactions(social=social))
+    if blind_to_walls:
+        monkeypatch.setattr(paths, "fits_past", lambda *args: True)
     mission = generate_world(HELD_BACK, folder / "world")
     return run_mission(mission, load_manifest(folder / "world"),
                        load_monitor_config(folder / "world"), make_controller("reference"),
@@ -237,10 +243,11 @@ def _held_back(folder: Path, monkeypatch: pytest.MonkeyPatch, social: SocialForc
 def test_a_social_human_held_back_tries_its_other_side(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """With the side switch the walker passes the robot and nobody touches; without it
-    (patience never runs out: the old model) they touch at 47 s."""
+    (patience never runs out, and blind to where it fits: the old model) they touch at 47 s."""
     fair = _held_back(tmp_path / "fair", monkeypatch, SocialForce())
     assert fair.measurements["collisions"] == 0, fair.measurements["collided_with"]
-    old = _held_back(tmp_path / "old", monkeypatch, SocialForce(patience=math.inf))
+    old = _held_back(tmp_path / "old", monkeypatch, SocialForce(patience=math.inf),
+                     blind_to_walls=True)
     assert old.measurements["collided_with"] == ["walker_1"]
 
 
@@ -319,3 +326,55 @@ def test_held_back_and_pass_side() -> None:
     assert pass_side(model, 1.0, model.patience - 0.1) == 1.0
     assert pass_side(model, 1.0, model.patience) == -1.0
     assert pass_side(model, -1.0, model.patience) == 1.0
+
+
+# Issue 22 (medium room 123, r1): a social human walking along a wall met the reference
+# standing 0.49 m from the wall, narrower than the human (0.5 m). Passing on its right, the
+# wall's side, it slid round the robot's footprint; the wall took away the part of that
+# motion that kept it clear, and it walked into the robot (SIG_HUMAN_WALKED_INTO_ROBOT,
+# MISSION_WITH_HUMAN_TRAJECTORY failed).
+WALL_X = 5.5
+"""The wall fills x >= 5.5 (a box 1 m thick, 10 m long)."""
+SQUEEZE_WALLS = np.array([[WALL_X + 0.5, 4.0, 0.0, 0.5, 5.0]])
+SQUEEZE_ROBOT = (4.80, 2.51, -2.37)
+"""Where the robot stood, as in the run: its footprint 0.49 m from the wall."""
+
+
+def _squeeze(walls: np.ndarray | None, seconds: float = 30.0) -> tuple[float, float]:
+    """A social human walking +y at x = 5 past the standing robot, driven by the real
+    Animator at the control rate; the wall stops it at x = 5.25, as the simulator's contact
+    does. Its smallest gap to the robot's circle, and its final y."""
+    spline = CatmullRom(np.array([0.0, 8.0]), np.array([[5.0, 0.0], [5.0, 8.0]]), False)
+    paths = Animator([Animated(1, spline, True, "social")], physics_rate=10.0,
+                     robot_radius=0.2077, walls=walls)
+    x, y, smallest = 5.0, 0.0, math.inf
+    for step in range(int(seconds * 10)):
+        paths.correct(step, [(x, y, 0.0)], SQUEEZE_ROBOT, (0.0, 0.0, 0.0))
+        _, vx, vy, _ = paths.commands(step)[0]
+        x, y = min(x + vx / 10.0, WALL_X - 0.25), y + vy / 10.0
+        smallest = min(smallest, math.hypot(x - SQUEEZE_ROBOT[0], y - SQUEEZE_ROBOT[1])
+                       - 0.25 - 0.2077)
+    return smallest, y
+
+
+def test_a_social_human_passes_a_robot_on_the_side_where_it_fits() -> None:
+    # Blind to the wall (the model before): through the gap, into the robot.
+    touched, _ = _squeeze(None)
+    assert touched < 0.0
+    # Seeing it: round the robot's other side, clear of it, and on to the path's end.
+    gap, end = _squeeze(SQUEEZE_WALLS)
+    assert gap >= SocialForce().clearance_margin
+    assert end > 7.5
+
+
+def test_fits_past_judges_the_place_beside_the_robot() -> None:
+    model, robot = SocialForce(), Agent(4.80, 2.51, 0.2077)
+    # walking +y at x = 5: right (+x) is the wall's side, too narrow; left is open
+    assert not fits_past(model, SQUEEZE_WALLS, 5.0, 1.5, 0.25, (0.0, 1.0), robot, 1.0)
+    assert fits_past(model, SQUEEZE_WALLS, 5.0, 1.5, 0.25, (0.0, 1.0), robot, -1.0)
+    # the wall 0.3 m farther off: room on both sides
+    farther = SQUEEZE_WALLS + np.array([[0.3, 0.0, 0.0, 0.0, 0.0]])
+    assert fits_past(model, farther, 5.0, 1.5, 0.25, (0.0, 1.0), robot, 1.0)
+    # a robot behind the human, or beyond the social force's cutoff, is nothing to pass
+    assert fits_past(model, SQUEEZE_WALLS, 5.0, 3.5, 0.25, (0.0, 1.0), robot, 1.0)
+    assert fits_past(model, SQUEEZE_WALLS, 5.0, -2.0, 0.25, (0.0, 1.0), robot, 1.0)
