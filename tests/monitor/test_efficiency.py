@@ -26,9 +26,9 @@ from rei.runtime.monitor.model import FloorMap
 REPO = Path(__file__).resolve().parents[2]
 
 
-def _graph(rows: list[str], blocked: str = "") -> tuple[FloorGraph, FloorMap, dict[str, int]]:
+def _graph(rows: list[str], blocked: str = "") -> tuple[FloorGraph, dict[str, tuple[float, float]]]:
     """Floors of a character grid ('.' floor, '#' wall, letters: named floors; names in
-    ``blocked`` carry a static object)."""
+    ``blocked`` carry a static object) and the centre of each named floor."""
     centres, names = [], {}
     for r, row in enumerate(rows):
         for c, ch in enumerate(row):
@@ -39,32 +39,63 @@ def _graph(rows: list[str], blocked: str = "") -> tuple[FloorGraph, FloorMap, di
     mask = np.zeros(len(centres), dtype=bool)
     for name in blocked:
         mask[names[name]] = True
-    return FloorGraph(floors.cells, floors.grid, floors.centres, mask), floors, names
+    return (FloorGraph(floors.grid, floors.origin, floors.tile, mask),
+            {name: centres[k] for name, k in names.items()})
 
 
-def test_the_shortest_path_goes_round_walls_and_objects_and_never_cuts_corners() -> None:
-    graph, _, n = _graph(["a.b",
-                          ".#.",
-                          "c.d"])
+def test_the_shortest_path_is_straight_in_sight_and_bends_only_at_corners() -> None:
+    graph, n = _graph(["a.b",
+                       ".#.",
+                       "c.d"])
     assert graph.distance(n["a"], n["b"]) == pytest.approx(2.0)
-    assert graph.distance(n["a"], n["d"]) == pytest.approx(4.0)  # no diagonal past the wall
-    open_graph, _, m = _graph(["a..",
-                               "...",
-                               "..d"])
+    # round the wall by its corner (1.5, -0.5): two legs of sqrt(1.5² + 0.5²)
+    assert graph.distance(n["a"], n["d"]) == pytest.approx(2 * math.hypot(1.5, 0.5))
+    open_graph, m = _graph(["a..",
+                            "...",
+                            "..d"])
     assert open_graph.distance(m["a"], m["d"]) == pytest.approx(2 * math.sqrt(2))
-    blocked, _, k = _graph(["a.x.b"], blocked="x")
+    # from where the robot is, not from its tile's centre: 0.4 m off it, 0.4 m shorter
+    assert open_graph.distance((0.4, 0.0), m["d"]) == pytest.approx(math.hypot(1.6, 2.0))
+    u_turn, k = _graph(["a.....",
+                        "#####.",
+                        "b....."])
+    # a U round the wall's end: both corners of the gap, never the seam between wall tiles
+    assert u_turn.distance(k["a"], k["b"]) == pytest.approx(2 * math.hypot(4.5, 0.5) + 1.0)
+
+
+def test_the_shortest_path_never_passes_objects_seams_or_pinches() -> None:
+    blocked, k = _graph(["a.x.b"], blocked="x")
     assert blocked.distance(k["a"], k["b"]) == math.inf
+    pinch, p = _graph(["a#",
+                       "#b"])
+    assert pinch.distance(p["a"], p["b"]) == math.inf  # tiles touching at a corner only
+    diagonal, d = _graph(["a#..",
+                          "..#b"])
+    assert diagonal.distance(d["a"], d["b"]) == math.inf
+    seam, _ = _graph(["...",
+                      ".#.",
+                      ".#.",
+                      "..."])
+    # along the seam between the two wall tiles would be 2 m; round the wall's end instead
+    assert seam.distance((0.0, -1.5), (2.0, -1.5)) == pytest.approx(2 * math.hypot(0.5, 1.0) + 1)
+    # an object's tile is blocked for paths past it, but a task starting on it is judged
+    start_on, o = _graph(["x..b"], blocked="x")
+    assert start_on.distance(o["x"], o["b"]) == pytest.approx(3.0)
+    assert start_on.distance((-3.0, 0.0), o["b"]) == math.inf  # off the floors
 
 
-def test_a_task_is_judged_against_the_shortest_path_less_its_tolerance() -> None:
+def test_a_task_is_judged_against_the_shortest_path_to_its_goal() -> None:
     goal = GoalFacts("g", 4.0, 0.0, None, 0.25, 0.26, 60.0)
-    task = TaskProgress((0.0, 0.0), 10.0, goal, travelled=7.5)
-    judged = judge_task(task, 10.0 + 30.0, 4.0, 0.25)
-    assert judged.shortest == pytest.approx(3.75)
+    task = TaskProgress((0.0, 0.0), 10.0, goal, travelled=8.0)
+    judged = judge_task(task, 10.0 + 32.0, 4.0, 0.25)
+    assert judged.shortest == pytest.approx(4.0)
     assert judged.path_ratio == pytest.approx(2.0)
-    assert judged.time_ratio == pytest.approx(2.0)  # 30 s against 3.75 m at 0.25 m/s
-    near = judge_task(TaskProgress((0.0, 0.0), 0.0, goal), 5.0, 0.6, 0.25)
-    assert near.path_ratio == near.time_ratio == 0.0  # too near to judge
+    assert judged.time_ratio == pytest.approx(2.0)  # 32 s against 4 m at 0.25 m/s
+    # a straight drive onto a goal 1 m away reads 0.9, not 0.9 / (1 - 0.25) = 1.2
+    short = judge_task(TaskProgress((0.0, 0.0), 0.0, goal, travelled=0.9), 5.0, 1.0, 0.25)
+    assert short.path_ratio == pytest.approx(0.9)
+    near = judge_task(TaskProgress((0.0, 0.0), 0.0, goal), 5.0, 0.7, 0.25)
+    assert near.path_ratio == near.time_ratio == 0.0  # less its tolerance too near to judge
 
 
 def test_turning_in_place_counts_only_near_the_goal() -> None:
