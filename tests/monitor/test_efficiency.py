@@ -17,8 +17,11 @@ import sys
 from pathlib import Path
 from typing import Any
 
+import networkx as nx
 import numpy as np
 import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
 
 from rei.runtime.messages import GoalFacts
 from rei.runtime.monitor.efficiency import FloorGraph, TaskProgress, judge_task
@@ -83,6 +86,49 @@ def test_the_shortest_path_never_passes_objects_seams_or_pinches() -> None:
     start_on, o = _graph(["x..b"], blocked="x")
     assert start_on.distance(o["x"], o["b"]) == pytest.approx(3.0)
     assert start_on.distance((-3.0, 0.0), o["b"]) == math.inf  # off the floors
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.text("..#x", min_size=5, max_size=5), min_size=4, max_size=4),
+       st.integers(0, 19), st.integers(0, 19))
+def test_the_shortest_path_lies_between_the_straight_line_and_the_tile_steps(
+        rows: list[str], a: int, b: int) -> None:
+    """The law of any room: no path is shorter than the straight line, the any-angle path is
+    never longer than one over tile centres (8-connected, no corner cutting: networkx's own
+    Dijkstra as the oracle), it is the same both ways, and it exists exactly when the tiles
+    connect through shared edges."""
+    objects = "".join(chr(ord("A") + k) for k in range(26))
+    named, k = [], 0
+    for row in rows:
+        line = ""
+        for ch in row:
+            line += objects[k] if ch == "x" else ch
+            k += ch == "x"
+        named.append(line)
+    graph, _ = _graph(named, blocked=objects[:k])
+    free = {(c, -r) for r, row in enumerate(named) for c, ch in enumerate(row) if ch == "."}
+    cells = sorted(free)
+    assume(len(cells) > max(a, b))
+    p, q = cells[a], cells[b]
+    tiles = nx.Graph()
+    tiles.add_nodes_from(cells)
+    edges = nx.Graph()
+    edges.add_nodes_from(cells)
+    for x, y in cells:
+        for dx, dy in ((1, 0), (0, 1), (1, 1), (1, -1)):
+            o = (x + dx, y + dy)
+            cut = dx and dy and ((x + dx, y) not in free or (x, y + dy) not in free)
+            if o not in free or cut:
+                continue
+            tiles.add_edge((x, y), o, weight=math.hypot(dx, dy))
+            if not (dx and dy):
+                edges.add_edge((x, y), o)
+    found = graph.distance(p, q)
+    assert found == pytest.approx(graph.distance(q, p))
+    assert math.isfinite(found) == nx.has_path(edges, p, q)
+    if math.isfinite(found):
+        assert found >= math.dist(p, q) - 1e-9
+        assert found <= nx.dijkstra_path_length(tiles, p, q) + 1e-9
 
 
 def test_a_task_is_judged_against_the_shortest_path_to_its_goal() -> None:
