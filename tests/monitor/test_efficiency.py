@@ -212,15 +212,6 @@ class Detour(ReferenceNavigator):
         return super().step(observation)
 
 
-class ArcsAround(ReferenceNavigator):
-    \"\"\"The reference without its first turn on the spot: a goal behind it is reached on the
-    local planner's tightest forward arc (the reference before issue 22's fix).\"\"\"
-
-    def _turn_to_path(self, pose, points, margin):
-        self._align_first = False
-        return None
-
-
 class Crawls(ReferenceNavigator):
     \"\"\"The reference at a fifth of its speed (a velocity smoother's limit set 5x too low).\"\"\"
 
@@ -302,7 +293,7 @@ BEHIND = """mission behind in "hall.room" {
 @pytest.mark.slow
 @pytest.mark.parametrize(("controller", "worst", "verdict"), [
     ("reference", (0.8, 1.1), "pass"),
-    ("navs:ArcsAround", (1.3, 2.0), "fail"),
+    ("tests.runtime.arcs_around:ArcsAround", (1.3, 2.0), "fail"),
 ])
 def test_the_reference_turns_on_the_spot_to_a_goal_behind_it(
         tmp_path: Path, controller: str, worst: tuple[float, float], verdict: str) -> None:

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rei.runtime.robot import NavGoal, VelocityCommand
+from rei.runtime.robot import NavGoal
 from rei.runtime.robot.recovery import arc_poses, footprint_gaps
 from rei.runtime.robot.reference import (
     EXACT_ALLOWANCE,
@@ -26,13 +26,14 @@ from rei.runtime.robot.reference import (
     TIGHT_MARGIN,
     ReferenceNavigator,
 )
+from tests.runtime.arcs_around import ArcsAround
 from tests.runtime.test_reference_recovery import HALF, Box, context_of, corridor_walls, drive
 
 REPO = Path(__file__).resolve().parents[2]
 SCENE = Path(__file__).parent / "scenes" / "table_corner.mission"
 
 
-class RoundedClearance(ReferenceNavigator):
+class RoundedClearance(ArcsAround):
     """The reference before the fix: a roll-out's gap is the grid's rounded one only. It also
     leaves a goal behind it to the local planner's forward arcs, as the reference did when the
     search found the scene: turning on the spot first (issue 22) the robot no longer swings
@@ -41,11 +42,6 @@ class RoundedClearance(ReferenceNavigator):
     def _exact_clearance(self, k: int, points: np.ndarray, rounded: np.ndarray,
                          mapped: np.ndarray) -> float:
         return float(rounded.min())
-
-    def _turn_to_path(self, pose: tuple[float, float, float], points: np.ndarray,
-                      margin: float) -> VelocityCommand | None:
-        self._align_first = False
-        return None
 
 
 def table_edge_beside_the_left_side(gap: float) -> np.ndarray:
