@@ -414,9 +414,7 @@ class RuntimeModel:
             return  # a failed task is MISSION_GOALS_REACHED's; efficiency judges successes
         shortest = math.inf
         if self._graph is not None:
-            here = self.floors.of(np.array([task.start_xy], dtype=float))[0]
-            there = self.floors.of(np.array([(task.goal.x, task.goal.y)], dtype=float))[0]
-            shortest = self._graph.distance(int(here), int(there))
+            shortest = self._graph.distance(task.start_xy, (task.goal.x, task.goal.y))
         self._judged = judge_task(task, e.time, shortest, self.speed_limit)
         self.efficiency.append((task.goal.name, self._judged))
 
@@ -430,7 +428,7 @@ class RuntimeModel:
         if static:
             under = self.floors.of(np.asarray(s.poses, dtype=float)[static, :2])
             blocked[under[under >= 0]] = True
-        return FloorGraph(self.floors.cells, self.floors.grid, self.floors.centres, blocked)
+        return FloorGraph(self.floors.grid, self.floors.origin, self.floors.tile, blocked)
 
     def _own_task_arrays(self) -> None:
         """Copy the task arrays before changing them in place: the inputs handed out

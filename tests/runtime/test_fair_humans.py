@@ -224,9 +224,11 @@ HELD_BACK_SEED = 1066328527
 
 def _held_back(folder: Path, monkeypatch: pytest.MonkeyPatch, social: SocialForce,
                blind_to_walls: bool = False) -> RunRecord:
-    """The first 50 s of the scene with the reference and ``social`` as the humans' model
-    (the run's humans take Reactions' defaults: patched here, the run is otherwise
-    untouched); ``blind_to_walls``: humans pass on their side whether they fit or not."""
+    """The first 50 s of the scene with the reference as the search found it with (it loops
+    to a goal behind it: turning on the spot first, issue 22, the robot meets the walker
+    elsewhere) and ``social`` as the humans' model (the run's humans take Reactions'
+    defaults: patched here, the run is otherwise untouched); ``blind_to_walls``: humans pass
+    on their side whether they fit or not."""
     from rei.runtime.animator import animator as paths  # noqa: PLC0415
     from rei.runtime.robot.select import make_controller  # noqa: PLC0415
 
@@ -235,7 +237,9 @@ def _held_back(folder: Path, monkeypatch: pytest.MonkeyPatch, social: SocialForc
         monkeypatch.setattr(paths, "fits_past", lambda *args: True)
     mission = generate_world(HELD_BACK, folder / "world")
     return run_mission(mission, load_manifest(folder / "world"),
-                       load_monitor_config(folder / "world"), make_controller("reference"),
+                       load_monitor_config(folder / "world"),
+                       make_controller("tests.runtime.arcs_around:ArcsAround",
+                                       str(Path(__file__).resolve().parents[2])),
                        [], RunConfig(seed=HELD_BACK_SEED, watchdog=None, duration=50.0))
 
 

@@ -120,9 +120,10 @@ class Drive:
 
 def drive(walls: list[Box], unknown: list[Box], people: list[Circle], goal: NavGoal,
           start: tuple[float, float, float], seconds: float, pinned: bool = False,
-          people_until: float = math.inf) -> Drive:
+          people_until: float = math.inf,
+          navigator: type[ReferenceNavigator] = ReferenceNavigator) -> Drive:
     """Run the navigator on the stand-in world until the goal ends or ``seconds`` pass."""
-    nav = ReferenceNavigator()
+    nav = navigator()
     nav.reset(context_of(walls))
     nav.send_goal(goal)
     pose = list(start)

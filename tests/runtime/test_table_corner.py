@@ -26,14 +26,18 @@ from rei.runtime.robot.reference import (
     TIGHT_MARGIN,
     ReferenceNavigator,
 )
+from tests.runtime.arcs_around import ArcsAround
 from tests.runtime.test_reference_recovery import HALF, Box, context_of, corridor_walls, drive
 
 REPO = Path(__file__).resolve().parents[2]
 SCENE = Path(__file__).parent / "scenes" / "table_corner.mission"
 
 
-class RoundedClearance(ReferenceNavigator):
-    """The reference before the fix: a roll-out's gap is the grid's rounded one only."""
+class RoundedClearance(ArcsAround):
+    """The reference before the fix: a roll-out's gap is the grid's rounded one only. It also
+    leaves a goal behind it to the local planner's forward arcs, as the reference did when the
+    search found the scene: turning on the spot first (issue 22) the robot no longer swings
+    into the corner's trap in this room, which is no fix of the rounding."""
 
     def _exact_clearance(self, k: int, points: np.ndarray, rounded: np.ndarray,
                          mapped: np.ndarray) -> float:
