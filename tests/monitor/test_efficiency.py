@@ -24,6 +24,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from rei.runtime.messages import GoalFacts
+from rei.runtime.monitor import efficiency
 from rei.runtime.monitor.efficiency import FloorGraph, TaskProgress, judge_task
 from rei.runtime.monitor.model import FloorMap
 
@@ -129,6 +130,65 @@ def test_the_shortest_path_lies_between_the_straight_line_and_the_tile_steps(
     if math.isfinite(found):
         assert found >= math.dist(p, q) - 1e-9
         assert found <= nx.dijkstra_path_length(tiles, p, q) + 1e-9
+
+
+def _hall(cols: int, rows: int) -> FloorGraph:
+    """A hall with an object on every second tile of every second row (bench/simulation.py's
+    lattice): four corners per object."""
+    grid = np.arange(cols * rows).reshape(cols, rows)
+    blocked = np.zeros(cols * rows, dtype=bool)
+    blocked[grid[1:-1:2, 1:-1:2].ravel()] = True
+    return FloorGraph(grid, np.zeros(2), 1.0, blocked)
+
+
+def test_a_room_of_many_corners_never_joins_every_pair_of_them(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The visibility graph of all corners grows with their square (~8,000 corners in the
+    2,000-object hall): past EXACT_CORNERS it is never built. A short task is still exact
+    (the corners within its bound's ellipse are few); a long one gets a path pulled taut,
+    between the exact path and the tile path, never shorter than the exact one."""
+    hall = _hall(42, 22)
+    assert len(hall.corners) > efficiency.EXACT_CORNERS
+    short = hall.distance((10.0, 4.0), (4.0, 8.0))
+    across = hall.distance((0.0, 0.0), (41.0, 21.0))
+    assert hall._graph is None  # no graph of every pair was made
+    monkeypatch.setattr(efficiency, "EXACT_CORNERS", 10_000)
+    exact = _hall(42, 22)
+    assert short == pytest.approx(exact.distance((10.0, 4.0), (4.0, 8.0)))
+    assert math.hypot(41.0, 21.0) < exact.distance((0.0, 0.0), (41.0, 21.0)) <= across
+    assert across <= 41.0 + 21.0  # no longer than the tile steps along the free rows
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.text("..x", min_size=6, max_size=6), min_size=6, max_size=6),
+       st.integers(0, 35), st.integers(0, 35))
+def test_the_bounded_search_is_never_shorter_than_the_exact_one(rows: list[str], a: int,
+                                                                 b: int) -> None:
+    """With the cap at 4 corners (most rooms here exceed it), every path found is one the
+    exact search could take: at least the exact length, finite exactly when it is."""
+    objects = "".join(chr(ord("A") + k) for k in range(26))
+    named, k = [], 0
+    for row in rows:
+        line = ""
+        for ch in row:
+            line += objects[k % 26] if ch == "x" and k < 26 else ("." if ch == "x" else ch)
+            k += ch == "x"
+        named.append(line)
+    graph, _ = _graph(named, blocked=objects[:min(k, 26)])
+    cells = sorted((c, -r) for r, row in enumerate(named) for c, ch in enumerate(row)
+                   if ch == ".")
+    assume(len(cells) > max(a, b))
+    p, q = cells[a], cells[b]
+    exact = graph.distance(p, q)
+    cap = efficiency.EXACT_CORNERS
+    try:
+        efficiency.EXACT_CORNERS = 4
+        bounded = _graph(named, blocked=objects[:min(k, 26)])[0].distance(p, q)
+    finally:
+        efficiency.EXACT_CORNERS = cap
+    assert math.isfinite(bounded) == math.isfinite(exact)
+    if math.isfinite(exact):
+        assert bounded >= exact - 1e-9
 
 
 def test_a_task_is_judged_against_the_shortest_path_to_its_goal() -> None:
