@@ -131,17 +131,22 @@ class FloorGraph:
                     return False
         return True
 
+    def _visibility(self, corners: np.ndarray) -> nx.Graph:
+        """The visibility graph of ``corners`` (tile units): an edge, weighted by its length,
+        between each pair the straight segment joins clear of the obstacles."""
+        graph = nx.Graph()
+        graph.add_nodes_from(range(len(corners)))
+        for a in range(len(corners)):
+            for b in range(a + 1, len(corners)):
+                if self._clear(corners[a], corners[b], frozenset()):
+                    graph.add_edge(a, b, weight=float(np.hypot(*(corners[b] - corners[a]))))
+        return graph
+
     def _corner_graph(self) -> nx.Graph:
-        """The visibility graph of the obstacles' convex corners (built once, on first use)."""
+        """The visibility graph of all the obstacles' convex corners (built once, on first
+        use)."""
         if self._graph is None:
-            graph = nx.Graph()
-            graph.add_nodes_from(range(len(self.corners)))
-            for a in range(len(self.corners)):
-                for b in range(a + 1, len(self.corners)):
-                    p, q = self.corners[a], self.corners[b]
-                    if self._clear(p, q, frozenset()):
-                        graph.add_edge(a, b, weight=float(np.hypot(*(q - p))))
-            self._graph = graph
+            self._graph = self._visibility(self.corners)
         return self._graph
 
     def distance(self, start: tuple[float, float], goal: tuple[float, float]) -> float:
@@ -172,13 +177,7 @@ class FloorGraph:
                             <= bound + _EPS]
         if len(near) > EXACT_CORNERS:
             return bound * self.tile
-        graph = nx.Graph()
-        graph.add_nodes_from(range(len(near)))
-        for a in range(len(near)):
-            for b in range(a + 1, len(near)):
-                if self._clear(near[a], near[b], frozenset()):
-                    graph.add_edge(a, b, weight=float(np.hypot(*(near[b] - near[a]))))
-        return min(bound, self._through(graph, near, p, q, ignore)) * self.tile
+        return min(bound, self._through(self._visibility(near), near, p, q, ignore)) * self.tile
 
     def _through(self, graph: nx.Graph, corners: np.ndarray, p: np.ndarray, q: np.ndarray,
                  ignore: frozenset[tuple[int, int]]) -> float:
@@ -240,6 +239,7 @@ class FloorGraph:
             length += float(np.hypot(*(points[far] - points[at])))
             at = far
         return length
+
 
 @dataclass
 class TaskProgress:
