@@ -12,8 +12,8 @@ import numpy as np
 from rei.catalogue import Catalogue, ObjectType, Tile
 from rei.lang.errors import Diagnostic
 from rei.lang.room.layout import Layout
-from rei.lang.room.model import PlacedObject, Room, Vertex
-from rei.lang.room.motion import walkable
+from rei.lang.room.model import PlacedObject, Room
+from rei.lang.room.motion import vertex_point, walkable
 from rei.lang.room.spline import CatmullRom, vertex_times, walked_path
 from rei.lang.suggest import did_you_mean
 
@@ -155,12 +155,6 @@ def check_placement(room: Room, layout: Layout) -> list[Diagnostic]:
     return out
 
 
-def vertex_point(vertex: Vertex, layout: Layout, tile: float) -> tuple[float, float]:
-    """Where a trajectory vertex is (metres): its floor's centre moved by its offset."""
-    i, j = layout.cells[vertex.floor.name]
-    return i * tile + vertex.offset[0], j * tile + vertex.offset[1]
-
-
 _PATH_STEP = 0.02
 """Metres between the points of a walked curve that the clearance check looks at."""
 _CLEAR_SLACK = 1e-6
@@ -191,7 +185,7 @@ def check_trajectories(room: Room, layout: Layout, catalogue: Catalogue) -> list
         if any(v.floor.name not in layout.cells or v.floor.name not in room.floors
                for v in vertices):
             continue  # unresolved vertices are reported by the linker
-        times, points = vertex_times([vertex_point(v, layout, tile) for v in vertices],
+        times, points = vertex_times([vertex_point(v, layout.cells, tile) for v in vertices],
                                      [v.time for v in vertices], traj.total_time, traj.loop)
         if not walkable(times, points):
             continue  # TRAJ-SPEED says which segment the animator cannot walk

@@ -16,7 +16,7 @@ from collections.abc import Mapping, Sequence
 from itertools import pairwise
 
 from rei.lang.errors import Diagnostic
-from rei.lang.room.model import Room
+from rei.lang.room.model import Room, Vertex
 from rei.lang.room.spline import vertex_times
 
 MAX_BODY_SPEED = 10.0
@@ -33,6 +33,13 @@ def walkable(times: Sequence[float], points: Sequence[tuple[float, float]]) -> b
     to any useful precision (a nanosecond segment swings it kilometres wide)."""
     return all(t1 - t0 >= MIN_SEGMENT_TIME and math.dist(p0, p1) / (t1 - t0) <= MAX_BODY_SPEED
                for (t0, t1), (p0, p1) in zip(pairwise(times), pairwise(points), strict=True))
+
+
+def vertex_point(vertex: Vertex, cells: Mapping[str, tuple[int, int]], tile: float
+                 ) -> tuple[float, float]:
+    """Where a trajectory vertex is (metres): its floor's centre moved by its offset."""
+    i, j = cells[vertex.floor.name]
+    return i * tile + vertex.offset[0], j * tile + vertex.offset[1]
 
 
 def check_motion(room: Room, cells: Mapping[str, tuple[int, int]]) -> list[Diagnostic]:
@@ -54,8 +61,7 @@ def check_motion(room: Room, cells: Mapping[str, tuple[int, int]]) -> list[Diagn
         if traj.total_time is None and any(b.time <= a.time for a, b in pairwise(written)
                                            if a.time is not None and b.time is not None):
             continue  # TRAJ-TIMES: times must increase
-        points = [(cells[v.floor.name][0] * tile + v.offset[0],
-                   cells[v.floor.name][1] * tile + v.offset[1]) for v in written]
+        points = [vertex_point(v, cells, tile) for v in written]
         times, pts = vertex_times(points, [v.time for v in written], traj.total_time,
                                   traj.loop)
         for i, ((t0, t1), (p0, p1)) in enumerate(zip(pairwise(times), pairwise(pts),
