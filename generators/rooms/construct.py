@@ -58,6 +58,9 @@ from rei.lang.room.checks import rotated_half_extents
 
 GRID = "area"
 ROBOT_TYPE = "turtlebot3_waffle"
+ROW_PREFIX = "row_"
+"""The names of a stressor's row objects begin so (the row's gap is the stressor: a search's
+placement shift leaves them be, rei.generators.rooms.scenario)."""
 HEADINGS = (0.0, 90.0, 180.0, 270.0, 45.0, 135.0, 30.0, 60.0, 120.0, 150.0)
 HUMAN_MIN_STEP = 2.0
 """Tiles between consecutive control vertices of a human's trajectory."""
@@ -345,7 +348,7 @@ def construct(params: RoomParameters, facts: CatalogueFacts, rng: random.Random,
     objects: list[PlacedObjectPlan] = []
     counts: dict[str, int] = {}
     if layout is not None:
-        objects += [PlacedObjectPlan(f"row_{o.type}_{k + 1}", o.type, o.cell, o.heading)
+        objects += [PlacedObjectPlan(f"{ROW_PREFIX}{o.type}_{k + 1}", o.type, o.cell, o.heading)
                     for k, o in enumerate(layout.row)]
         wanted += len(layout.row)
     for cell in candidates:

@@ -41,7 +41,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import replace
 
 from rei.catalogue import Catalogue
-from rei.generators.rooms.construct import ROBOT_TYPE, PlacedObjectPlan, RoomPlan
+from rei.generators.rooms.construct import ROBOT_TYPE, ROW_PREFIX, PlacedObjectPlan, RoomPlan
 from rei.generators.rooms.descriptors import format_number
 from rei.generators.rooms.geometry import Cell
 from rei.generators.rooms.space import Interval, ParameterError, parse_range
@@ -63,8 +63,6 @@ TILE = 1.0
 """m: the generator's tile (writer.room_text writes ``tile 1.0``)."""
 MAX_PLACEMENT = TILE / 2
 """m: the largest placement shift either way; a body never leaves its tile anyway."""
-ROW_PREFIX = "row_"
-"""A stressor's row objects (their gap is the stressor): never shifted."""
 
 
 class ScenarioRefused(Exception):
