@@ -14,10 +14,13 @@ import pytest
 
 from bench.defects import DEFECTS, Defect
 from bench.defects.control import (
+    CLEARING_SPIN,
     ExceedsDriveLimit,
     IgnoresMissionSpeed,
+    InvertedApproachScaling,
     NoSlowZone,
     OscillatingHeading,
+    SpinsWhenTurning,
 )
 from bench.defects.localisation import OdometryOffset
 from bench.defects.mission import (
@@ -28,7 +31,7 @@ from bench.defects.mission import (
     SkipsSecondGoal,
 )
 from bench.defects.perception import BlindSector, IgnoresHumans
-from bench.defects.planning import FootprintTooSmall
+from bench.defects.planning import FootprintTooSmall, NeverClearsObstacles
 from bench.defects.timing import (
     DROPOUT_LENGTH,
     LATENCY,
@@ -93,6 +96,26 @@ def drive(nav: ReferenceNavigator, steps: int, pose: tuple[float, float, float] 
         t = t0 + 0.1 * k
         out.append(nav.step(Observation(t, pose, (0.0, 0.0), scan(hits), t)))
     return out
+
+
+def drive_moving(nav: ReferenceNavigator, steps: int,
+                 pose: tuple[float, float, float] = START) -> tuple[float, float]:
+    """Steps at 10 Hz in the empty room, the robot moving as commanded (a unicycle); the
+    distance driven and the radians turned on the spot until the goal ended."""
+    x, y, yaw = pose
+    driven = turned = 0.0
+    for k in range(steps):
+        t = 0.1 * k
+        cmd = nav.step(Observation(t, (x, y, yaw), (0.0, 0.0), scan(), t))
+        if nav.feedback().state != NavState.ACTIVE:
+            break
+        driven += abs(cmd.linear) * 0.1
+        if cmd.linear == 0.0:
+            turned += abs(cmd.angular) * 0.1
+        x += cmd.linear * 0.1 * math.cos(yaw)
+        y += cmd.linear * 0.1 * math.sin(yaw)
+        yaw = math.remainder(yaw + cmd.angular * 0.1, math.tau)
+    return driven, turned
 
 
 PERSON_LEFT = {math.pi / 2: 0.6}
@@ -239,6 +262,40 @@ def test_oscillating_heading_triples_the_angular_command() -> None:
         assert d.angular == pytest.approx(float(np.clip(3.0 * r.angular, -wmax, wmax)))
 
 
+def test_inverted_approach_scaling_crawls_far_from_the_goal_and_not_near_it() -> None:
+    vmax = checker_context().drive.max_linear
+    reference = drive(started(ReferenceNavigator()), 10)
+    crawl = drive(started(InvertedApproachScaling()), 10)
+    # 2.5 m from the goal the reference cruises; the defect drives at 0.6 / 2.5 of that,
+    # on the reference's arcs.
+    assert max(c.linear for c in reference) == pytest.approx(vmax)
+    for r, d in zip(reference, crawl, strict=True):
+        assert d.linear == pytest.approx(r.linear * 0.6 / 2.5)
+        assert d.angular == pytest.approx(r.angular * 0.6 / 2.5)
+    # 0.5 m from it (within 0.6 m) it does what the reference does.
+    near = (FAR_GOAL.x - 0.5, FAR_GOAL.y, 0.0)
+    assert drive(started(InvertedApproachScaling()), 3, near) == \
+        drive(started(ReferenceNavigator()), 3, near)
+
+
+def test_spins_when_turning_turns_a_full_turn_more_at_a_goal_with_a_heading() -> None:
+    """At the goal facing north, the goal's heading east: the reference turns the quarter
+    turn and succeeds; the defect's progress checker sees a second without translation and
+    spins a full turn first (and again while the quarter turn's slow end lasts)."""
+    goal = dataclasses.replace(FAR_GOAL, yaw=0.0)
+    facing_north = (goal.x, goal.y, math.pi / 2)
+    turns = {}
+    for nav in (ReferenceNavigator(), SpinsWhenTurning()):
+        driven, turns[nav.name] = drive_moving(started(nav, goal), 600, facing_north)
+        assert nav.feedback().state == NavState.SUCCEEDED and driven == 0.0, nav.name
+    assert turns["reference"] == pytest.approx(math.pi / 2, abs=0.1)
+    assert turns["spins-when-turning"] >= CLEARING_SPIN + math.pi / 2 - 0.1
+    # a goal it drives to in a straight line, without turning on the spot: no spin at all
+    for nav in (ReferenceNavigator(), SpinsWhenTurning()):
+        driven, turned = drive_moving(started(nav), 600)
+        assert nav.feedback().state == NavState.SUCCEEDED and turned == 0.0, nav.name
+
+
 # -- planning and localisation -------------------------------------------------------------
 
 def test_footprint_too_small_plans_for_half_the_robot_without_inflation_cost() -> None:
@@ -249,6 +306,23 @@ def test_footprint_too_small_plans_for_half_the_robot_without_inflation_cost() -
     east = (cell[0] + 1, cell[1])
     assert defect._graph.weight(cell, east) == pytest.approx(1.0)
     assert (reference._reduced_graph().weight(cell, east) or 0.0) > 1.5
+
+
+def test_never_clears_obstacles_plans_round_a_person_who_has_left() -> None:
+    """A person stands 1 m ahead on the straight way to the goal for one scan, then is gone:
+    the reference's path stays straight (its plan is the static map's), the defect re-plans
+    round the place the person left."""
+    person_ahead = {0.0: 1.0}
+    paths = {}
+    for nav in (ReferenceNavigator(), NeverClearsObstacles()):
+        started(nav)
+        drive(nav, 1, hits=person_ahead)
+        drive(nav, 2, t0=0.1)  # the person has gone
+        assert nav._path is not None
+        paths[nav.name] = nav._path
+    off_line = {name: float(np.abs(path[:, 1] - START[1]).max()) for name, path in paths.items()}
+    assert off_line["reference"] < 0.15
+    assert off_line["never-clears-obstacles"] > 0.4
 
 
 def test_odometry_offset_does_not_know_it_has_arrived() -> None:
