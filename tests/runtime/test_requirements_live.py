@@ -15,6 +15,7 @@ from tests.conftest import EXAMPLES
 
 SIMPLE_WALL = EXAMPLES / "simple_wall" / "simple_wall.mission"
 CROSSING = Path(__file__).parent / "scenes" / "crossing.mission"
+GHOST_TRAIL = Path(__file__).parent / "scenes" / "ghost_trail.mission"
 NAVIGATION = EXAMPLES / "navigation" / "navigation.mission"
 
 
@@ -42,11 +43,18 @@ def _slow_mission(folder: Path) -> Path:
     ("crossing", "control:NoSlowZone", "HUMAN_SLOW_ZONE"),
     ("simple_wall", "teleop", "NO_ROBOT_COLLISION"),
     ("small_dense", "control:OscillatingHeading", "SMOOTH_MOTION"),
+    # the walker's trail shuts the gap between two shelves: path ratio 1.6 against 1.02
+    ("ghost_trail", "planning:NeverClearsObstacles", "EFFICIENT_PATH"),
+    # crawling at 0.05 m/s while the elevator is far: time ratio 8.6 against 1.15
+    ("navigation", "control:InvertedApproachScaling", "TIME_TO_GOAL"),
+    # a full turn (twice) on top of the quarter turn to the elevator's heading: 7.5 rad
+    ("navigation", "control:SpinsWhenTurning", "NO_SPIN_AT_GOAL"),
 ])
 def test_the_reference_passes_and_the_defect_fails(tmp_path: Path, mission: str, defect: str,
                                                    requirement: str) -> None:
     path = {"simple_wall": SIMPLE_WALL, "crossing": CROSSING, "navigation": NAVIGATION,
-            "small_dense": EXAMPLES / "small_dense" / "small_dense.mission"}.get(mission) or \
+            "small_dense": EXAMPLES / "small_dense" / "small_dense.mission",
+            "ghost_trail": GHOST_TRAIL}.get(mission) or \
         _slow_mission(tmp_path / "mission")
     good, _ = run_into(path, tmp_path / "reference")
     assert good.verdict == "pass", [v for v in good.verdicts if v.status != "pass"]
@@ -57,3 +65,13 @@ def test_the_reference_passes_and_the_defect_fails(tmp_path: Path, mission: str,
     verdict = next(v for v in bad.verdicts if v.requirement == requirement)
     assert verdict.status == "fail", bad.verdicts
     assert verdict.decided_at is not None and verdict.reason
+
+
+def test_a_defect_that_remembers_what_it_saw_is_still_deterministic(tmp_path: Path) -> None:
+    """NeverClearsObstacles keeps a growing set of remembered points and re-plans from it:
+    the same scenario and seed still give byte-identical traces and event logs."""
+    controller = "bench.defects.planning:NeverClearsObstacles"
+    run_into(GHOST_TRAIL, tmp_path / "a", controller)
+    run_into(GHOST_TRAIL, tmp_path / "b", controller)
+    for name in ("trace.jsonl", "events.csv", "summary.json"):
+        assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes()
