@@ -354,3 +354,21 @@ def test_the_simulation_process_is_not_dumpable() -> None:
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           timeout=SAFETY_LIMIT, check=True)
     assert done.stdout.strip() == "0"
+
+
+def test_a_simulation_killed_with_sigkill_leaves_no_temporary_folder(tmp_path: Path) -> None:
+    """Issue 25: the hosted controller's folder (rei-controller-*) is made in a folder the
+    supervisor owns and removes, so a simulation process killed with SIGKILL (which cleans
+    up nothing) leaves nothing in $TMPDIR."""
+    temporary = tmp_path / "tmp"
+    temporary.mkdir()
+    out = tmp_path / "out"
+    done = subprocess.run(
+        [sys.executable, "-m", "rei.runtime.cli", "run", str(NAVIGATION), "-o", str(out),
+         "--duration", "5", "--controller", "tests.runtime.faulty:KillsTheSimulation",
+         "--quiet"],
+        cwd=REPO, capture_output=True, text=True, timeout=SAFETY_LIMIT, check=False,
+        env={**os.environ, "TMPDIR": str(temporary)})
+    assert done.returncode == 3, done.stderr
+    assert "killed by signal 9 (SIGKILL)" in str(summary_of(out)["reason"])
+    assert sorted(p.name for p in temporary.iterdir()) == []
