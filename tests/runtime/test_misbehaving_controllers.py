@@ -362,10 +362,12 @@ def test_the_simulation_process_is_not_dumpable() -> None:
     assert done.stdout.strip() == "0"
 
 
-def test_a_simulation_killed_with_sigkill_leaves_no_temporary_folder(tmp_path: Path) -> None:
+@pytest.mark.parametrize("warm", ["on", "off"])
+def test_a_simulation_killed_with_sigkill_leaves_no_temporary_folder(warm: str,
+                                                                     tmp_path: Path) -> None:
     """Issue 25: the hosted controller's folder (rei-controller-*) is made in a folder the
     supervisor owns and removes, so a simulation process killed with SIGKILL (which cleans
-    up nothing) leaves nothing in $TMPDIR."""
+    up nothing) leaves nothing in $TMPDIR; forked children (REI_WARM) and fresh ones alike."""
     temporary = tmp_path / "tmp"
     temporary.mkdir()
     out = tmp_path / "out"
@@ -374,7 +376,7 @@ def test_a_simulation_killed_with_sigkill_leaves_no_temporary_folder(tmp_path: P
          "--duration", "5", "--controller", "tests.runtime.faulty:KillsTheSimulation",
          "--quiet"],
         cwd=REPO, capture_output=True, text=True, timeout=SAFETY_LIMIT, check=False,
-        env={**os.environ, "TMPDIR": str(temporary)})
+        env={**os.environ, "TMPDIR": str(temporary), "REI_WARM": warm})
     assert done.returncode == 3, done.stderr
     assert "killed by signal 9 (SIGKILL)" in str(summary_of(out)["reason"])
     assert sorted(p.name for p in temporary.iterdir()) == []
