@@ -28,6 +28,11 @@ to the child, which ends the run ``interrupted`` with consistent outputs; a seco
 kills it. The child dies with this process (Linux: PR_SET_PDEATHSIG; elsewhere at its next
 report, when the pipe is broken, it ends its run as interrupted).
 
+The child's temporary files (the hosted controller's working folder ``rei-controller-*``,
+whatever a controller puts in ``$TMPDIR``) are made in a folder this process creates, hands
+down (``TMPDIR`` and ``tempfile.tempdir`` of the child, so of every process it starts) and
+removes however the child ended: a child killed with SIGKILL cannot clean up after itself.
+
 This module must never import the simulator or the monitor in the supervising process: its
 cost there is an interpreter start-up, not a second copy of REI's heavy imports.
 """
@@ -39,8 +44,10 @@ import json
 import math
 import os
 import select
+import shutil
 import signal
 import sys
+import tempfile
 import threading
 import time
 from dataclasses import asdict, dataclass
@@ -190,8 +197,16 @@ def _signal_group(process: Child, number: int) -> None:
 def supervise(request: RunRequest) -> SupervisedRun:
     """Run ``request`` in a child process and wait for it under the liveness limits; a child
     that dies or hangs gets summary.json written here (outcome error)."""
+    scratch = tempfile.mkdtemp(prefix="rei-run-scratch-")
+    try:
+        return _supervise(request, scratch)
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+
+
+def _supervise(request: RunRequest, scratch: str) -> SupervisedRun:
     read_end, write_end = os.pipe()
-    args = [str(write_end), request.to_json()]
+    args = [str(write_end), request.to_json(), scratch]
     argv = [sys.executable, "-m", "rei.runtime.supervisor", *args]
     try:
         # The child's stdout is this process's stderr: stdout carries the results `rei run`
@@ -385,8 +400,14 @@ def _save_traceback(out_dir: Path, exc: BaseException) -> str:
 
 
 def child_main(argv: list[str]) -> int:
-    """The child: run the request, report to the supervisor, return the exit status."""
+    """The child: run the request, report to the supervisor, return the exit status.
+    ``argv``: the pipe's descriptor, the request, and the folder for temporary files that
+    the supervisor removes (optional)."""
     fd, text = int(argv[0]), argv[1]
+    if len(argv) > 2:
+        # Every temporary file of the run (and of the processes it starts) in the folder the
+        # supervisor removes whatever way this process ends.
+        os.environ["TMPDIR"] = tempfile.tempdir = argv[2]
     keep_private()  # the robot under test cannot reach this pipe through /proc
     one_math_thread(os.environ)  # before numpy is imported; the campaign's runs have it too
     channel = _Channel(fd)

@@ -40,8 +40,14 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 
-from rei.catalogue import Catalogue
-from rei.generators.rooms.construct import ROBOT_TYPE, ROW_PREFIX, PlacedObjectPlan, RoomPlan
+from rei.catalogue import Catalogue, ObjectType
+from rei.generators.rooms.construct import (
+    ROBOT_TYPE,
+    ROW_PREFIX,
+    CatalogueFacts,
+    PlacedObjectPlan,
+    RoomPlan,
+)
 from rei.generators.rooms.descriptors import format_number
 from rei.generators.rooms.geometry import Cell
 from rei.generators.rooms.space import Interval, ParameterError, parse_range
@@ -169,9 +175,8 @@ def placed(plan: RoomPlan, values: Mapping[str, float], catalogue: Catalogue) ->
         def moved(o: PlacedObjectPlan) -> PlacedObjectPlan:
             if o.name.startswith(ROW_PREFIX):
                 return o
-            hx, hy = rotated_half_extents(catalogue.types[o.type], o.heading)
-            return replace(o, offset=towards(o.cell, route, shift, TILE / 2 - hx,
-                                             TILE / 2 - hy))
+            room_x, room_y = object_room(catalogue.types[o.type], o.heading)
+            return replace(o, offset=towards(o.cell, route, shift, room_x, room_y))
         plan = replace(plan, objects=tuple(moved(o) for o in plan.objects))
     if GOAL_SHIFT in values and len(plan.goals) > 1:
         radius = catalogue.types[ROBOT_TYPE].footprint.circumradius()
@@ -188,6 +193,23 @@ def placed(plan: RoomPlan, values: Mapping[str, float], catalogue: Catalogue) ->
             replace(h, offsets=tuple(towards(v, route, shift, room, room) for v in h.vertices))
             for h in plan.humans))
     return plan
+
+
+def object_room(otype: ObjectType, heading: float, tile: float = TILE) -> tuple[float, float]:
+    """How far (m) an object of this type turned ``heading`` degrees can move from its tile's
+    centre along x and along y and keep its footprint on the tile (OFFSET-TILE): (tile - its
+    extent) / 2 on each axis. A table or a shelf nearly fills a 1 m tile, so an object shift
+    moves it little whatever the range asked for (docs/search.md lists every kind)."""
+    hx, hy = rotated_half_extents(otype, heading)
+    return tile / 2 - hx, tile / 2 - hy
+
+
+def object_rooms(catalogue: Catalogue, tile: float = TILE
+                 ) -> dict[str, dict[float, tuple[float, float]]]:
+    """``object_room`` of every static kind at every heading the generator places it at."""
+    facts = CatalogueFacts.of(catalogue, tile)
+    return {name: {h: object_room(otype, h, tile) for h in facts.headings[name]}
+            for name, otype in facts.types.items()}
 
 
 def _around(cells: Sequence[Cell], reach: int = 3) -> set[Cell]:
@@ -253,4 +275,5 @@ def comment(values: Mapping[str, float]) -> str:
 __all__ = ["GOAL_SHIFT", "MAX_PHASE", "MAX_PLACEMENT", "MAX_SHIFT", "OBJECT_SHIFT",
            "PATH_SHIFT", "PHASE", "PLACEMENT_SHIFTS", "STRESS_SHIFT",
            "ScenarioRefused", "apply_to_plan", "check_faults", "comment",
-           "fault_section", "parse_scenario", "placed", "towards", "with_faults"]
+           "fault_section", "object_room", "object_rooms", "parse_scenario", "placed",
+           "towards", "with_faults"]

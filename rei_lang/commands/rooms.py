@@ -63,7 +63,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.add_argument("--count", type=int, default=None, metavar="N",
                         help="rooms to generate (default: the design's rows for systematic, "
                              "10 for random)")
-    parser.add_argument("--seed", type=int, default=0, metavar="S", help="random seed")
+    parser.add_argument("--seed", type=int, default=0, metavar="S", help="random seed (default 0)")
     parser.add_argument("--preset", choices=("small", "medium", "large", "stress"),
                         default="medium",
                         help="thesis 7.4 room classes: small and dense, medium with a moving "

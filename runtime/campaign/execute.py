@@ -4,12 +4,15 @@ Both engines call ``execute_run``: the local engine in a thread of the campaign 
 Dask engine on a cluster worker. The run's process may crash, hang or be killed; whatever
 happens becomes a ``RunResult`` (never an exception), so one bad run never stops a campaign.
 This module must never write outside the work folder it is given, and never touch the store.
+The run's temporary files go into that folder too (``RUN_TEMPORARY``, the run's ``TMPDIR``),
+removed however the run ended: a `rei run` the watchdog kills with SIGKILL cannot clean up.
 """
 
 from __future__ import annotations
 
 import json
 import os
+import shutil
 import signal
 import sys
 import threading
@@ -31,7 +34,7 @@ from rei.runtime.processes import (
 )
 from rei.runtime.results import RunSummary
 from rei.runtime.warm import warm_enabled
-from rei.runtime.warm.server import WarmRun, WarmWorkers
+from rei.runtime.warm.server import TEMPORARY_VARIABLE, WarmRun, WarmWorkers
 
 RunStatus = Literal["ran", "crashed", "hung", "interrupted"]
 """ran: `rei run` ended by itself and wrote a summary; crashed: it died by a signal from
@@ -120,6 +123,21 @@ def execute_run(spec: RunSpec, work_dir: Path, *, timeout: float | None = None,
     call this from a thread that lives until it returns (both engines do: the thread waits).
     """
     work_dir.mkdir(parents=True, exist_ok=True)
+    temporary = work_dir / RUN_TEMPORARY
+    temporary.mkdir(mode=0o700, exist_ok=True)
+    try:
+        return _execute(spec, work_dir, temporary, timeout, runner, stop, cache, warm, pages)
+    finally:
+        shutil.rmtree(temporary, ignore_errors=True)
+
+
+RUN_TEMPORARY = ".tmp"
+"""The folder of a run's temporary files inside its work folder (its ``TMPDIR``)."""
+
+
+def _execute(spec: RunSpec, work_dir: Path, temporary: Path, timeout: float | None,
+             runner: Sequence[str], stop: threading.Event | None, cache: Path | None,
+             warm: WarmWorkers | None, pages: str) -> RunResult:
     limit = default_timeout(spec) if timeout is None else timeout
     argv = [*runner, *spec.run_argv(str(work_dir)), *page_argv(pages)]
     with open_output(work_dir / "campaign-stdout.txt", binary=True) as out, \
@@ -128,6 +146,7 @@ def execute_run(spec: RunSpec, work_dir: Path, *, timeout: float | None = None,
         # reaches the campaign, which stops the runs; kill -9 of the campaign kills them too
         # (a warm run dies with its fork server, which dies with this thread).
         env = run_environment(cache)
+        env[TEMPORARY_VARIABLE] = str(temporary.resolve())
         process = _start(argv, env, out, err, warm if tuple(runner) == DEFAULT_RUNNER
                          and warm_enabled(env) else None)
         # The watchdog counts from here: starting (or replacing) a worker's fork server is

@@ -16,8 +16,8 @@ from pathlib import Path
 from rei.lang.cli_support import EXIT_OK, EXIT_RUN_ERROR
 
 HELP_EXAMPLES = """\
-rei page out/campaign                 # full pages for the campaign's passing runs too
-rei page out/campaign/runs/r0001-s0   # one run's folder
+rei page out/campaign                      # full pages for the campaign's passing runs too
+rei page out/campaign/runs/navigation.r00  # one run's folder
 """
 
 

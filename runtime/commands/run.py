@@ -169,7 +169,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                         help="report.html: 'all' (default) the full page with plots and map; "
                              "'failed' the full page only if the run did not pass, a brief "
                              "one (verdicts, no plots) if it did: `rei page DIR` draws the "
-                             "full one later; 'none' no page (what campaigns save, "
+                             "full one later; 'none' no page (a campaign's --pages none, "
                              "docs/campaign.md)")
     parser.add_argument("--record", action="store_true",
                         help="also write recording.mcap: the run as an MCAP file with ROS 2 "

@@ -42,10 +42,12 @@ EXIT_HELP = ("Exit status (the campaign's rule): 0 no run failed (nothing found)
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    from rei.catalogue import default_catalogue  # noqa: PLC0415
     from rei.generators.rooms.scenario import (  # noqa: PLC0415
         MAX_PHASE,
         MAX_PLACEMENT,
         MAX_SHIFT,
+        object_room,
     )
     from rei.lang.commands.rooms import OVERRIDES  # noqa: PLC0415
     from rei.runtime.commands.campaign import _seconds, add_engine_arguments  # noqa: PLC0415
@@ -109,11 +111,17 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                              "timed, which moves the encounter along the robot's first leg; "
                              "write --stress-shift=-4:4 for a negative LOW")
     most = f"{MAX_PLACEMENT:g}"
+    table = default_catalogue().types["table"]
+    table_x, table_y = (2 * h for h in table.footprint.half_extents())
+    along, across = (round(r, 3) for r in object_room(table, 0.0))
     parser.add_argument("--object-shift", default=None, metavar="LOW:HIGH",
                         help=f"search object placement: metres (-{most} to {most}) every "
                              "generated object moves towards the nearest tile of the robot's "
                              "route (away when negative), as far as its footprint stays on "
-                             "its tile; written as `offset DX DY`")
+                             "its tile: at most (tile - its extent)/2 along each axis, so a "
+                             f"{table_x:g} x {table_y:g} m table on a 1 m tile moves at most "
+                             f"{along:g} m along its length and {across:g} m across "
+                             "(docs/search.md: every kind); written as `offset DX DY`")
     parser.add_argument("--goal-shift", default=None, metavar="LOW:HIGH",
                         help=f"search goal positions: metres (-{most} to {most}) every goal but "
                              "the start moves towards the nearest wall or object (away when "

@@ -38,6 +38,7 @@ import select
 import socket
 import subprocess
 import sys
+import tempfile
 import threading
 from collections.abc import Mapping, Sequence
 from typing import Any
@@ -221,6 +222,19 @@ class WarmRun:
             self.returncode = message["exit"]
 
 
+TEMPORARY_VARIABLE = "TMPDIR"
+"""Where a run makes its temporary files: a folder of its own (rei.runtime.campaign.execute),
+so the only variable of a run's environment that differs from run to run."""
+
+
+def server_environment(env: Mapping[str, str]) -> dict[str, str]:
+    """``env`` as a fork server gets it: the campaign's own temporary folder, not a run's."""
+    out = {k: v for k, v in env.items() if k != TEMPORARY_VARIABLE}
+    if TEMPORARY_VARIABLE in os.environ:
+        out[TEMPORARY_VARIABLE] = os.environ[TEMPORARY_VARIABLE]
+    return out
+
+
 class WarmWorkers:
     """The fork servers of a campaign's worker threads, one per thread, each started by the
     thread that uses it (so it dies with that thread). ``close`` ends them all."""
@@ -236,7 +250,10 @@ class WarmWorkers:
     def start(self, args: Sequence[str], env: Mapping[str, str], cwd: str, stdout: int,
               stderr: int) -> tuple[WarmRun | None, str]:
         """The run forked by this thread's server (started or replaced as needed), or
-        (None, why) when it must start cold."""
+        (None, why) when it must start cold. The run gets ``env``; the server the same
+        without the run's own temporary folder (each run has its own: no reason to replace
+        the server), which its child sets."""
+        env, run_env = server_environment(env), env
         key = tuple(sorted(env.items()))
         with self._lock:
             known = self._cold.get(key)
@@ -259,7 +276,7 @@ class WarmWorkers:
                 with self._lock:
                     self._servers.append(server)
             try:
-                return server.spawn(args, env, cwd, stdout, stderr), ""
+                return server.spawn(args, run_env, cwd, stdout, stderr), ""
             except WarmUnavailable as exc:
                 why = str(exc)
                 self._local.server = None
@@ -298,6 +315,7 @@ def _run(request: dict[str, Any]) -> int:
 
     os.environ.clear()
     os.environ.update(request["env"])
+    tempfile.tempdir = None  # found again from the run's TMPDIR, not the server's
     args = [str(a) for a in request["args"]]
     sys.argv = [str(cli.__file__), *args]
     return cli.main(args)

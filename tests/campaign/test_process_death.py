@@ -16,15 +16,18 @@ import sys
 import threading
 import time
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
 
 from rei.lang.cli_support import EXIT_RUN_ERROR
 from rei.runtime.campaign import CampaignStore, LocalEngine, plan_campaign, run_campaign
-from rei.runtime.campaign.execute import execute_run
+from rei.runtime.campaign.execute import RUN_TEMPORARY, execute_run
 from rei.runtime.commands.campaign import finish
 from rei.runtime.processes import start_child
+from rei.runtime.warm.server import WarmWorkers
+from tests.conftest import REPO
 
 from .conftest import require_rei_run
 from .records import EXAMPLES
@@ -120,6 +123,62 @@ def test_only_the_campaigns_stop_request_makes_a_run_interrupted(tmp_path: Path)
                          stop=stop)
     assert result.status == "interrupted"
     assert result.message == "stopped by the campaign"
+
+
+# Issue 25: a run's temporary files are in its work folder (its TMPDIR), removed however
+# the run ended; `rei run` killed with SIGKILL (the watchdog's way) cannot remove them itself.
+def test_a_runs_temporary_folder_is_removed_however_it_ended(tmp_path: Path) -> None:
+    spec = plan_campaign([EXAMPLES / "simple_wall"], duration=2.0).runs[0]
+    made = tmp_path / "made.txt"
+    runner = python("import os, signal, tempfile; d = tempfile.mkdtemp(prefix='rei-x-'); "
+                    f"open({str(made)!r}, 'w').write(d); os.kill(os.getpid(), signal.SIGKILL)")
+    result = execute_run(spec, tmp_path / "attempt", runner=runner)
+    assert result.status == "crashed"
+    folder = Path(made.read_text())
+    assert folder.parent == (tmp_path / "attempt" / RUN_TEMPORARY).resolve()
+    assert not folder.parent.exists()
+
+    stop = threading.Event()
+    made.unlink()
+    hangs = python("import tempfile, time; d = tempfile.mkdtemp(prefix='rei-x-'); "
+                   f"open({str(made)!r}, 'w').write(d); time.sleep(600)")
+    waiter = threading.Thread(target=lambda: wait_until(made.exists, "the folder") or
+                              stop.set())
+    waiter.start()
+    result = execute_run(spec, tmp_path / "again", runner=hangs, stop=stop)
+    waiter.join()
+    assert result.status == "interrupted"
+    assert not Path(made.read_text()).exists() and not (tmp_path / "again" / ".tmp").exists()
+
+
+@linux_only
+@pytest.mark.parametrize("warm", [True, False])
+def test_rei_run_killed_with_sigkill_leaves_no_temporary_folder(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, warm: bool) -> None:
+    """A real `rei run` (forked by a fork server, or a fresh interpreter) killed with SIGKILL
+    mid-run: its supervisor's folder and the controller's, in the run's TMPDIR, are gone."""
+    require_rei_run()
+    elsewhere = tmp_path / "tmp"  # the campaign's own TMPDIR: nothing of the run's lands here
+    elsewhere.mkdir()
+    monkeypatch.setenv("TMPDIR", str(elsewhere))
+    monkeypatch.delenv("REI_WARM", raising=False)
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join([str(REPO),
+                                                      os.environ.get("PYTHONPATH", "")]))
+    spec = replace(plan_campaign([EXAMPLES / "simple_wall"], duration=5.0).runs[0],
+                   controller="tests.runtime.faulty:KillsRei")
+    workers = WarmWorkers() if warm else None
+    try:
+        result = execute_run(spec, tmp_path / "attempt", warm=workers)
+    finally:
+        if workers is not None:
+            workers.close()
+    assert result.status == "crashed", result.message
+    assert result.exit_code == -signal.SIGKILL
+    stderr = (tmp_path / "attempt" / "campaign-stderr.txt").read_text()
+    if warm:
+        assert "fresh interpreter" not in stderr, stderr  # it was forked by the server
+    assert sorted(p.name for p in elsewhere.iterdir()) == []
+    assert not (tmp_path / "attempt" / RUN_TEMPORARY).exists()
 
 
 @linux_only

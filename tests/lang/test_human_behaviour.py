@@ -63,5 +63,8 @@ def test_completion_after_behaviour_offers_the_behaviours() -> None:
     offered = room_completions("room r {\n human h on f trajectory total 3 { f g } behaviour ",
                                None, None)
     assert [c.label for c in offered] == list(BEHAVIOURS)
+    after_human = "room r {\n human h on f trajectory total 3 { f g } "
+    assert "behaviour" in [c.label for c in room_completions(after_human, None, None)]
+    # only a human's statement takes one, so it is not a statement of its own
     keywords = [c.label for c in room_completions("room r {\n  ", None, None)]
-    assert "behaviour" in keywords
+    assert "behaviour" not in keywords and "human" in keywords

@@ -156,6 +156,42 @@ async def test_completion_of_names_types_and_keywords(client: RecordingClient, f
     await editor.close(path)
 
 
+# Issue 25: keywords are offered where the grammar accepts them. `offset` follows a placement
+# (an object's floor, a trajectory vertex, a goal's floor), never a statement's start.
+async def test_completion_offers_a_clause_only_where_the_grammar_accepts_it(
+        client: RecordingClient, folder: Path) -> None:
+    path = folder / "cafe.room"
+    editor = Editor(client)
+    await editor.open(path)
+    text = ROOM.replace("    tile 1.0\n", "    tile 1.0\n    \n")
+    await editor.change(path, text)
+    at_start = await completion_labels(client, path, position_of(text, "1.0\n    ", offset=8))
+    assert {"object", "human", "robot", "floor", "grid", "tile"} <= set(at_start)
+    assert not {"offset", "heading", "behaviour", "trajectory", "at", "on"} & set(at_start)
+
+    text = ROOM[:-2] + "    object lamp : table on hall_2_1 \n}\n"
+    await editor.change(path, text)
+    after = await completion_labels(client, path, position_of(text, "hall_2_1 \n", offset=9))
+    assert {"offset", "heading", "object", "human"} <= set(after)
+    assert "behaviour" not in after and "trajectory" not in after  # a human's, not an object's
+    half = ROOM[:-2] + "    object lamp : table on hall_2_1 offset 0.2 \n}\n"
+    await editor.change(path, half)
+    assert await completion_labels(client, path, position_of(half, "0.2 \n", offset=4)) == []
+
+    vertex = position_of(ROOM, "porch at 0", offset=len("porch "))
+    await editor.change(path, ROOM)
+    assert {"offset", "at"} <= set(await completion_labels(client, path, vertex))
+    await editor.close(path)
+
+    mission = folder / "visit.mission"
+    await editor.open(mission)
+    goal = await completion_labels(client, mission, position_of(MISSION, "at start\n", offset=9))
+    assert {"offset", "tolerance", "goal"} <= set(goal)
+    start = await completion_labels(client, mission, position_of(MISSION, "    goal first"))
+    assert "goal" in start and "offset" not in start and "tolerance" not in start
+    await editor.close(mission)
+
+
 async def test_mission_completion_offers_the_floors_of_its_room(client: RecordingClient,
                                                                 folder: Path) -> None:
     path = folder / "visit.mission"

@@ -359,6 +359,17 @@ class KillsTheSimulation(_Base):
         return VelocityCommand(0.0, 0.0)
 
 
+class KillsRei(_Base):
+    """Kills `rei run` itself, the supervisor (its host's parent's parent), with SIGKILL:
+    what a campaign's watchdog does to a hung run. Nothing of REI's can clean up then."""
+
+    def fault(self) -> VelocityCommand:
+        with open(f"/proc/{os.getppid()}/stat", encoding="ascii") as stat:
+            supervisor = int(stat.read().rsplit(")", 1)[1].split()[1])
+        os.kill(supervisor, signal.SIGKILL)
+        return VelocityCommand(0.0, 0.0)
+
+
 class StopsTheSimulation(_Base):
     """Stops the process that runs the simulation (SIGSTOP to its host's parent): a run
     that makes no progress, which only the supervisor sees."""

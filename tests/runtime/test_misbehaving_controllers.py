@@ -172,12 +172,15 @@ def test_checked_answers_are_plain_floats_and_states() -> None:
         checked_feedback(GoalFeedback(NavState.ACTIVE, "g", None, 3))  # type: ignore[arg-type]
 
 
-def _start(out: Path, controller: str) -> subprocess.Popen[bytes]:
-    """`rei run` with a slow controller, once its run is under way (a few samples traced)."""
+def _start(out: Path, controller: str, temporary: Path | None = None
+           ) -> subprocess.Popen[bytes]:
+    """`rei run` with a slow controller, once its run is under way (a few samples traced);
+    its temporary files in ``temporary`` when given."""
+    env = None if temporary is None else {**os.environ, "TMPDIR": str(temporary)}
     process = subprocess.Popen(
         [sys.executable, "-m", "rei.runtime.cli", "run", str(NAVIGATION), "-o", str(out),
          "--controller", f"tests.runtime.faulty:{controller}", "--quiet"],
-        cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
     partial = out / "trace.jsonl.partial"
     started = time.monotonic()
     while process.poll() is None and (not partial.exists() or partial.stat().st_size < 20000):
@@ -199,7 +202,10 @@ def test_sigterm_is_passed_on_and_ends_the_run_interrupted(tmp_path: Path) -> No
 def test_the_simulation_dies_with_its_supervisor(tmp_path: Path) -> None:
     """kill -9 of `rei run` (a campaign's watchdog does it) leaves no simulation behind."""
     psutil = pytest.importorskip("psutil")
-    process = _start(tmp_path, "Slow")
+    # Killed with it, the supervisor cannot remove the run's temporary folder: keep it here.
+    temporary = tmp_path / "tmp"
+    temporary.mkdir()
+    process = _start(tmp_path / "out", "Slow", temporary)
     children = psutil.Process(process.pid).children()
     assert len(children) == 1
     process.kill()
@@ -354,3 +360,23 @@ def test_the_simulation_process_is_not_dumpable() -> None:
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           timeout=SAFETY_LIMIT, check=True)
     assert done.stdout.strip() == "0"
+
+
+@pytest.mark.parametrize("warm", ["on", "off"])
+def test_a_simulation_killed_with_sigkill_leaves_no_temporary_folder(warm: str,
+                                                                     tmp_path: Path) -> None:
+    """Issue 25: the hosted controller's folder (rei-controller-*) is made in a folder the
+    supervisor owns and removes, so a simulation process killed with SIGKILL (which cleans
+    up nothing) leaves nothing in $TMPDIR; forked children (REI_WARM) and fresh ones alike."""
+    temporary = tmp_path / "tmp"
+    temporary.mkdir()
+    out = tmp_path / "out"
+    done = subprocess.run(
+        [sys.executable, "-m", "rei.runtime.cli", "run", str(NAVIGATION), "-o", str(out),
+         "--duration", "5", "--controller", "tests.runtime.faulty:KillsTheSimulation",
+         "--quiet"],
+        cwd=REPO, capture_output=True, text=True, timeout=SAFETY_LIMIT, check=False,
+        env={**os.environ, "TMPDIR": str(temporary), "REI_WARM": warm})
+    assert done.returncode == 3, done.stderr
+    assert "killed by signal 9 (SIGKILL)" in str(summary_of(out)["reason"])
+    assert sorted(p.name for p in temporary.iterdir()) == []

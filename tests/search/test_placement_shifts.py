@@ -15,12 +15,13 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from rei.catalogue import default_catalogue
+from rei.catalogue import Cylinder, default_catalogue
 from rei.generators.concrete.build import load_concrete_mission
 from rei.generators.rooms.construct import ROBOT_TYPE, RoomPlan
-from rei.generators.rooms.scenario import MAX_PLACEMENT, TILE, towards
+from rei.generators.rooms.scenario import MAX_PLACEMENT, TILE, object_rooms, towards
 from rei.generators.rooms.writer import read_metadata
-from rei.lang.room.checks import rotated_half_extents
+from rei.lang.room.checks import offset_problem, rotated_half_extents
+from tests.conftest import REPO
 from tests.search.test_scenario_dimensions import (
     ONE_HUMAN,
     candidate,
@@ -208,3 +209,55 @@ def test_a_real_search_with_the_shifts_runs_the_moved_scenario(tmp_path: Path) -
     again = subprocess.run(argv, capture_output=True, text=True, timeout=SAFETY_LIMIT)
     assert again.returncode == done.returncode, again.stderr
     assert outputs(out) == before
+
+
+def test_an_objects_room_is_the_checkers_own_bound() -> None:
+    """Issue 25: a table or shelf barely moves because it fills its tile. The generator's
+    bound (``object_room``) is exactly OFFSET-TILE's: a move that far along an axis passes
+    the checker, 2 mm more is refused, at every kind and heading the generator uses."""
+    catalogue = default_catalogue()
+    rooms = object_rooms(catalogue)
+    assert set(rooms) == {"box", "chair", "pillar", "shelf", "table"}
+    for name, by_heading in rooms.items():
+        for heading, (room_x, room_y) in by_heading.items():
+            hx, hy = rotated_half_extents(catalogue.types[name], heading)
+            for offset, half in (((room_x, 0.0), (hx, hy)), ((0.0, room_y), (hx, hy))):
+                assert offset_problem(offset, TILE, *half) == "", (name, heading)
+            assert offset_problem((room_x + 0.002, 0.0), TILE, hx, hy) != ""
+            assert offset_problem((0.0, room_y + 0.002), TILE, hx, hy) != ""
+    assert rooms["table"][0.0] == pytest.approx((0.1, 0.2))  # 0.8 x 0.6 m on a 1 m tile
+
+
+def room_table() -> list[str]:
+    """docs/search.md's table of how far each kind can move (regenerate it from this)."""
+    catalogue = default_catalogue()
+    lines = ["| kind | footprint | farthest from its tile's centre, x × y (m), by heading |",
+             "|---|---|---|"]
+    for name, by_heading in object_rooms(catalogue).items():
+        footprint = catalogue.types[name].footprint
+        if isinstance(footprint, Cylinder):
+            shape, where = f"disc, radius {footprint.radius:g} m", "any heading"
+        else:
+            hx, hy = footprint.half_extents()
+            shape, where = f"{2 * hx:g} × {2 * hy:g} m", ""
+        groups: dict[tuple[float, float], list[float]] = {}
+        for heading, (x, y) in by_heading.items():
+            groups.setdefault((_mm(x), _mm(y)), []).append(heading)
+        text = "; ".join(f"{where or ', '.join(f'{h:g}°' for h in headings)}: {x:g} × {y:g}"
+                         for (x, y), headings in groups.items())
+        lines.append(f"| {name} | {shape} | {text} |")
+    return lines
+
+
+def _mm(value: float) -> float:
+    return math.trunc(round(value * 1000.0, 6)) / 1000.0
+
+
+def test_the_documented_table_of_object_room_is_the_catalogues() -> None:
+    """docs/search.md says how far each catalogue kind can move; a catalogue or bound that
+    changes fails here until the table is regenerated (``room_table()``)."""
+    docs = (REPO / "docs" / "search.md").read_text(encoding="utf-8").splitlines()
+    table = room_table()
+    assert table[0] in docs, "\n".join(table)
+    start = docs.index(table[0])
+    assert docs[start:start + len(table)] == table, "\n".join(table)
