@@ -40,9 +40,11 @@ from rei.runtime.animator.reactive import (
     gap_beside,
     gap_in_the_way,
     held_back,
+    hold_ground,
     keep_clear,
     limit_speed,
     pass_side,
+    room_aside,
     social_acceleration,
     speed_share,
 )
@@ -194,6 +196,14 @@ class Animator:
         """Social humans: seconds held back from where they want to walk."""
         self._stood = [0.0] * len(items)
         """Yielding humans: seconds stood with the robot in the way."""
+        self._way = [1.0] * len(items)
+        """Reactive humans: 1 walking their path forwards, -1 turned back along it."""
+        self._back = [0.0] * len(items)
+        """Reactive humans turned back: seconds they still walk backwards."""
+        self._tried = [False] * len(items)
+        """Social humans: switched side while held back, not yet got on since."""
+        self._free = [0.0] * len(items)
+        """Social humans: seconds not held back."""
         self._giving_way = [False] * len(items)
         self._aside = [0.0] * len(items)
         """Yielding humans giving way: seconds since they began to."""
@@ -250,6 +260,8 @@ class Animator:
                   for j, (item, p) in enumerate(zip(self.items, poses, strict=True))
                   if item.face_motion]
         for k, (item, pose) in enumerate(zip(self.items, poses, strict=True)):
+            if item.behaviour != "scripted":
+                self._walk_back(k, item, dt)
             if item.behaviour == "social":
                 others = [a for j, a in humans if j != k] + ([robot] if robot else [])
                 self._social(k, item, pose, dt, others, robot)
@@ -258,6 +270,7 @@ class Animator:
             x0, y0 = item.spline.position(s)
             cx, cy = _pull(x0 - pose[0], y0 - pose[1])
             vx, vy = item.spline.velocity(s)
+            vx, vy = vx * self._way[k], vy * self._way[k]
             if item.behaviour == "yielding":
                 clock = self.clock(k, step)
                 walking = clock is not None and clock >= item.variation.phase_s
@@ -276,7 +289,14 @@ class Animator:
                     gap = gap_beside(rule, pose[0], pose[1], item.radius, robot)
                 else:
                     gap = gap_in_the_way(rule, pose[0], pose[1], item.radius, going, robot)
-                share = self._yield(k, gap, dt, standing)
+                # Room to step aside (the way it would step): else it turns back along its
+                # path, if it has begun one (one waiting for its start stands at its first
+                # vertex and can only step aside).
+                room = (robot is None or gap is None or not walking
+                        or room_aside(self.walls, pose[0], pose[1], item.radius,
+                                      self._aside_direction(pose, robot, robot_pose),
+                                      rule.aside_room))
+                share = self._yield(k, gap, dt, standing, room)
                 self._advance[k] = share if walking else 0.0
                 if self._giving_way[k] and robot is not None:
                     cx, cy = self._step_away(pose, robot, gap, robot_pose)
@@ -284,10 +304,30 @@ class Animator:
                     cx, cy = cx * share, cy * share
             self._feedback[k] = (cx, cy, _turn(item.face_motion, vx, vy, pose[2], 1e-3))
 
-    def _yield(self, k: int, gap: float | None, dt: float, standing: bool = False) -> float:
+    def _walk_back(self, k: int, item: Animated, dt: float) -> None:
+        """A human that turned back turns round again once it has walked back its
+        ``turn_back_time`` or reached the start of an open path."""
+        if self._way[k] > 0.0:
+            return
+        self._back[k] -= dt
+        if self._back[k] <= 0.0 or (not item.spline.loop and self._path_time[k] <= 0.0):
+            self._way[k], self._back[k] = 1.0, 0.0
+
+    def _turn_back(self, k: int, walk_back: float) -> None:
+        """Turn round along the path: backwards for ``walk_back`` seconds, or forwards again
+        if it had turned back already (the robot followed it)."""
+        spline = self.items[k].spline
+        if not spline.loop:  # its path time ran on past an open path's end while it stood
+            self._path_time[k] = min(self._path_time[k], float(spline.t[-1]))
+        self._way[k] = -self._way[k]
+        self._back[k] = walk_back if self._way[k] < 0.0 else 0.0
+
+    def _yield(self, k: int, gap: float | None, dt: float, standing: bool = False,
+               room: bool = True) -> float:
         """The share of path speed a yielding human walks at; 0 while it gives way.
         ``standing``: the human has nowhere to walk (before its start, at its path's end),
-        so a robot anywhere within ``gap_beside`` is waiting on it."""
+        so a robot anywhere within ``gap_beside`` is waiting on it. ``room``: it has room
+        to step aside; without, it turns back along its path when its patience runs out."""
         rule = self.reactions.yielding
         if self._giving_way[k]:
             self._aside[k] += dt
@@ -302,7 +342,11 @@ class Animator:
         waited_on = share < 0.1 or (standing and gap is not None and gap < rule.slow_gap)
         self._stood[k] = self._stood[k] + dt if waited_on else 0.0
         if self._stood[k] >= rule.patience:
-            self._giving_way[k], self._stood[k], self._aside[k] = True, 0.0, 0.0
+            self._stood[k] = 0.0
+            if room or rule.turn_back_time <= 0.0:
+                self._giving_way[k], self._aside[k] = True, 0.0
+            else:
+                self._turn_back(k, rule.turn_back_time)
             return 0.0
         return share
 
@@ -314,9 +358,19 @@ class Animator:
         robot), until give_way_gap; then it stands; its pull brings it back to its path once
         the robot is out of the way."""
         rule = self.reactions.yielding
+        if gap is None or gap >= rule.give_way_gap \
+                or math.hypot(pose[0] - robot.x, pose[1] - robot.y) < 1e-9:
+            return 0.0, 0.0
+        ux, uy = self._aside_direction(pose, robot, robot_pose)
+        return rule.give_way_speed * ux, rule.give_way_speed * uy
+
+    @staticmethod
+    def _aside_direction(pose: Pose, robot: Agent, robot_pose: Pose | None
+                         ) -> tuple[float, float]:
+        """The unit direction a human giving way steps in: see ``_step_away``."""
         dx, dy = pose[0] - robot.x, pose[1] - robot.y
         dist = math.hypot(dx, dy)
-        if gap is None or gap >= rule.give_way_gap or dist < 1e-9:
+        if dist < 1e-9:
             return 0.0, 0.0
         ux, uy = dx / dist, dy / dist
         if robot_pose is not None:
@@ -326,7 +380,7 @@ class Animator:
             ax, ay = -hy * side + 0.3 * ux, hx * side + 0.3 * uy
             norm = math.hypot(ax, ay)
             ux, uy = ax / norm, ay / norm
-        return rule.give_way_speed * ux, rule.give_way_speed * uy
+        return ux, uy
 
     def _social(self, k: int, item: Animated, pose: Pose, dt: float,
                 others: list[Agent], robot: Agent | None = None) -> None:
@@ -335,6 +389,7 @@ class Animator:
         tx, ty = item.spline.position(s)
         ex, ey = tx - pose[0], ty - pose[1]
         px, py = item.spline.velocity(s)
+        px, py = px * self._way[k], py * self._way[k]
         # Only a target ahead of the human waits for it; one the human has overtaken (after
         # a detour cut a corner) walks on, and the pull slows the human until it catches up.
         behind = ex * px + ey * py > 0.0
@@ -358,11 +413,20 @@ class Animator:
                                      others, self._path_speed[k], self._side[k])
         vx, vy = limit_speed(vx + ax * dt, vy + ay * dt, v_max)
         vx, vy = keep_clear(model, pose[0], pose[1], vx, vy, item.radius, others)
-        # Held back (a wall on the side it turns to, the robot ahead): try the other side.
-        self._held[k] = self._held[k] + dt if held_back(model, vx, vy, desired) else 0.0
+        vx, vy = hold_ground(vx, vy, (ex, ey), model.stray)
+        # Held back (a wall on the side it turns to, the robot ahead): try the other side;
+        # held back on that one too, turn back along the path.
+        held = held_back(model, vx, vy, desired)
+        self._held[k] = self._held[k] + dt if held else 0.0
+        self._free[k] = 0.0 if held else self._free[k] + dt
+        if self._free[k] >= model.patience:
+            self._tried[k] = False
+        if self._tried[k] and self._held[k] >= model.patience and model.turn_back_time > 0.0:
+            self._turn_back(k, model.turn_back_time)
+            self._held[k], self._tried[k] = 0.0, False
         side = pass_side(model, self._side[k], self._held[k])
         if side != self._side[k]:
-            self._side[k], self._held[k] = side, 0.0
+            self._side[k], self._held[k], self._tried[k] = side, 0.0, True
         self._velocity[k] = (vx, vy)
         self._feedback[k] = (0.0, 0.0, _turn(item.face_motion, vx, vy, pose[2], FACING_SPEED))
 
@@ -379,7 +443,9 @@ class Animator:
                 out.append((item.body, vx[j] + cx, vy[j] + cy, wz))
                 continue
             s = self._path_time[k]
-            s_next = s + item.variation.speed_scale * self._advance[k] / self.rate
+            s_next = s + self._way[k] * item.variation.speed_scale * self._advance[k] / self.rate
+            if not item.spline.loop:
+                s_next = max(s_next, 0.0)
             self._path_time[k] = s_next
             if item.behaviour == "social":
                 vx_s, vy_s = self._velocity[k]

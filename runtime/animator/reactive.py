@@ -71,6 +71,12 @@ class YieldRule:
     """m between footprints at which a human giving way stops stepping back."""
     give_way_time: float = 6.0
     """s a human stands aside at most before it walks its path again (and yields afresh)."""
+    aside_room: float = 0.5
+    """m: a human gives way by stepping aside only when the place this far across (towards
+    where it would step) keeps its radius from every wall; else it turns back."""
+    turn_back_time: float = 6.0
+    """s of its path a human that turned back walks backwards before it turns round again
+    (0: it never turns back, it always steps aside: the model before issue 25's deadlocks)."""
 
 
 @dataclass(frozen=True)
@@ -114,6 +120,12 @@ class SocialForce:
     held_share: float = 0.25
     """Share of its desired speed, along its desired direction, below which a human counts
     as held back."""
+    turn_back_time: float = 6.0
+    """s of its path a human walks backwards after it was held back on both sides for its
+    ``patience`` each, before it turns round again (0: it never turns back)."""
+    stray: float = 1.2
+    """m: how far from its target point on the path a human lets the others push it; there
+    it gives no more ground (the repulsion can no longer herd it through a room)."""
     cutoff: float = 3.0
     """m between footprints beyond which another agent exerts no force (cheap, and smooth
     enough: A exp(-3/0.5) is 0.015 m/s^2)."""
@@ -270,6 +282,28 @@ def fits_past(model: SocialForce, walls: np.ndarray, x: float, y: float, radius:
     beside = robot.radius + radius + model.clearance_margin
     return wall_distance(walls, robot.x + side * hy * beside,
                          robot.y - side * hx * beside) >= radius
+
+
+def room_aside(walls: np.ndarray, x: float, y: float, radius: float, direction: Vec,
+               reach: float) -> bool:
+    """Whether a human at (x, y) has room to step ``reach`` metres along ``direction`` (unit
+    length): the place there keeps its radius from every wall (``walls`` as in
+    ``wall_distance``)."""
+    return wall_distance(walls, x + direction[0] * reach, y + direction[1] * reach) >= radius
+
+
+def hold_ground(vx: float, vy: float, to_target: Vec, stray: float) -> Vec:
+    """The velocity (vx, vy) without its component away from the target point when the
+    target is ``to_target`` away and farther than ``stray``: a human pushed that far from
+    where it is going gives no more ground (it may still move across or back)."""
+    dist = math.hypot(*to_target)
+    if dist <= stray:
+        return vx, vy
+    ux, uy = to_target[0] / dist, to_target[1] / dist
+    towards = vx * ux + vy * uy
+    if towards >= 0.0:
+        return vx, vy
+    return vx - towards * ux, vy - towards * uy
 
 
 def elliptical_distance(dx: float, dy: float, sx: float, sy: float) -> float:
