@@ -9,7 +9,8 @@ How the path time runs is the body's behaviour (runtime/animator/reactive.py): a
 ``scripted`` body's is the clock (delayed and scaled by its seeded variation); a
 ``yielding`` human's only advances while the robot leaves its way free; a ``social``
 human's velocity comes from the social force model, towards a target point whose path time
-only advances while the human keeps up with it.
+only advances while the human keeps up with it. A reactive human that turned back (held
+back for its patience, reactive.py) walks its path backwards: its path time runs back.
 
 A trajectory with a start trigger (``when robot within D of FLOOR``) keeps its clock
 at zero, so its body stands at its first vertex, until a control tick finds the robot's centre

@@ -16,6 +16,11 @@ as often as a human-blind one; reactive humans make the test fair.
   on any side (``gap_beside``): a path that ends on the robot's goal otherwise keeps the
   human on the goal for ever, and any navigator fails that goal (issue 22: a medium-preset
   walker stood on goal_2 from 31 s until the reference aborted it at 227 s).
+  A human steps aside only where it has room (``room_aside``: the place ``aside_room``
+  across, the way it would step, keeps its radius from every wall); without it turns back
+  along its path (below). Stepping aside into a wall, it stood beside the robot, came back,
+  yielded and stepped into the wall again, and both waited until the goal aborted (issue 25,
+  a MAP-Elites room: the walker's loop ran along a wall through the robot's goal).
 * ``social``: the social force model of Helbing and Molnár (Phys. Rev. E 51, 4282, 1995):
   a driving force relaxes the human's velocity towards its desired velocity (towards a
   target point moving along its spline) over the relaxation time; the robot and the other
@@ -39,7 +44,23 @@ as often as a human-blind one; reactive humans make the test fair.
   people do when the first side is blocked. Walls and fixed objects decide the side from
   the start where one side is too narrow (``fits_past``): passing a standing robot on the
   side of a wall it did not fit past, a human slid along the wall, which turned its way
-  round the robot into the robot (issue 22, medium room 123).
+  round the robot into the robot (issue 22, medium room 123). A human held back on the
+  other side too for ``patience`` turns back along its path: with a wall on one side and the
+  waiting robot's footprint on the other, one whose loop crossed the robot's goal stood
+  0.3 m from the goal for 30 s while the robot, 0.34 m from it, waited for it (issue 25).
+  And a human gives no more ground than ``stray`` from its target point (``hold_ground``):
+  the repulsion of a robot driving at it otherwise herded it ahead of the robot, once 3 m
+  off its path through a doorway, where it stood for good against the wall between it and
+  its path (issue 25). Held there, it is held back, passes or turns back like any other.
+
+Turning back (both behaviours): a human walks its path backwards (its path time runs back)
+for ``turn_back_time`` seconds, or to the start of an open path, and then forwards again,
+yielding afresh; one that turned back and is held back again turns forwards at once (the
+robot followed it). It keeps to its path, so it needs no map, and it walks away from the
+robot rather than standing beside it: a robot waiting for it gets the way free, and one
+waiting at its goal on the human's path gets the goal (the human comes back later, as
+people do). Nothing here forbids a path over a goal or makes a human avoid the robot's way:
+a robot that drives into a human that stands or turns round is still to blame.
 
 Everything here is a pure function of poses and velocities; the parameters are plain
 frozen records. This module must never import the simulator or judge the robot.
