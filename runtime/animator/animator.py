@@ -41,7 +41,6 @@ from rei.runtime.animator.reactive import (
     gap_beside,
     gap_in_the_way,
     held_back,
-    hold_ground,
     keep_clear,
     limit_speed,
     pass_side,
@@ -414,7 +413,6 @@ class Animator:
                                      others, self._path_speed[k], self._side[k])
         vx, vy = limit_speed(vx + ax * dt, vy + ay * dt, v_max)
         vx, vy = keep_clear(model, pose[0], pose[1], vx, vy, item.radius, others)
-        vx, vy = hold_ground(vx, vy, (ex, ey), model.stray)
         # Held back (a wall on the side it turns to, the robot ahead): try the other side;
         # held back on that one too, turn back along the path.
         held = held_back(model, vx, vy, desired)

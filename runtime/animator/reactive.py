@@ -48,10 +48,13 @@ as often as a human-blind one; reactive humans make the test fair.
   other side too for ``patience`` turns back along its path: with a wall on one side and the
   waiting robot's footprint on the other, one whose loop crossed the robot's goal stood
   0.3 m from the goal for 30 s while the robot, 0.34 m from it, waited for it (issue 25).
-  And a human gives no more ground than ``stray`` from its target point (``hold_ground``):
-  the repulsion of a robot driving at it otherwise herded it ahead of the robot, once 3 m
-  off its path through a doorway, where it stood for good against the wall between it and
-  its path (issue 25). Held there, it is held back, passes or turns back like any other.
+  Turning back also ends a herding: a robot driving at a human held it back on both sides
+  as it retreated, once 3 m off its loop through a doorway, where it stood for good against
+  the wall between it and its path, beside the goal (issue 25); now it turns back after
+  6 s, its target runs the other way, and it walks off round the robot. A hard bound on how
+  far a human lets itself be pushed from its target (1.2 m: it gave no more ground there)
+  was tried and dropped: pressed by the robot into a corner of a wall and a box 1 m off its
+  path, a human held there stood for good, and the reference failed that search room.
 
 Turning back (both behaviours): a human walks its path backwards (its path time runs back)
 for ``turn_back_time`` seconds, or to the start of an open path, and then forwards again,
@@ -144,9 +147,6 @@ class SocialForce:
     turn_back_time: float = 6.0
     """s of its path a human walks backwards after it was held back on both sides for its
     ``patience`` each, before it turns round again (0: it never turns back)."""
-    stray: float = 1.2
-    """m: how far from its target point on the path a human lets the others push it; there
-    it gives no more ground (the repulsion can no longer herd it through a room)."""
     cutoff: float = 3.0
     """m between footprints beyond which another agent exerts no force (cheap, and smooth
     enough: A exp(-3/0.5) is 0.015 m/s^2)."""
@@ -311,20 +311,6 @@ def room_aside(walls: np.ndarray, x: float, y: float, radius: float, direction: 
     length): the place there keeps its radius from every wall (``walls`` as in
     ``wall_distance``)."""
     return wall_distance(walls, x + direction[0] * reach, y + direction[1] * reach) >= radius
-
-
-def hold_ground(vx: float, vy: float, to_target: Vec, stray: float) -> Vec:
-    """The velocity (vx, vy) without its component away from the target point when the
-    target is ``to_target`` away and farther than ``stray``: a human pushed that far from
-    where it is going gives no more ground (it may still move across or back)."""
-    dist = math.hypot(*to_target)
-    if dist <= stray:
-        return vx, vy
-    ux, uy = to_target[0] / dist, to_target[1] / dist
-    towards = vx * ux + vy * uy
-    if towards >= 0.0:
-        return vx, vy
-    return vx - towards * ux, vy - towards * uy
 
 
 def elliptical_distance(dx: float, dy: float, sx: float, sy: float) -> float:

@@ -13,10 +13,9 @@ correct robot waiting for each other until the goal aborted:
   (scenes/herded).
 
 Now a human held back for its patience on both sides (social), or with no room to step
-aside (yielding), turns back along its path for a while; and a social human gives no more
-ground than ``SocialForce.stray`` from where it is going. Each scene runs the real simulator
-with the reference, once with the model before (``turn_back_time`` 0, ``stray`` infinite:
-the same runs as main's, byte for byte) and once with today's.
+aside (yielding), turns back along its path for a while. Each scene runs the real simulator
+with the reference, once with the model before (``turn_back_time`` 0: the same runs as
+before the change, byte for byte) and once with today's.
 """
 
 from __future__ import annotations
@@ -29,13 +28,13 @@ import pytest
 
 from rei.lang.room.spline import CatmullRom
 from rei.runtime.animator.animator import Animated, Animator, Reactions
-from rei.runtime.animator.reactive import SocialForce, YieldRule, hold_ground, room_aside
+from rei.runtime.animator.reactive import SocialForce, YieldRule, room_aside
 from rei.runtime.collector import SampleList, load_monitor_config
 from rei.runtime.run import RunConfig, RunRecord, generate_world, run_mission
 from rei.runtime.world.manifest import load_manifest
 
 SCENES = Path(__file__).parent / "scenes"
-OLD_SOCIAL = SocialForce(turn_back_time=0.0, stray=math.inf)
+OLD_SOCIAL = SocialForce(turn_back_time=0.0)
 OLD_YIELDING = YieldRule(turn_back_time=0.0)
 NEAR = 1.5
 """m between centres within which a human standing still keeps a waiting robot waiting."""
@@ -107,20 +106,23 @@ def test_a_yielding_human_with_no_room_aside_turns_back(
 
 
 @pytest.mark.slow
-def test_a_social_human_gives_no_more_ground_than_its_stray(
+def test_a_herded_social_human_turns_back_and_stays_in_its_room(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """Its loop is x = 3 in the east room; the doorway to the west room is the gap at
-    x = 1. Before, the robot herded it through the doorway to x = 0.25 (against the wall
-    between it and its path) for good. Held to its stray (without turning back, to show
-    that bound alone), it stays in its own room and the robot reaches every goal."""
-    old, _, walker, _ = _scene("herded", 1058734826, tmp_path / "old", monkeypatch,
-                               Reactions(social=OLD_SOCIAL))
+    x = 1. Before, the robot driving at it herded it through the doorway to x = 0.25,
+    where it stood for good against the wall between it and its path, beside goal_1. Now,
+    held back on both sides as it retreats, it turns back and walks off round the robot: it
+    stays in its own room and the robot reaches every goal."""
+    old, t, walker, robot = _scene("herded", 1058734826, tmp_path / "old", monkeypatch,
+                                   Reactions(social=OLD_SOCIAL))
     assert old.outcome == "failed"
     assert walker[:, 0].min() < 0.5
-    held, _, walker, _ = _scene("herded", 1058734826, tmp_path / "held", monkeypatch,
-                                Reactions(social=SocialForce(turn_back_time=0.0)))
-    assert held.outcome == "completed", held.reason
+    assert longest_wait(t, walker, robot) > 25.0
+    new, t, walker, robot = _scene("herded", 1058734826, tmp_path / "new", monkeypatch,
+                                   Reactions())
+    assert new.outcome == "completed", new.reason
     assert walker[:, 0].min() > 1.5
+    assert longest_wait(t, walker, robot) < 10.0
 
 
 @pytest.mark.slow
@@ -190,12 +192,8 @@ def test_a_turned_back_human_on_a_loop_walks_it_backwards() -> None:
     assert track[200:, 0].min() < 3.0 - 2.5
 
 
-def test_room_aside_and_hold_ground() -> None:
+def test_room_aside() -> None:
     # in the passage there is no room to step across it; in the open there is
     assert not room_aside(PASSAGE_WALLS, 2.0, 0.0, 0.25, (0.0, -1.0), 0.5)
     assert room_aside(PASSAGE_WALLS * np.array([1, 3, 1, 1, 1]), 2.0, 0.0, 0.25, (0.0, -1.0),
                       0.5)
-    # within its stray a human moves as it likes; beyond, no farther away from the target
-    assert hold_ground(-1.0, 0.5, (2.0, 0.0), 2.5) == (-1.0, 0.5)
-    assert hold_ground(-1.0, 0.5, (2.0, 0.0), 1.2) == (0.0, 0.5)
-    assert hold_ground(1.0, 0.5, (2.0, 0.0), 1.2) == (1.0, 0.5)  # back towards it: kept
