@@ -47,6 +47,7 @@ from rei.runtime.animator.reactive import (
     room_aside,
     social_acceleration,
     speed_share,
+    way_aside,
 )
 from rei.runtime.animator.variation import (
     NO_VARIATION,
@@ -70,6 +71,9 @@ LEASH = (0.3, 1.0)
 stands at the second distance, so a detour never leaves the human chasing a far target."""
 FACING_SPEED = 0.05
 """m/s below which a reactive human keeps its heading instead of turning to its velocity."""
+STEP_LOOK = 0.1
+"""m: a human stepping aside stops where a step this long would bring it nearer a wall than
+its radius."""
 
 Pose = tuple[float, float, float]
 
@@ -205,6 +209,8 @@ class Animator:
         self._free = [0.0] * len(items)
         """Social humans: seconds not held back."""
         self._giving_way = [False] * len(items)
+        self._away = [False] * len(items)
+        """Yielding humans giving way: stepping away from the robot (no room across)."""
         self._aside = [0.0] * len(items)
         """Yielding humans giving way: seconds since they began to."""
         self._last_correct: int | None = None
@@ -292,14 +298,13 @@ class Animator:
                 # Room to step aside (the way it would step): else it turns back along its
                 # path, if it has begun one (one waiting for its start stands at its first
                 # vertex and can only step aside).
-                room = (robot is None or gap is None or not walking
-                        or room_aside(self.walls, pose[0], pose[1], item.radius,
-                                      self._aside_direction(pose, robot, robot_pose),
-                                      rule.aside_room))
-                share = self._yield(k, gap, dt, standing, room)
+                # Which way it gives way if its patience runs out
+                way_out = ("across" if robot is None or gap is None
+                           else self._steps_aside(pose, item.radius, robot, robot_pose))
+                share = self._yield(k, gap, dt, standing, way_out)
                 self._advance[k] = share if walking else 0.0
                 if self._giving_way[k] and robot is not None:
-                    cx, cy = self._step_away(pose, robot, gap, robot_pose)
+                    cx, cy = self._step_away(k, pose, item.radius, robot, gap, robot_pose)
                 else:
                     cx, cy = cx * share, cy * share
             self._feedback[k] = (cx, cy, _turn(item.face_motion, vx, vy, pose[2], 1e-3))
@@ -323,11 +328,12 @@ class Animator:
         self._back[k] = walk_back if self._way[k] < 0.0 else 0.0
 
     def _yield(self, k: int, gap: float | None, dt: float, standing: bool = False,
-               room: bool = True) -> float:
+               way_out: str = "across") -> float:
         """The share of path speed a yielding human walks at; 0 while it gives way.
         ``standing``: the human has nowhere to walk (before its start, at its path's end),
-        so a robot anywhere within ``gap_beside`` is waiting on it. ``room``: it has room
-        to step aside; without, it turns back along its path when its patience runs out."""
+        so a robot anywhere within ``gap_beside`` is waiting on it. ``way_out``: how it gives way
+        when its patience runs out (``_steps_aside``): it steps "across" or "away", or turns
+        "back" along its path."""
         rule = self.reactions.yielding
         if self._giving_way[k]:
             self._aside[k] += dt
@@ -343,14 +349,15 @@ class Animator:
         self._stood[k] = self._stood[k] + dt if waited_on else 0.0
         if self._stood[k] >= rule.patience:
             self._stood[k] = 0.0
-            if room or rule.turn_back_time <= 0.0:
+            if way_out != "back" or rule.turn_back_time <= 0.0:
                 self._giving_way[k], self._aside[k] = True, 0.0
+                self._away[k] = way_out == "away"
             else:
                 self._turn_back(k, rule.turn_back_time)
             return 0.0
         return share
 
-    def _step_away(self, pose: Pose, robot: Agent, gap: float | None,
+    def _step_away(self, k: int, pose: Pose, radius: float, robot: Agent, gap: float | None,
                    robot_pose: Pose | None) -> tuple[float, float]:
         """A human giving way steps aside out of the robot's way: across the robot's heading,
         on the side it already stands (straight away from a robot coming at it would keep it
@@ -361,26 +368,59 @@ class Animator:
         if gap is None or gap >= rule.give_way_gap \
                 or math.hypot(pose[0] - robot.x, pose[1] - robot.y) < 1e-9:
             return 0.0, 0.0
-        ux, uy = self._aside_direction(pose, robot, robot_pose)
-        return rule.give_way_speed * ux, rule.give_way_speed * uy
+        across, _ = self._directions(pose, robot, robot_pose)
+        # Across (as far as the walls let it: it looks one short step ahead), or away if
+        # across had no room to begin with.
+        if self._away[k]:
+            step = self._way_aside(pose, radius, robot, robot_pose, STEP_LOOK)
+        elif rule.aside_room <= 0.0 or room_aside(self.walls, pose[0], pose[1], radius, across,
+                                                  STEP_LOOK):
+            step = across
+        else:
+            step = None
+        if step is None:
+            return 0.0, 0.0
+        return rule.give_way_speed * step[0], rule.give_way_speed * step[1]
+
+    def _steps_aside(self, pose: Pose, radius: float, robot: Agent, robot_pose: Pose | None
+                     ) -> str:
+        """How a yielding human whose patience ran out gives way: it steps "across" the
+        robot's heading where it has room; else "away" from the robot where it has room
+        (straight or up to 90 degrees off: ``way_aside``); else it turns "back" along its
+        path."""
+        reach = self.reactions.yielding.aside_room
+        across, _ = self._directions(pose, robot, robot_pose)
+        if reach <= 0.0 or room_aside(self.walls, pose[0], pose[1], radius, across, reach):
+            return "across"
+        return "away" if self._way_aside(pose, radius, robot, robot_pose) is not None else "back"
+
+    def _way_aside(self, pose: Pose, radius: float, robot: Agent, robot_pose: Pose | None,
+                   reach: float | None = None) -> tuple[float, float] | None:
+        """The unit direction a human giving way steps in (see ``_step_away``), None where
+        it has no room to step ``reach`` (default ``aside_room``; ``way_aside``)."""
+        across, away = self._directions(pose, robot, robot_pose)
+        aside_room = self.reactions.yielding.aside_room
+        return way_aside(self.walls, pose[0], pose[1], radius, across, away,
+                         aside_room if reach is None or aside_room <= 0.0 else reach)
 
     @staticmethod
-    def _aside_direction(pose: Pose, robot: Agent, robot_pose: Pose | None
-                         ) -> tuple[float, float]:
-        """The unit direction a human giving way steps in: see ``_step_away``."""
+    def _directions(pose: Pose, robot: Agent, robot_pose: Pose | None
+                    ) -> tuple[tuple[float, float], tuple[float, float]]:
+        """Across the robot's heading on the side the human stands (with a little of away,
+        so a human beside it still leaves), and straight away from the robot: unit vectors
+        (zero for a human on the robot's centre)."""
         dx, dy = pose[0] - robot.x, pose[1] - robot.y
         dist = math.hypot(dx, dy)
         if dist < 1e-9:
-            return 0.0, 0.0
+            return (0.0, 0.0), (0.0, 0.0)
         ux, uy = dx / dist, dy / dist
-        if robot_pose is not None:
-            hx, hy = math.cos(robot_pose[2]), math.sin(robot_pose[2])
-            side = 1.0 if hx * dy - hy * dx >= 0.0 else -1.0
-            # across the heading, with a little of 'away' so a human beside it still leaves
-            ax, ay = -hy * side + 0.3 * ux, hx * side + 0.3 * uy
-            norm = math.hypot(ax, ay)
-            ux, uy = ax / norm, ay / norm
-        return ux, uy
+        if robot_pose is None:
+            return (ux, uy), (ux, uy)
+        hx, hy = math.cos(robot_pose[2]), math.sin(robot_pose[2])
+        side = 1.0 if hx * dy - hy * dx >= 0.0 else -1.0
+        ax, ay = -hy * side + 0.3 * ux, hx * side + 0.3 * uy
+        norm = math.hypot(ax, ay)
+        return (ax / norm, ay / norm), (ux, uy)
 
     def _social(self, k: int, item: Animated, pose: Pose, dt: float,
                 others: list[Agent], robot: Agent | None = None) -> None:

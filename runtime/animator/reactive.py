@@ -16,11 +16,15 @@ as often as a human-blind one; reactive humans make the test fair.
   on any side (``gap_beside``): a path that ends on the robot's goal otherwise keeps the
   human on the goal for ever, and any navigator fails that goal (issue 22: a medium-preset
   walker stood on goal_2 from 31 s until the reference aborted it at 227 s).
-  A human steps aside only where it has room (``room_aside``: the place ``aside_room``
-  across, the way it would step, keeps its radius from every wall); without it turns back
-  along its path (below). Stepping aside into a wall, it stood beside the robot, came back,
-  yielded and stepped into the wall again, and both waited until the goal aborted (issue 25,
-  a MAP-Elites room: the walker's loop ran along a wall through the robot's goal).
+  A human steps only where it has room (``way_aside``: across the robot's heading, else
+  straight away from the robot or up to 90 degrees off that, wherever the place
+  ``aside_room`` ahead of its step keeps its radius from every wall); with nowhere to step
+  it turns back along its path (below). Stepping aside into a wall, it stood beside the
+  robot, came back, yielded and stepped into the wall again, and both waited until the goal
+  aborted (issue 25, a MAP-Elites room: the walker's loop ran along a wall through the
+  robot's goal). At the turning point of a path that goes out and back, turning back leads
+  the same way, into the robot: there only a step away helps (a TPE room of issue 25's
+  protocol, where the walker stood at its turning point beside a wall's end).
 * ``social``: the social force model of Helbing and Molnár (Phys. Rev. E 51, 4282, 1995):
   a driving force relaxes the human's velocity towards its desired velocity (towards a
   target point moving along its spline) over the relaxation time; the robot and the other
@@ -96,8 +100,9 @@ class YieldRule:
     give_way_time: float = 6.0
     """s a human stands aside at most before it walks its path again (and yields afresh)."""
     aside_room: float = 0.5
-    """m: a human gives way by stepping aside only when the place this far across (towards
-    where it would step) keeps its radius from every wall; else it turns back."""
+    """m: a human gives way by stepping only where the place this far ahead of its step
+    keeps its radius from every wall (``way_aside``); with nowhere to step, it turns back
+    (0: it steps across the robot's heading without looking: the model before issue 25)."""
     turn_back_time: float = 6.0
     """s of its path a human that turned back walks backwards before it turns round again
     (0: it never turns back, it always steps aside: the model before issue 25's deadlocks)."""
@@ -311,6 +316,24 @@ def room_aside(walls: np.ndarray, x: float, y: float, radius: float, direction: 
     length): the place there keeps its radius from every wall (``walls`` as in
     ``wall_distance``)."""
     return wall_distance(walls, x + direction[0] * reach, y + direction[1] * reach) >= radius
+
+
+def way_aside(walls: np.ndarray, x: float, y: float, radius: float, across: Vec, away: Vec,
+              reach: float) -> Vec | None:
+    """Where a human at (x, y) giving way steps (a unit direction), None where it has no
+    room: ``across`` the robot's heading if it has room there (``room_aside``), else the
+    first with room of straight ``away`` from the robot and away turned 45 and then 90
+    degrees either way (never towards the robot). ``reach`` 0: ``across``, unlooked."""
+    if reach <= 0.0:
+        return across
+    candidates = [across, away]
+    for turn in (math.pi / 4.0, -math.pi / 4.0, math.pi / 2.0, -math.pi / 2.0):
+        c, s = math.cos(turn), math.sin(turn)
+        candidates.append((c * away[0] - s * away[1], s * away[0] + c * away[1]))
+    for direction in candidates:
+        if room_aside(walls, x, y, radius, direction, reach):
+            return direction
+    return None
 
 
 def elliptical_distance(dx: float, dy: float, sx: float, sy: float) -> float:

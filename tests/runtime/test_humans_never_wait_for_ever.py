@@ -28,14 +28,14 @@ import pytest
 
 from rei.lang.room.spline import CatmullRom
 from rei.runtime.animator.animator import Animated, Animator, Reactions
-from rei.runtime.animator.reactive import SocialForce, YieldRule, room_aside
+from rei.runtime.animator.reactive import SocialForce, YieldRule, room_aside, way_aside
 from rei.runtime.collector import SampleList, load_monitor_config
 from rei.runtime.run import RunConfig, RunRecord, generate_world, run_mission
 from rei.runtime.world.manifest import load_manifest
 
 SCENES = Path(__file__).parent / "scenes"
 OLD_SOCIAL = SocialForce(turn_back_time=0.0)
-OLD_YIELDING = YieldRule(turn_back_time=0.0)
+OLD_YIELDING = YieldRule(turn_back_time=0.0, aside_room=0.0)
 NEAR = 1.5
 """m between centres within which a human standing still keeps a waiting robot waiting."""
 
@@ -73,33 +73,25 @@ def _scene(name: str, seed: int, folder: Path, monkeypatch: pytest.MonkeyPatch,
             np.array([s.robot_pose[:2] for s in got]))
 
 
-@pytest.mark.slow
-def test_a_social_human_held_back_on_both_sides_turns_back(
-        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    """Before: it stood 0.3-0.4 m from goal_2 beside the waiting robot until the goal
-    aborted. Now it turns back along its loop and the robot reaches every goal."""
-    old, t, walker, robot = _scene("waits_on_goal", 1179214411, tmp_path / "old", monkeypatch,
-                                   Reactions(social=OLD_SOCIAL))
-    assert old.outcome == "failed"
-    assert longest_wait(t, walker, robot) > 25.0
-    new, t, walker, robot = _scene("waits_on_goal", 1179214411, tmp_path / "new", monkeypatch,
-                                   Reactions())
-    assert new.outcome == "completed", new.reason
-    assert new.measurements["collisions"] == 0
-    assert longest_wait(t, walker, robot) < 10.0
+# scene, the search's run seed, the model before: a social walker held back on both sides
+# (a wall, the waiting robot) stood 0.3-0.4 m from goal_2 until the goal aborted; a yielding
+# one giving way stepped into the wall beside the robot, came back and did it again.
+WAITED = [("waits_on_goal", 1179214411, Reactions(social=OLD_SOCIAL)),
+          ("steps_into_wall", 1193251556, Reactions(yielding=OLD_YIELDING))]
 
 
 @pytest.mark.slow
-def test_a_yielding_human_with_no_room_aside_turns_back(
-        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    """Before: giving way, it stepped into the wall beside the robot and both waited for
-    good. Now, with no room on the side it would step to, it turns back along its loop."""
-    old, t, walker, robot = _scene("steps_into_wall", 1193251556, tmp_path / "old",
-                                   monkeypatch, Reactions(yielding=OLD_YIELDING))
+@pytest.mark.parametrize(("scene", "seed", "before"), WAITED, ids=[w[0] for w in WAITED])
+def test_a_human_and_the_robot_no_longer_wait_for_each_other(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, scene: str, seed: int,
+        before: Reactions) -> None:
+    """Before: they waited for each other for more than 25 s and the goal aborted. Now the
+    human turns back along its loop (held back on both sides; no room aside) and the robot
+    reaches every goal, touching no one."""
+    old, t, walker, robot = _scene(scene, seed, tmp_path / "old", monkeypatch, before)
     assert old.outcome == "failed"
     assert longest_wait(t, walker, robot) > 25.0
-    new, t, walker, robot = _scene("steps_into_wall", 1193251556, tmp_path / "new",
-                                   monkeypatch, Reactions())
+    new, t, walker, robot = _scene(scene, seed, tmp_path / "new", monkeypatch, Reactions())
     assert new.outcome == "completed", new.reason
     assert new.measurements["collisions"] == 0
     assert longest_wait(t, walker, robot) < 10.0
@@ -161,15 +153,13 @@ def _passage(behaviour: str, reactions: Reactions, seconds: float = 60.0,
     return times, np.array(track)
 
 
-@pytest.mark.parametrize("behaviour", ["social", "yielding"])
-def test_in_a_passage_a_human_turns_back_from_a_standing_robot(behaviour: str) -> None:
+def test_in_a_passage_a_social_human_turns_back_from_a_standing_robot() -> None:
     robot = np.tile(ROBOT[:2], (600, 1))
-    old = Reactions(social=OLD_SOCIAL, yielding=OLD_YIELDING)
-    times, track = _passage(behaviour, old)
-    # the old model: it stays in front of the robot (a social one for good; a yielding one
-    # steps 'aside' into the wall, comes back, and does it again)
+    times, track = _passage("social", Reactions(social=OLD_SOCIAL))
+    # the old model: held back on both sides, it stands in front of the robot for good
     assert track[200:, 0].min() > 3.0 - 2.0
-    times, track = _passage(behaviour, Reactions())
+    assert longest_wait(times, track, robot) > 40.0
+    times, track = _passage("social", Reactions())
     # now: it turns back along its path, well away from the robot, and comes again
     first = int(np.argmax(track[:, 0] > 3.0 - 1.0))
     away = first + int(np.argmax(track[first:, 0] < 3.0 - 2.5))
@@ -192,8 +182,17 @@ def test_a_turned_back_human_on_a_loop_walks_it_backwards() -> None:
     assert track[200:, 0].min() < 3.0 - 2.5
 
 
-def test_room_aside() -> None:
+def test_room_aside_and_way_aside() -> None:
     # in the passage there is no room to step across it; in the open there is
     assert not room_aside(PASSAGE_WALLS, 2.0, 0.0, 0.25, (0.0, -1.0), 0.5)
-    assert room_aside(PASSAGE_WALLS * np.array([1, 3, 1, 1, 1]), 2.0, 0.0, 0.25, (0.0, -1.0),
-                      0.5)
+    hall = PASSAGE_WALLS * np.array([1, 3, 1, 1, 1])
+    assert room_aside(hall, 2.0, 0.0, 0.25, (0.0, -1.0), 0.5)
+    # giving way: across where it has room, else straight away from the robot (back along
+    # the passage), else up to 90 degrees off that; None in a dead end
+    across, away = (0.0, -1.0), (-1.0, 0.0)
+    assert way_aside(hall, 2.0, 0.0, 0.25, across, away, 0.5) == across
+    assert way_aside(PASSAGE_WALLS, 2.0, 0.0, 0.25, across, away, 0.5) == away
+    end = np.vstack([PASSAGE_WALLS, [[1.0, 0.0, 0.0, 0.5, 0.5]]])  # a wall behind it too
+    assert way_aside(end, 2.0, 0.0, 0.25, across, away, 0.5) is None
+    # with room 0 (the old model) it steps across without looking
+    assert way_aside(PASSAGE_WALLS, 2.0, 0.0, 0.25, across, away, 0.0) == across
