@@ -295,9 +295,6 @@ class Animator:
                     gap = gap_beside(rule, pose[0], pose[1], item.radius, robot)
                 else:
                     gap = gap_in_the_way(rule, pose[0], pose[1], item.radius, going, robot)
-                # Room to step aside (the way it would step): else it turns back along its
-                # path, if it has begun one (one waiting for its start stands at its first
-                # vertex and can only step aside).
                 # Which way it gives way if its patience runs out
                 way_out = ("across" if robot is None or gap is None
                            else self._steps_aside(pose, item.radius, robot, robot_pose))
@@ -362,8 +359,9 @@ class Animator:
         """A human giving way steps aside out of the robot's way: across the robot's heading,
         on the side it already stands (straight away from a robot coming at it would keep it
         in the robot's path, and at a turning point back along its own path leads into the
-        robot), until give_way_gap; then it stands; its pull brings it back to its path once
-        the robot is out of the way."""
+        robot), until give_way_gap or a step short of a wall; or, where across had no room to
+        begin with, away from the robot (``way_aside``); then it stands; its pull brings it
+        back to its path once the robot is out of the way."""
         rule = self.reactions.yielding
         if gap is None or gap >= rule.give_way_gap \
                 or math.hypot(pose[0] - robot.x, pose[1] - robot.y) < 1e-9:
