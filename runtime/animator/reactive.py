@@ -6,10 +6,10 @@ as often as a human-blind one; reactive humans make the test fair.
 * ``yielding``: a human slows down, then stands, while the robot's footprint is in a cone
   ahead of it along its walking direction, and walks on when the way is clear. Its path
   time only advances while it walks, so it resumes where it stopped. A human that has stood
-  for ``patience`` seconds with the robot still in its way gives way: it steps straight
-  away from the robot until the robot is ``give_way_gap`` away, stands there until the
-  robot is out of its way (at most ``give_way_time``: the robot's goal may be where the
-  human stands), and returns to its path. Without that, a human standing in a one-tile
+  for ``patience`` seconds with the robot still in its way gives way: it steps out of the
+  robot's way (where it has room, below) until the robot is ``give_way_gap`` away, stands
+  there until the robot is out of its way (at most ``give_way_time``: the robot's goal may
+  be where the human stands), and returns to its path. Without that, a human standing in a one-tile
   passage and a robot waiting for it to move would wait for each other until the goal
   times out. A human that stands because it has nowhere to walk (before its start, at the
   end of an open path) gives way the same way to a robot waiting within ``slow_gap`` of it
