@@ -9,7 +9,8 @@ How the path time runs is the body's behaviour (runtime/animator/reactive.py): a
 ``scripted`` body's is the clock (delayed and scaled by its seeded variation); a
 ``yielding`` human's only advances while the robot leaves its way free; a ``social``
 human's velocity comes from the social force model, towards a target point whose path time
-only advances while the human keeps up with it.
+only advances while the human keeps up with it. A reactive human that turned back (held
+back for its patience, reactive.py) walks its path backwards: its path time runs back.
 
 A trajectory with a start trigger (``when robot within D of FLOOR``) keeps its clock
 at zero, so its body stands at its first vertex, until a control tick finds the robot's centre
@@ -43,8 +44,10 @@ from rei.runtime.animator.reactive import (
     keep_clear,
     limit_speed,
     pass_side,
+    room_aside,
     social_acceleration,
     speed_share,
+    way_aside,
 )
 from rei.runtime.animator.variation import (
     NO_VARIATION,
@@ -68,6 +71,9 @@ LEASH = (0.3, 1.0)
 stands at the second distance, so a detour never leaves the human chasing a far target."""
 FACING_SPEED = 0.05
 """m/s below which a reactive human keeps its heading instead of turning to its velocity."""
+STEP_LOOK = 0.1
+"""m: a human stepping aside stops where a step this long would bring it nearer a wall than
+its radius."""
 
 Pose = tuple[float, float, float]
 
@@ -194,7 +200,17 @@ class Animator:
         """Social humans: seconds held back from where they want to walk."""
         self._stood = [0.0] * len(items)
         """Yielding humans: seconds stood with the robot in the way."""
+        self._way = [1.0] * len(items)
+        """Reactive humans: 1 walking their path forwards, -1 turned back along it."""
+        self._back = [0.0] * len(items)
+        """Reactive humans turned back: seconds they still walk backwards."""
+        self._tried = [False] * len(items)
+        """Social humans: switched side while held back, not yet got on since."""
+        self._free = [0.0] * len(items)
+        """Social humans: seconds not held back."""
         self._giving_way = [False] * len(items)
+        self._away = [False] * len(items)
+        """Yielding humans giving way: stepping away from the robot (no room across)."""
         self._aside = [0.0] * len(items)
         """Yielding humans giving way: seconds since they began to."""
         self._last_correct: int | None = None
@@ -250,6 +266,8 @@ class Animator:
                   for j, (item, p) in enumerate(zip(self.items, poses, strict=True))
                   if item.face_motion]
         for k, (item, pose) in enumerate(zip(self.items, poses, strict=True)):
+            if item.behaviour != "scripted":
+                self._walk_back(k, item, dt)
             if item.behaviour == "social":
                 others = [a for j, a in humans if j != k] + ([robot] if robot else [])
                 self._social(k, item, pose, dt, others, robot)
@@ -258,6 +276,7 @@ class Animator:
             x0, y0 = item.spline.position(s)
             cx, cy = _pull(x0 - pose[0], y0 - pose[1])
             vx, vy = item.spline.velocity(s)
+            vx, vy = vx * self._way[k], vy * self._way[k]
             if item.behaviour == "yielding":
                 clock = self.clock(k, step)
                 walking = clock is not None and clock >= item.variation.phase_s
@@ -276,18 +295,42 @@ class Animator:
                     gap = gap_beside(rule, pose[0], pose[1], item.radius, robot)
                 else:
                     gap = gap_in_the_way(rule, pose[0], pose[1], item.radius, going, robot)
-                share = self._yield(k, gap, dt, standing)
+                # Which way it gives way if its patience runs out
+                way_out = ("across" if robot is None or gap is None
+                           else self._steps_aside(pose, item.radius, robot, robot_pose))
+                share = self._yield(k, gap, dt, standing, way_out)
                 self._advance[k] = share if walking else 0.0
                 if self._giving_way[k] and robot is not None:
-                    cx, cy = self._step_away(pose, robot, gap, robot_pose)
+                    cx, cy = self._step_away(k, pose, item.radius, robot, gap, robot_pose)
                 else:
                     cx, cy = cx * share, cy * share
             self._feedback[k] = (cx, cy, _turn(item.face_motion, vx, vy, pose[2], 1e-3))
 
-    def _yield(self, k: int, gap: float | None, dt: float, standing: bool = False) -> float:
+    def _walk_back(self, k: int, item: Animated, dt: float) -> None:
+        """A human that turned back turns round again once it has walked back its
+        ``turn_back_time`` or reached the start of an open path."""
+        if self._way[k] > 0.0:
+            return
+        self._back[k] -= dt
+        if self._back[k] <= 0.0 or (not item.spline.loop and self._path_time[k] <= 0.0):
+            self._way[k], self._back[k] = 1.0, 0.0
+
+    def _turn_back(self, k: int, walk_back: float) -> None:
+        """Turn round along the path: backwards for ``walk_back`` seconds, or forwards again
+        if it had turned back already (the robot followed it)."""
+        spline = self.items[k].spline
+        if not spline.loop:  # its path time ran on past an open path's end while it stood
+            self._path_time[k] = min(self._path_time[k], float(spline.t[-1]))
+        self._way[k] = -self._way[k]
+        self._back[k] = walk_back if self._way[k] < 0.0 else 0.0
+
+    def _yield(self, k: int, gap: float | None, dt: float, standing: bool = False,
+               way_out: str = "across") -> float:
         """The share of path speed a yielding human walks at; 0 while it gives way.
         ``standing``: the human has nowhere to walk (before its start, at its path's end),
-        so a robot anywhere within ``gap_beside`` is waiting on it."""
+        so a robot anywhere within ``gap_beside`` is waiting on it. ``way_out``: how it gives way
+        when its patience runs out (``_steps_aside``): it steps "across" or "away", or turns
+        "back" along its path."""
         rule = self.reactions.yielding
         if self._giving_way[k]:
             self._aside[k] += dt
@@ -302,31 +345,80 @@ class Animator:
         waited_on = share < 0.1 or (standing and gap is not None and gap < rule.slow_gap)
         self._stood[k] = self._stood[k] + dt if waited_on else 0.0
         if self._stood[k] >= rule.patience:
-            self._giving_way[k], self._stood[k], self._aside[k] = True, 0.0, 0.0
+            self._stood[k] = 0.0
+            if way_out != "back" or rule.turn_back_time <= 0.0:
+                self._giving_way[k], self._aside[k] = True, 0.0
+                self._away[k] = way_out == "away"
+            else:
+                self._turn_back(k, rule.turn_back_time)
             return 0.0
         return share
 
-    def _step_away(self, pose: Pose, robot: Agent, gap: float | None,
+    def _step_away(self, k: int, pose: Pose, radius: float, robot: Agent, gap: float | None,
                    robot_pose: Pose | None) -> tuple[float, float]:
         """A human giving way steps aside out of the robot's way: across the robot's heading,
         on the side it already stands (straight away from a robot coming at it would keep it
         in the robot's path, and at a turning point back along its own path leads into the
-        robot), until give_way_gap; then it stands; its pull brings it back to its path once
-        the robot is out of the way."""
+        robot), until give_way_gap or a step short of a wall; or, where across had no room to
+        begin with, away from the robot (``way_aside``); then it stands; its pull brings it
+        back to its path once the robot is out of the way."""
         rule = self.reactions.yielding
+        if gap is None or gap >= rule.give_way_gap \
+                or math.hypot(pose[0] - robot.x, pose[1] - robot.y) < 1e-9:
+            return 0.0, 0.0
+        across, _ = self._directions(pose, robot, robot_pose)
+        # Across (as far as the walls let it: it looks one short step ahead), or away if
+        # across had no room to begin with.
+        if self._away[k]:
+            step = self._way_aside(pose, radius, robot, robot_pose, STEP_LOOK)
+        elif rule.aside_room <= 0.0 or room_aside(self.walls, pose[0], pose[1], radius, across,
+                                                  STEP_LOOK):
+            step = across
+        else:
+            step = None
+        if step is None:
+            return 0.0, 0.0
+        return rule.give_way_speed * step[0], rule.give_way_speed * step[1]
+
+    def _steps_aside(self, pose: Pose, radius: float, robot: Agent, robot_pose: Pose | None
+                     ) -> str:
+        """How a yielding human whose patience ran out gives way: it steps "across" the
+        robot's heading where it has room; else "away" from the robot where it has room
+        (straight or up to 90 degrees off: ``way_aside``); else it turns "back" along its
+        path."""
+        reach = self.reactions.yielding.aside_room
+        across, _ = self._directions(pose, robot, robot_pose)
+        if reach <= 0.0 or room_aside(self.walls, pose[0], pose[1], radius, across, reach):
+            return "across"
+        return "away" if self._way_aside(pose, radius, robot, robot_pose) is not None else "back"
+
+    def _way_aside(self, pose: Pose, radius: float, robot: Agent, robot_pose: Pose | None,
+                   reach: float | None = None) -> tuple[float, float] | None:
+        """The unit direction a human giving way steps in (see ``_step_away``), None where
+        it has no room to step ``reach`` (default ``aside_room``; ``way_aside``)."""
+        across, away = self._directions(pose, robot, robot_pose)
+        aside_room = self.reactions.yielding.aside_room
+        return way_aside(self.walls, pose[0], pose[1], radius, across, away,
+                         aside_room if reach is None or aside_room <= 0.0 else reach)
+
+    @staticmethod
+    def _directions(pose: Pose, robot: Agent, robot_pose: Pose | None
+                    ) -> tuple[tuple[float, float], tuple[float, float]]:
+        """Across the robot's heading on the side the human stands (with a little of away,
+        so a human beside it still leaves), and straight away from the robot: unit vectors
+        (zero for a human on the robot's centre)."""
         dx, dy = pose[0] - robot.x, pose[1] - robot.y
         dist = math.hypot(dx, dy)
-        if gap is None or gap >= rule.give_way_gap or dist < 1e-9:
-            return 0.0, 0.0
+        if dist < 1e-9:
+            return (0.0, 0.0), (0.0, 0.0)
         ux, uy = dx / dist, dy / dist
-        if robot_pose is not None:
-            hx, hy = math.cos(robot_pose[2]), math.sin(robot_pose[2])
-            side = 1.0 if hx * dy - hy * dx >= 0.0 else -1.0
-            # across the heading, with a little of 'away' so a human beside it still leaves
-            ax, ay = -hy * side + 0.3 * ux, hx * side + 0.3 * uy
-            norm = math.hypot(ax, ay)
-            ux, uy = ax / norm, ay / norm
-        return rule.give_way_speed * ux, rule.give_way_speed * uy
+        if robot_pose is None:
+            return (ux, uy), (ux, uy)
+        hx, hy = math.cos(robot_pose[2]), math.sin(robot_pose[2])
+        side = 1.0 if hx * dy - hy * dx >= 0.0 else -1.0
+        ax, ay = -hy * side + 0.3 * ux, hx * side + 0.3 * uy
+        norm = math.hypot(ax, ay)
+        return (ax / norm, ay / norm), (ux, uy)
 
     def _social(self, k: int, item: Animated, pose: Pose, dt: float,
                 others: list[Agent], robot: Agent | None = None) -> None:
@@ -335,6 +427,7 @@ class Animator:
         tx, ty = item.spline.position(s)
         ex, ey = tx - pose[0], ty - pose[1]
         px, py = item.spline.velocity(s)
+        px, py = px * self._way[k], py * self._way[k]
         # Only a target ahead of the human waits for it; one the human has overtaken (after
         # a detour cut a corner) walks on, and the pull slows the human until it catches up.
         behind = ex * px + ey * py > 0.0
@@ -358,11 +451,19 @@ class Animator:
                                      others, self._path_speed[k], self._side[k])
         vx, vy = limit_speed(vx + ax * dt, vy + ay * dt, v_max)
         vx, vy = keep_clear(model, pose[0], pose[1], vx, vy, item.radius, others)
-        # Held back (a wall on the side it turns to, the robot ahead): try the other side.
-        self._held[k] = self._held[k] + dt if held_back(model, vx, vy, desired) else 0.0
+        # Held back (a wall on the side it turns to, the robot ahead): try the other side;
+        # held back on that one too, turn back along the path.
+        held = held_back(model, vx, vy, desired)
+        self._held[k] = self._held[k] + dt if held else 0.0
+        self._free[k] = 0.0 if held else self._free[k] + dt
+        if self._free[k] >= model.patience:
+            self._tried[k] = False
+        if self._tried[k] and self._held[k] >= model.patience and model.turn_back_time > 0.0:
+            self._turn_back(k, model.turn_back_time)
+            self._held[k], self._tried[k] = 0.0, False
         side = pass_side(model, self._side[k], self._held[k])
         if side != self._side[k]:
-            self._side[k], self._held[k] = side, 0.0
+            self._side[k], self._held[k], self._tried[k] = side, 0.0, True
         self._velocity[k] = (vx, vy)
         self._feedback[k] = (0.0, 0.0, _turn(item.face_motion, vx, vy, pose[2], FACING_SPEED))
 
@@ -379,7 +480,9 @@ class Animator:
                 out.append((item.body, vx[j] + cx, vy[j] + cy, wz))
                 continue
             s = self._path_time[k]
-            s_next = s + item.variation.speed_scale * self._advance[k] / self.rate
+            s_next = s + self._way[k] * item.variation.speed_scale * self._advance[k] / self.rate
+            if not item.spline.loop:
+                s_next = max(s_next, 0.0)
             self._path_time[k] = s_next
             if item.behaviour == "social":
                 vx_s, vy_s = self._velocity[k]

@@ -6,16 +6,25 @@ as often as a human-blind one; reactive humans make the test fair.
 * ``yielding``: a human slows down, then stands, while the robot's footprint is in a cone
   ahead of it along its walking direction, and walks on when the way is clear. Its path
   time only advances while it walks, so it resumes where it stopped. A human that has stood
-  for ``patience`` seconds with the robot still in its way gives way: it steps straight
-  away from the robot until the robot is ``give_way_gap`` away, stands there until the
-  robot is out of its way (at most ``give_way_time``: the robot's goal may be where the
-  human stands), and returns to its path. Without that, a human standing in a one-tile
+  for ``patience`` seconds with the robot still in its way gives way: it steps out of the
+  robot's way (where it has room, below) until the robot is ``give_way_gap`` away, stands
+  there until the robot is out of its way (at most ``give_way_time``: the robot's goal may
+  be where the human stands), and returns to its path. Without that, a human standing in a one-tile
   passage and a robot waiting for it to move would wait for each other until the goal
   times out. A human that stands because it has nowhere to walk (before its start, at the
   end of an open path) gives way the same way to a robot waiting within ``slow_gap`` of it
   on any side (``gap_beside``): a path that ends on the robot's goal otherwise keeps the
   human on the goal for ever, and any navigator fails that goal (issue 22: a medium-preset
   walker stood on goal_2 from 31 s until the reference aborted it at 227 s).
+  A human steps only where it has room (``way_aside``: across the robot's heading, else
+  straight away from the robot or up to 90 degrees off that, wherever the place
+  ``aside_room`` ahead of its step keeps its radius from every wall); with nowhere to step
+  it turns back along its path (below). Stepping aside into a wall, it stood beside the
+  robot, came back, yielded and stepped into the wall again, and both waited until the goal
+  aborted (issue 25, a MAP-Elites room: the walker's loop ran along a wall through the
+  robot's goal). At the turning point of a path that goes out and back, turning back leads
+  the same way, into the robot: there only a step away helps (a TPE room of issue 25's
+  protocol, where the walker stood at its turning point beside a wall's end).
 * ``social``: the social force model of Helbing and Molnár (Phys. Rev. E 51, 4282, 1995):
   a driving force relaxes the human's velocity towards its desired velocity (towards a
   target point moving along its spline) over the relaxation time; the robot and the other
@@ -39,7 +48,26 @@ as often as a human-blind one; reactive humans make the test fair.
   people do when the first side is blocked. Walls and fixed objects decide the side from
   the start where one side is too narrow (``fits_past``): passing a standing robot on the
   side of a wall it did not fit past, a human slid along the wall, which turned its way
-  round the robot into the robot (issue 22, medium room 123).
+  round the robot into the robot (issue 22, medium room 123). A human held back on the
+  other side too for ``patience`` turns back along its path: with a wall on one side and the
+  waiting robot's footprint on the other, one whose loop crossed the robot's goal stood
+  0.3 m from the goal for 30 s while the robot, 0.34 m from it, waited for it (issue 25).
+  Turning back also ends a herding: a robot driving at a human held it back on both sides
+  as it retreated, once 3 m off its loop through a doorway, where it stood for good against
+  the wall between it and its path, beside the goal (issue 25); now it turns back after
+  6 s, its target runs the other way, and it walks off round the robot. A hard bound on how
+  far a human lets itself be pushed from its target (1.2 m: it gave no more ground there)
+  was tried and dropped: pressed by the robot into a corner of a wall and a box 1 m off its
+  path, a human held there stood for good, and the reference failed that search room.
+
+Turning back (both behaviours): a human walks its path backwards (its path time runs back)
+for ``turn_back_time`` seconds, or to the start of an open path, and then forwards again,
+yielding afresh; one that turned back and is held back again turns forwards at once (the
+robot followed it). It keeps to its path, so it needs no map, and it walks away from the
+robot rather than standing beside it: a robot waiting for it gets the way free, and one
+waiting at its goal on the human's path gets the goal (the human comes back later, as
+people do). Nothing here forbids a path over a goal or makes a human avoid the robot's way:
+a robot that drives into a human that stands or turns round is still to blame.
 
 Everything here is a pure function of poses and velocities; the parameters are plain
 frozen records. This module must never import the simulator or judge the robot.
@@ -71,6 +99,13 @@ class YieldRule:
     """m between footprints at which a human giving way stops stepping back."""
     give_way_time: float = 6.0
     """s a human stands aside at most before it walks its path again (and yields afresh)."""
+    aside_room: float = 0.5
+    """m: a human gives way by stepping only where the place this far ahead of its step
+    keeps its radius from every wall (``way_aside``); with nowhere to step, it turns back
+    (0: it steps across the robot's heading without looking: the model before issue 25)."""
+    turn_back_time: float = 6.0
+    """s of its path a human that turned back walks backwards before it turns round again
+    (0: it never turns back, it always steps aside: the model before issue 25's deadlocks)."""
 
 
 @dataclass(frozen=True)
@@ -114,6 +149,9 @@ class SocialForce:
     held_share: float = 0.25
     """Share of its desired speed, along its desired direction, below which a human counts
     as held back."""
+    turn_back_time: float = 6.0
+    """s of its path a human walks backwards after it was held back on both sides for its
+    ``patience`` each, before it turns round again (0: it never turns back)."""
     cutoff: float = 3.0
     """m between footprints beyond which another agent exerts no force (cheap, and smooth
     enough: A exp(-3/0.5) is 0.015 m/s^2)."""
@@ -270,6 +308,32 @@ def fits_past(model: SocialForce, walls: np.ndarray, x: float, y: float, radius:
     beside = robot.radius + radius + model.clearance_margin
     return wall_distance(walls, robot.x + side * hy * beside,
                          robot.y - side * hx * beside) >= radius
+
+
+def room_aside(walls: np.ndarray, x: float, y: float, radius: float, direction: Vec,
+               reach: float) -> bool:
+    """Whether a human at (x, y) has room to step ``reach`` metres along ``direction`` (unit
+    length): the place there keeps its radius from every wall (``walls`` as in
+    ``wall_distance``)."""
+    return wall_distance(walls, x + direction[0] * reach, y + direction[1] * reach) >= radius
+
+
+def way_aside(walls: np.ndarray, x: float, y: float, radius: float, across: Vec, away: Vec,
+              reach: float) -> Vec | None:
+    """Where a human at (x, y) giving way steps (a unit direction), None where it has no
+    room: ``across`` the robot's heading if it has room there (``room_aside``), else the
+    first with room of straight ``away`` from the robot and away turned 45 and then 90
+    degrees either way (never towards the robot). ``reach`` 0: ``across``, unlooked."""
+    if reach <= 0.0:
+        return across
+    candidates = [across, away]
+    for turn in (math.pi / 4.0, -math.pi / 4.0, math.pi / 2.0, -math.pi / 2.0):
+        c, s = math.cos(turn), math.sin(turn)
+        candidates.append((c * away[0] - s * away[1], s * away[0] + c * away[1]))
+    for direction in candidates:
+        if room_aside(walls, x, y, radius, direction, reach):
+            return direction
+    return None
 
 
 def elliptical_distance(dx: float, dy: float, sx: float, sy: float) -> float:

@@ -1,0 +1,198 @@
+"""Reactive humans never wait for ever beside a waiting robot, and are not herded (issue 25).
+
+Four of the reference's false alarms in the issue's search protocol were a human and the
+correct robot waiting for each other until the goal aborted:
+
+* a social human whose loop runs through the robot's goal, held back by the robot waiting
+  next to the goal, tried its other side, was held back there too (a wall) and stood 0.35 m
+  from the goal for 30 s (scenes/waits_on_goal);
+* a yielding human giving way stepped aside into the wall beside the robot, stood there,
+  came back, yielded again, stepped into the wall again (scenes/steps_into_wall);
+* a social human the robot drove at retreated ahead of it 3 m off its path, through a
+  doorway, and stood for good against the wall between it and its path, beside the goal
+  (scenes/herded).
+
+Now a human held back for its patience on both sides (social), or with no room to step
+aside (yielding), turns back along its path for a while. Each scene runs the real simulator
+with the reference, once with the model before (``turn_back_time`` 0: the same runs as
+before the change, byte for byte) and once with today's.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rei.lang.room.spline import CatmullRom
+from rei.runtime.animator.animator import Animated, Animator, Reactions
+from rei.runtime.animator.reactive import SocialForce, YieldRule, room_aside, way_aside
+from rei.runtime.collector import SampleList, load_monitor_config
+from rei.runtime.run import RunConfig, RunRecord, generate_world, run_mission
+from rei.runtime.world.manifest import load_manifest
+
+SCENES = Path(__file__).parent / "scenes"
+OLD_SOCIAL = SocialForce(turn_back_time=0.0)
+OLD_YIELDING = YieldRule(turn_back_time=0.0, aside_room=0.0)
+NEAR = 1.5
+"""m between centres within which a human standing still keeps a waiting robot waiting."""
+
+
+def longest_wait(times: np.ndarray, walker: np.ndarray, robot: np.ndarray) -> float:
+    """The longest time (s) the walker stayed within 0.3 m of one place with the robot
+    within ``NEAR`` of it: a human and a robot waiting for each other."""
+    best, start = 0.0, 0
+    for i in range(len(times)):
+        moved = np.hypot(*(walker[i] - walker[start])) > 0.3
+        if moved or np.hypot(*(walker[i] - robot[i])) > NEAR:
+            start = i
+        best = max(best, float(times[i] - times[start]))
+    return best
+
+
+def _scene(name: str, seed: int, folder: Path, monkeypatch: pytest.MonkeyPatch,
+           reactions: Reactions) -> tuple[RunRecord, np.ndarray, np.ndarray, np.ndarray]:
+    """The scene's whole mission with the reference, the search's run seed and ``reactions``
+    as the humans' model; the record, the times, the walker's and the robot's (x, y)."""
+    from rei.runtime.animator import animator as paths  # noqa: PLC0415
+    from rei.runtime.robot.select import make_controller  # noqa: PLC0415
+
+    monkeypatch.setattr(paths, "Reactions", lambda: reactions)
+    mission = generate_world(SCENES / f"{name}.mission", folder / "world")
+    manifest = load_manifest(folder / "world")
+    samples = SampleList()
+    record = run_mission(mission, manifest, load_monitor_config(folder / "world"),
+                         make_controller("reference"), [samples],
+                         RunConfig(seed=seed, watchdog=None))
+    walker = len(manifest.walls) + [b.name for b in manifest.objects].index("walker_1")
+    got = samples.samples
+    return (record, np.array([s.time for s in got]),
+            np.array([s.poses[walker, :2] for s in got]),
+            np.array([s.robot_pose[:2] for s in got]))
+
+
+# scene, the search's run seed, the model before: a social walker held back on both sides
+# (a wall, the waiting robot) stood 0.3-0.4 m from goal_2 until the goal aborted; a yielding
+# one giving way stepped into the wall beside the robot, came back and did it again.
+WAITED = [("waits_on_goal", 1179214411, Reactions(social=OLD_SOCIAL)),
+          ("steps_into_wall", 1193251556, Reactions(yielding=OLD_YIELDING))]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("scene", "seed", "before"), WAITED, ids=[w[0] for w in WAITED])
+def test_a_human_and_the_robot_no_longer_wait_for_each_other(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, scene: str, seed: int,
+        before: Reactions) -> None:
+    """Before: they waited for each other for more than 25 s and the goal aborted. Now the
+    human turns back along its loop (held back on both sides; no room aside) and the robot
+    reaches every goal, touching no one."""
+    old, t, walker, robot = _scene(scene, seed, tmp_path / "old", monkeypatch, before)
+    assert old.outcome == "failed"
+    assert longest_wait(t, walker, robot) > 25.0
+    new, t, walker, robot = _scene(scene, seed, tmp_path / "new", monkeypatch, Reactions())
+    assert new.outcome == "completed", new.reason
+    assert new.measurements["collisions"] == 0
+    assert longest_wait(t, walker, robot) < 10.0
+
+
+@pytest.mark.slow
+def test_a_herded_social_human_turns_back_and_stays_in_its_room(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Its loop is x = 3 in the east room; the doorway to the west room is the gap at
+    x = 1. Before, the robot driving at it herded it through the doorway to x = 0.25,
+    where it stood for good against the wall between it and its path, beside goal_1. Now,
+    held back on both sides as it retreats, it turns back and walks off round the robot: it
+    stays in its own room and the robot reaches every goal."""
+    old, t, walker, robot = _scene("herded", 1058734826, tmp_path / "old", monkeypatch,
+                                   Reactions(social=OLD_SOCIAL))
+    assert old.outcome == "failed"
+    assert walker[:, 0].min() < 0.5
+    assert longest_wait(t, walker, robot) > 25.0
+    new, t, walker, robot = _scene("herded", 1058734826, tmp_path / "new", monkeypatch,
+                                   Reactions())
+    assert new.outcome == "completed", new.reason
+    assert walker[:, 0].min() > 1.5
+    assert longest_wait(t, walker, robot) < 10.0
+
+
+@pytest.mark.slow
+def test_turning_back_is_the_same_bit_for_bit_with_the_same_seed(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    a = _scene("waits_on_goal", 1179214411, tmp_path / "a", monkeypatch, Reactions())
+    b = _scene("waits_on_goal", 1179214411, tmp_path / "b", monkeypatch, Reactions())
+    assert a[0].measurements == b[0].measurements
+    assert a[2].tobytes() == b[2].tobytes() and a[3].tobytes() == b[3].tobytes()
+
+
+# The model alone: a one-tile passage along x (walls fill |y| >= 0.5), a robot standing in it
+# at x = 3 facing the human, who walks +x from the origin; the clamp on y is the walls'
+# contact, as in the simulator. The real Animator drives the human at the control rate.
+PASSAGE_WALLS = np.array([[5.0, 1.0, 0.0, 10.0, 0.5], [5.0, -1.0, 0.0, 10.0, 0.5]])
+ROBOT = (3.0, 0.0, math.pi)
+ROBOT_RADIUS = 0.2077
+
+
+def _passage(behaviour: str, reactions: Reactions, seconds: float = 60.0,
+             loop: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """The human's times and (x, y) at every control tick."""
+    spline = CatmullRom(np.array([0.0, 10.0]), np.array([[0.0, 0.0], [8.0, 0.0]]), loop)
+    paths = Animator([Animated(1, spline, True, behaviour)], physics_rate=10.0,
+                     robot_radius=ROBOT_RADIUS, reactions=reactions, walls=PASSAGE_WALLS)
+    x, y, track = 0.0, 0.0, []
+    for step in range(int(seconds * 10)):
+        paths.correct(step, [(x, y, 0.0)], ROBOT, (0.0, 0.0, 0.0))
+        _, vx, vy, _ = paths.commands(step)[0]
+        x, y = x + vx / 10.0, min(max(y + vy / 10.0, -0.25), 0.25)
+        # the robot's footprint is a body too: the human never passes through it
+        gap = math.hypot(x - ROBOT[0], y - ROBOT[1]) - 0.25 - ROBOT_RADIUS
+        assert gap > -0.01, (step, x, y)
+        track.append((x, y))
+    times = np.arange(len(track)) / 10.0
+    return times, np.array(track)
+
+
+def test_in_a_passage_a_social_human_turns_back_from_a_standing_robot() -> None:
+    robot = np.tile(ROBOT[:2], (600, 1))
+    times, track = _passage("social", Reactions(social=OLD_SOCIAL))
+    # the old model: held back on both sides, it stands in front of the robot for good
+    assert track[200:, 0].min() > 3.0 - 2.0
+    assert longest_wait(times, track, robot) > 40.0
+    times, track = _passage("social", Reactions())
+    # now: it turns back along its path, well away from the robot, and comes again
+    first = int(np.argmax(track[:, 0] > 3.0 - 1.0))
+    away = first + int(np.argmax(track[first:, 0] < 3.0 - 2.5))
+    assert track[away, 0] < 3.0 - 2.5
+    assert track[away:, 0].max() > 3.0 - 1.0
+    assert longest_wait(times, track, robot) < 2 * SocialForce().patience + 2.0
+    # an open path: its target never runs back past the start (a social human's velocity
+    # relaxes to it, so it may overshoot by a step)
+    assert track[:, 0].min() > -0.3
+
+
+def test_a_turned_back_human_on_a_loop_walks_it_backwards() -> None:
+    """On a loop (here out and back along the passage) it walks the loop the other way for
+    its turn_back_time, then forwards again."""
+    robot = np.tile(ROBOT[:2], (600, 1))
+    times, track = _passage("social", Reactions(social=OLD_SOCIAL), loop=True)
+    assert longest_wait(times, track, robot) > 40.0
+    times, track = _passage("social", Reactions(), loop=True)
+    assert longest_wait(times, track, robot) < 2 * SocialForce().patience + 2.0
+    assert track[200:, 0].min() < 3.0 - 2.5
+
+
+def test_room_aside_and_way_aside() -> None:
+    # in the passage there is no room to step across it; in the open there is
+    assert not room_aside(PASSAGE_WALLS, 2.0, 0.0, 0.25, (0.0, -1.0), 0.5)
+    hall = PASSAGE_WALLS * np.array([1, 3, 1, 1, 1])
+    assert room_aside(hall, 2.0, 0.0, 0.25, (0.0, -1.0), 0.5)
+    # giving way: across where it has room, else straight away from the robot (back along
+    # the passage), else up to 90 degrees off that; None in a dead end
+    across, away = (0.0, -1.0), (-1.0, 0.0)
+    assert way_aside(hall, 2.0, 0.0, 0.25, across, away, 0.5) == across
+    assert way_aside(PASSAGE_WALLS, 2.0, 0.0, 0.25, across, away, 0.5) == away
+    end = np.vstack([PASSAGE_WALLS, [[1.0, 0.0, 0.0, 0.5, 0.5]]])  # a wall behind it too
+    assert way_aside(end, 2.0, 0.0, 0.25, across, away, 0.5) is None
+    # with room 0 (the old model) it steps across without looking
+    assert way_aside(PASSAGE_WALLS, 2.0, 0.0, 0.25, across, away, 0.0) == across
