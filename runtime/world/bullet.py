@@ -4,7 +4,8 @@ Headless (DIRECT mode), one physics client per ``BulletWorld`` so two worlds can
 process. The plane is simulated without gravity: every movable body is driven by planar
 velocities (robot: its differential-drive command; animated bodies: the animator), while
 contacts between them stay real; the bodies that move besides the robot get an inertia about
-their horizontal axes that no contact can turn (``keep_upright``), so none of them tips. This module must never decide what the robot does or judge the run.
+their horizontal axes that no contact can turn (``keep_upright``), so none of them tips.
+This module must never decide what the robot does or judge the run.
 """
 
 from __future__ import annotations

@@ -11,16 +11,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from pathlib import Path
 
 import pybullet as p
 import pytest
 
+from rei.catalogue import Box
 from rei.generators.concrete.build import load_concrete_mission
 from rei.generators.output import write_tree
 from rei.generators.targets import GenerationRequest, get_target
 from rei.runtime.world import bullet, load_manifest
-from rei.catalogue import Box
 from rei.runtime.world.manifest import BodySpec, WorldManifest
 from tests.conftest import EXAMPLES
 
