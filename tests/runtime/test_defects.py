@@ -140,6 +140,21 @@ def test_a_wall_the_map_explains_does_not_slow_the_reference() -> None:
     assert max(c.linear for c in drive(nav, 5, pose, wall)) > SLOW_ZONE_SPEED + 0.05
 
 
+def test_a_person_against_a_wall_slows_the_reference_and_the_wall_alone_does_not() -> None:
+    """Issue 25 (room_0127): points 0.1 m in front of the south wall are within
+    UNMAPPED_BEYOND of it, but the map leaves their beams free to the wall: a person stands
+    there. The wall itself, read up to 3 cm short (three times the laser's noise), is the map."""
+    pose = (1.0, 0.6, 0.0)  # the south wall's face 1.1 m to the robot's right
+    right = [-math.pi / 2 + k * 2 * math.pi / BEAMS for k in (-1, 0, 1)]
+    person = {b: (1.1 - 0.1) / math.cos(b + math.pi / 2) for b in right}
+    wall = {b: (1.1 - 0.03) / math.cos(b + math.pi / 2) for b in right}
+    goal = NavGoal("east", 3.5, 0.6, None, 0.3, 60.0)
+    near = max(c.linear for c in drive(started(ReferenceNavigator(), goal), 5, pose, person))
+    alone = max(c.linear for c in drive(started(ReferenceNavigator(), goal), 5, pose, wall))
+    assert 0.0 < near <= SLOW_ZONE_SPEED + 1e-9
+    assert alone > SLOW_ZONE_SPEED + 0.05
+
+
 # -- perception ----------------------------------------------------------------------------
 
 def test_ignores_humans_drops_unmapped_points_only() -> None:

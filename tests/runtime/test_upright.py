@@ -84,7 +84,7 @@ def _face(manifest: WorldManifest) -> float:
     """The x of a person's centre touching the desk's +x side."""
     desk = _desk(manifest)
     assert isinstance(desk.footprint, Box)
-    return desk.x + desk.footprint.size_x / 2 + 0.25
+    return float(desk.x + desk.footprint.size_x / 2 + 0.25)
 
 
 def test_a_person_walking_into_a_table_stays_upright_and_outside_it(
