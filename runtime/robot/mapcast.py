@@ -23,11 +23,13 @@ from rei.runtime.sensors.laser import ray_boxes, ray_circles
 class MapCaster:
     """Ray casting against the boxes and cylinders of a static map (immutable once built)."""
 
-    def __init__(self, obstacles: Sequence[MapObstacle]) -> None:
-        self._boxes = np.array([(o.x, o.y, o.yaw, o.size_x / 2, o.size_y / 2)
+    def __init__(self, obstacles: Sequence[MapObstacle], grow: float = 0.0) -> None:
+        """``grow``: metres every obstacle is cast as larger, so that a beam which grazes a
+        corner exactly still hits it whatever the rounding of its direction."""
+        self._boxes = np.array([(o.x, o.y, o.yaw, o.size_x / 2 + grow, o.size_y / 2 + grow)
                                 for o in obstacles if o.shape != "cylinder"],
                                dtype=float).reshape(-1, 5)
-        self._circles = np.array([(o.x, o.y, o.radius) for o in obstacles
+        self._circles = np.array([(o.x, o.y, o.radius + grow) for o in obstacles
                                   if o.shape == "cylinder"], dtype=float).reshape(-1, 3)
         self._box_reach = np.hypot(self._boxes[:, 3], self._boxes[:, 4])
 

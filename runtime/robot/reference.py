@@ -108,6 +108,9 @@ EXACT_ALLOWANCE = 0.02
 the drive's lag), as the swept-distance grid's rounding used to by chance."""
 MAP_FIT_RES = 0.05
 """Metres per cell of the fine distance-to-map grid the laser points are checked against."""
+SHADOW_GRAZE = 0.002
+"""Metres the map is cast as larger for that comparison: a point on a table's corner, its
+beam grazing the corner, was otherwise read as 0.3 m in front of the wall behind it."""
 ODOMETRY_KEPT = 20
 """Steps of odometry kept to find the pose a scan was taken from (2 s at 10 Hz)."""
 SHADOW_TOLERANCE = 0.05
@@ -227,7 +230,7 @@ class ReferenceNavigator:
         xs = x0 + (np.arange(nx_) + 0.5) * MAP_FIT_RES
         ys = y0 + (np.arange(ny_) + 0.5) * MAP_FIT_RES
         self._fit = clearance_field(xs, ys, ctx, UNMAPPED_BEYOND + 0.05)
-        self._caster = MapCaster(ctx.obstacles)
+        self._caster = MapCaster(ctx.obstacles, grow=SHADOW_GRAZE)
 
     def _unmapped(self, points: np.ndarray, pose: tuple[float, float, float]) -> np.ndarray:
         """Which laser points (robot frame) the static map does not explain: farther than

@@ -60,3 +60,16 @@ def test_a_beam_from_inside_an_obstacle_is_stopped_at_once_and_nothing_beyond_re
     assert caster.ranges((0.0, 1.5), east, 2.0)[0] == 0.0  # inside the pillar
     assert math.isinf(caster.ranges((-3.0, 0.0), east, 1.0)[0])  # the wall is 1.5 m away
     assert caster.ranges((-3.0, 0.0), east, 2.0)[0] == pytest.approx(1.5)
+
+
+def test_a_beam_grazing_a_corner_hits_it_when_the_map_is_grown() -> None:
+    """The table of tests/runtime/test_table_corner: the beam from the origin to its corner
+    (0.02, 0.198) passed it by the rounding of its direction, and read the wall 0.3 m behind."""
+    table = MapObstacle("table", "static", -0.19, 0.324, 0.0, "box", 0.42, 0.252)
+    wall = MapObstacle("wall", "wall", 0.0, 1.0, 0.0, "box", 3.0, 1.0)
+    corner = np.array([0.02, 0.198])
+    beam = (corner / np.hypot(*corner))[None, :]
+    grown = MapCaster((table, wall), grow=0.002).ranges((0.0, 0.0), beam, 3.0)[0]
+    assert grown == pytest.approx(float(np.hypot(*corner)), abs=0.02)
+    # The exact map misses the corner (the check above can fail).
+    assert MapCaster((table, wall)).ranges((0.0, 0.0), beam, 3.0)[0] > 0.45
