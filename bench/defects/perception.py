@@ -31,7 +31,7 @@ class IgnoresHumans(ReferenceNavigator):
 
     def _laser_points(self, observation: Observation) -> np.ndarray:
         points = super()._laser_points(observation)
-        kept: np.ndarray = points[~self._unmapped(points, observation.odom_pose)]
+        kept: np.ndarray = points[~self._unmapped(points, self._scan_pose)]
         return kept
 
 

@@ -37,6 +37,7 @@ import numpy as np
 
 from rei.runtime.messages import LaserScan
 from rei.runtime.robot.gridplan import GridGraph
+from rei.runtime.robot.mapcast import MapCaster
 from rei.runtime.robot.protocol import (
     STOP,
     ControllerContext,
@@ -107,6 +108,16 @@ EXACT_ALLOWANCE = 0.02
 the drive's lag), as the swept-distance grid's rounding used to by chance."""
 MAP_FIT_RES = 0.05
 """Metres per cell of the fine distance-to-map grid the laser points are checked against."""
+SHADOW_GRAZE = 0.002
+"""Metres the map is cast as larger for that comparison: a point on a table's corner, its
+beam grazing the corner, was otherwise read as 0.3 m in front of the wall behind it."""
+ODOMETRY_KEPT = 20
+"""Steps of odometry kept to find the pose a scan was taken from (2 s at 10 Hz)."""
+SHADOW_TOLERANCE = 0.05
+"""Metres a beam may end short of the map obstacle it points at and still be that obstacle
+(five times the laser's 1 cm range noise). A person standing against a wall or wedged by a
+pillar is within ``UNMAPPED_BEYOND`` of it, and was taken for the map: the robot drove on at
+full speed 1 m from them (issue 25: REACTION_TIME in a 1,000-run campaign's room_0127)."""
 
 
 def clearance_field(xs: np.ndarray, ys: np.ndarray, ctx: ControllerContext,
@@ -182,6 +193,10 @@ class ReferenceNavigator:
         self._wmax = context.drive.max_angular
         self._points_of: LaserScan | None = None
         self._points = np.zeros((0, 2))
+        self._odometry: list[tuple[float, tuple[float, float, float]]] = []
+        """(time, odometry pose) of the last ``ODOMETRY_KEPT`` steps."""
+        self._scan_pose = context.start_pose
+        """The odometry pose the current scan was taken from (see ``_pose_at``)."""
         # Per-scan results, keyed by the identity of the scan's points (see _laser_points).
         self._clearance_of: np.ndarray | None = None
         self._clearance = np.zeros(0)
@@ -215,9 +230,12 @@ class ReferenceNavigator:
         xs = x0 + (np.arange(nx_) + 0.5) * MAP_FIT_RES
         ys = y0 + (np.arange(ny_) + 0.5) * MAP_FIT_RES
         self._fit = clearance_field(xs, ys, ctx, UNMAPPED_BEYOND + 0.05)
+        self._caster = MapCaster(ctx.obstacles, grow=SHADOW_GRAZE)
 
     def _unmapped(self, points: np.ndarray, pose: tuple[float, float, float]) -> np.ndarray:
-        """Which laser points (robot frame) lie farther than ``UNMAPPED_BEYOND`` from the map."""
+        """Which laser points (robot frame) the static map does not explain: farther than
+        ``UNMAPPED_BEYOND`` from it, or nearer, but where the map leaves the beam free for
+        more than ``SHADOW_TOLERANCE`` beyond them (something in front of the map)."""
         if not len(points):
             return np.zeros(0, dtype=bool)
         x, y, yaw = pose
@@ -228,6 +246,18 @@ class ReferenceNavigator:
         i = np.clip(np.floor((wx - x0) / MAP_FIT_RES).astype(np.int64), 0, self._fit.shape[0] - 1)
         j = np.clip(np.floor((wy - y0) / MAP_FIT_RES).astype(np.int64), 0, self._fit.shape[1] - 1)
         far: np.ndarray = self._fit[i, j] > UNMAPPED_BEYOND
+        explained = np.nonzero(~far)[0]
+        if len(explained):
+            # Near the map, but is it the map the beam stopped at? A person standing against
+            # a wall or a pillar is within UNMAPPED_BEYOND of it, on the robot's side.
+            laser = self._ctx.laser  # type: ignore[union-attr]
+            mx = x + c * laser.mount_x - s * laser.mount_y
+            my = y + s * laser.mount_x + c * laser.mount_y
+            beams = np.stack((wx[explained] - mx, wy[explained] - my), axis=1)
+            measured = np.hypot(beams[:, 0], beams[:, 1])
+            expected = self._caster.ranges((mx, my), beams / measured[:, None].clip(1e-9),
+                                           float(measured.max()) + SHADOW_TOLERANCE)
+            far[explained] = expected > measured + SHADOW_TOLERANCE
         return far
 
     def _in_slow_zone(self, pose: tuple[float, float, float], points: np.ndarray) -> bool:
@@ -362,8 +392,11 @@ class ReferenceNavigator:
     _pose: tuple[float, float, float] | None = None
 
     def step(self, observation: Observation) -> VelocityCommand:
+        self._odometry.append((observation.time, observation.odom_pose))
+        del self._odometry[:-ODOMETRY_KEPT]
         cmd = self._navigate(observation)
-        if self._in_slow_zone(observation.odom_pose, self._laser_points(observation)):
+        points = self._laser_points(observation)
+        if self._in_slow_zone(self._scan_pose, points):
             self._slow_until = observation.time + SLOW_ZONE_MEMORY
         if abs(cmd.linear) > SLOW_ZONE_SPEED and observation.time < self._slow_until:
             # Scaling both keeps the arc the local planner checked against the laser.
@@ -484,7 +517,7 @@ class ReferenceNavigator:
         if abs(err) > ALIGN_FIRST:
             w = math.copysign(0.6 * self._wmax, err)
             k = int(np.argmin(np.abs(self._cmds[:, 0]) + np.abs(self._cmds[:, 1] - w)))
-            if self._rollout_clearance(points, pose)[k] >= margin:
+            if self._rollout_clearance(points, self._scan_pose)[k] >= margin:
                 return VelocityCommand(0.0, float(self._cmds[k, 1]))
         self._align_first = False
         return None
@@ -547,8 +580,29 @@ class ReferenceNavigator:
         keep = (r < min(SENSE_RADIUS, scan.range_max - 1e-6)) & (r >= scan.range_min)
         mx, my = self._ctx.laser.mount_x, self._ctx.laser.mount_y  # type: ignore[union-attr]
         self._points_of = scan
+        self._scan_pose = self._pose_at(observation.scan_time, observation.odom_pose)
         self._points = np.stack((mx + r[keep] * cos[keep], my + r[keep] * sin[keep]), axis=1)
         return self._points
+
+    def _pose_at(self, time: float | None,
+                 now: tuple[float, float, float]) -> tuple[float, float, float]:
+        """The odometry pose at ``time`` (a scan's), interpolated between the steps around
+        it; ``now`` when it is unknown or later than the last step, the oldest kept pose
+        when it is older. A scan is up to a laser period old when it is acted on: read from
+        the pose of the step, a wall 0.26 m/s x 0.2 s behind the robot came 5 cm nearer than
+        the map, beyond ``SHADOW_TOLERANCE``, and seemed a person (a stack transforms a scan
+        with the pose at its own time stamp)."""
+        history = self._odometry
+        if time is None or not history or time >= history[-1][0]:
+            return now
+        if time <= history[0][0]:
+            return history[0][1]
+        k = next(i for i, (t, _) in enumerate(history) if t >= time)
+        (t0, p0), (t1, p1) = history[k - 1], history[k]
+        f = (time - t0) / (t1 - t0)
+        dyaw = math.remainder(p1[2] - p0[2], math.tau)
+        return (p0[0] + f * (p1[0] - p0[0]), p0[1] + f * (p1[1] - p0[1]),
+                math.remainder(p0[2] + f * dyaw, math.tau))
 
     def _choose(self, pose: tuple[float, float, float], points: np.ndarray,
                 dist: float, margin: float = MARGIN, commit: float = 0.0
@@ -560,7 +614,7 @@ class ReferenceNavigator:
         c, s = math.cos(yaw), math.sin(yaw)
         tx = c * (target[0] - x) + s * (target[1] - y)
         ty = -s * (target[0] - x) + c * (target[1] - y)
-        clearance = self._rollout_clearance(points, pose)
+        clearance = self._rollout_clearance(points, self._scan_pose)
         hit = clearance < margin
         clearance = np.clip(clearance, 0.0, 0.5)
         v, w = self._cmds[:, 0], self._cmds[:, 1]

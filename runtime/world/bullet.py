@@ -2,9 +2,10 @@
 
 Headless (DIRECT mode), one physics client per ``BulletWorld`` so two worlds can share a
 process. The plane is simulated without gravity: every movable body is driven by planar
-velocities (robot: its differential-drive command; animated bodies: the animator), which
-keeps bodies upright after contacts without holding them by force, while contacts between
-them stay real. This module must never decide what the robot does or judge the run.
+velocities (robot: its differential-drive command; animated bodies: the animator), while
+contacts between them stay real; the bodies that move besides the robot get an inertia about
+their horizontal axes that no contact can turn (``keep_upright``), so none of them tips.
+This module must never decide what the robot does or judge the run.
 """
 
 from __future__ import annotations
@@ -43,6 +44,20 @@ p = _import_pybullet()
 
 CONTACT_DISTANCE = 1e-3
 """Metres: a contact point of pybullet at most this far apart is a touch."""
+UPRIGHT_INERTIA = 1e9
+"""kg m^2 about a moving body's horizontal axes: no contact can tip it over."""
+
+
+def keep_upright(bid: int, client: int) -> None:
+    """Give body ``bid`` an inertia about its horizontal axes no contact can turn (its
+    inertia about the vertical axis, and so its turning in the plane, is kept)."""
+    info = p.getDynamicsInfo(bid, -1, physicsClientId=client)
+    # The mass is passed again: given the inertia alone, pybullet took the mass from
+    # uninitialised memory (1e189 kg in one run, 1e241 kg in another), and a body that heavy
+    # walked through tables, shoved the robot like a bulldozer, and was not reproducible.
+    p.changeDynamics(bid, -1, mass=info[0],
+                     localInertiaDiagonal=(UPRIGHT_INERTIA, UPRIGHT_INERTIA, info[2][2]),
+                     physicsClientId=client)
 
 
 def _quat(yaw: float) -> tuple[float, float, float, float]:
@@ -65,6 +80,14 @@ class BulletWorld:
             self.wall_ids = [self._load(b) for b in manifest.walls]
             self.object_ids = [self._load(b) for b in manifest.objects]
             self.robot_id = self._load(manifest.robot)
+            # Nothing topples in REI's planar world. Velocities are set in the plane, but a
+            # contact's impulse within a step still turned a person about a horizontal axis,
+            # and the tilt added up: a social walker brushing a table leaned 37 degrees and
+            # the top of the leaning cylinder touched a robot 0.3 m from its footprint
+            # (issue 25, a 1,000-run campaign's room_0337; wp-walls saw 23 degrees).
+            for bid, body in zip(self.object_ids, manifest.objects, strict=True):
+                if not body.fixed:
+                    keep_upright(bid, self.client)
         except Exception:
             p.disconnect(physicsClientId=self.client)
             raise

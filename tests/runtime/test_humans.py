@@ -66,8 +66,11 @@ def _run(folder: Path, behaviour: str | None, seed: int = 0, vary: bool = False,
 
 
 def test_a_scripted_human_walks_into_a_robot_standing_in_its_way(tmp_path: Path) -> None:
-    record, _ = _run(tmp_path, None)
-    assert record.measurements["collided_with"] == ["walker"]
+    record, path = _run(tmp_path, None)
+    # It shoves the robot ahead of it to the corridor's end wall (x = 4.5): an upright
+    # 75 kg person does not tip over the robot and slide past it (issue 25).
+    assert record.measurements["collided_with"] == ["g_2_10", "walker"]
+    assert path[-1, 0] == pytest.approx(4.5 - 0.25 - 0.281, abs=0.02)
     assert record.measurements["variations"]["walker"]["behaviour"] == "scripted"
 
 
