@@ -40,7 +40,7 @@ def _graph(rows: list[str], blocked: str = "") -> tuple[FloorGraph, dict[str, tu
             if ch != "#":
                 names[ch] = len(centres)
                 centres.append((float(c), float(-r)))
-    floors = FloorMap(np.array(centres), 1.0)
+    floors = FloorMap(np.array(centres, dtype=float).reshape(-1, 2), 1.0)  # (0, 2): no floor
     mask = np.zeros(len(centres), dtype=bool)
     for name in blocked:
         mask[names[name]] = True
