@@ -7,7 +7,11 @@ never hides a missing install step.
 
 Parallel workers are separate processes, so tests share nothing but the file system and the
 machine: write under ``tmp_path`` (each worker has its own), bind port 0 on 127.0.0.1, never a
-fixed path or port. A test file runs on one worker (`--dist loadfile`), so a module-scoped
+fixed path or port. In CI (CI=true, or HYPOTHESIS_PROFILE=ci as .ci/run sets) Hypothesis's
+property tests draw the same examples on every run (the `ci` profile, derandomized): a CI
+landing cannot fail on a new random draw. A developer's run still draws afresh each time,
+which is where new counterexamples come from.
+A test file runs on one worker (`--dist loadfile`), so a module-scoped
 fixture (an expensive run shared by the file's tests) is still made once. (xdist's finer
 `--dist loadgroup` would split the files that share nothing, but pytest 9.2 ignores the group
 suffix xdist 3.8 writes into node ids, so its groups are not kept together.)
@@ -23,6 +27,11 @@ from collections.abc import Callable, Generator
 from pathlib import Path
 
 import pytest
+from hypothesis import settings
+
+settings.register_profile("ci", derandomize=True, print_blob=True)
+if os.environ.get("CI") or os.environ.get("HYPOTHESIS_PROFILE") == "ci":
+    settings.load_profile("ci")
 
 REPO = Path(__file__).resolve().parent.parent
 EXAMPLES = REPO / "examples"
