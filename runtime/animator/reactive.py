@@ -39,7 +39,11 @@ as often as a human-blind one; reactive humans make the test fair.
   speed over ``reference_speed`` (its driving force grows with that speed, so a fixed
   strength let a human at 1.3 m/s settle against the robot's footprint), and a human never
   closes the gap to another body faster than (gap - clearance_margin) / clearance_time
-  (``keep_clear``): it stops short of the robot instead of pressing into it.
+  (``keep_clear``): it stops short of the robot instead of pressing into it. Nor does it
+  walk into a wall or fixed object it touches (``wall_normals``), and both limits hold
+  together: keeping clear of a robot up and ahead of a human pressed against a wall turned
+  its velocity into the wall, the contact took that part away, and the rest slid it along
+  the wall into the robot (issue 25, with humans kept upright).
   Walls are not part of the force: the spline keeps clear of them, and a pushed human
   meets them as real contacts. So a human that meets the robot with a wall on its right
   would turn into the wall and retreat ahead of the robot for as long as it comes on (a
