@@ -47,6 +47,7 @@ from rei.runtime.animator.reactive import (
     room_aside,
     social_acceleration,
     speed_share,
+    wall_normals,
     way_aside,
 )
 from rei.runtime.animator.variation import (
@@ -450,7 +451,12 @@ class Animator:
         ax, ay = social_acceleration(model, pose[0], pose[1], vx, vy, item.radius, desired,
                                      others, self._path_speed[k], self._side[k])
         vx, vy = limit_speed(vx + ax * dt, vy + ay * dt, v_max)
-        vx, vy = keep_clear(model, pose[0], pose[1], vx, vy, item.radius, others)
+        # What it touches of walls and fixed objects: a velocity into one is not kept but
+        # turned along it by the contact, and must not be turned into the robot.
+        touching = (wall_normals(self.walls, pose[0], pose[1],
+                                 item.radius + model.clearance_margin)
+                    if model.wall_stop else [])
+        vx, vy = keep_clear(model, pose[0], pose[1], vx, vy, item.radius, others, touching)
         # Held back (a wall on the side it turns to, the robot ahead): try the other side;
         # held back on that one too, turn back along the path.
         held = held_back(model, vx, vy, desired)

@@ -39,7 +39,11 @@ as often as a human-blind one; reactive humans make the test fair.
   speed over ``reference_speed`` (its driving force grows with that speed, so a fixed
   strength let a human at 1.3 m/s settle against the robot's footprint), and a human never
   closes the gap to another body faster than (gap - clearance_margin) / clearance_time
-  (``keep_clear``): it stops short of the robot instead of pressing into it.
+  (``keep_clear``): it stops short of the robot instead of pressing into it. Nor does it
+  walk into a wall or fixed object it touches (``wall_normals``), and both limits hold
+  together: keeping clear of a robot up and ahead of a human pressed against a wall turned
+  its velocity into the wall, the contact took that part away, and the rest slid it along
+  the wall into the robot (issue 25, with humans kept upright).
   Walls are not part of the force: the spline keeps clear of them, and a pushed human
   meets them as real contacts. So a human that meets the robot with a wall on its right
   would turn into the wall and retreat ahead of the robot for as long as it comes on (a
@@ -76,11 +80,16 @@ frozen records. This module must never import the simulator or judge the robot.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 Vec = tuple[float, float]
+
+KEEP_CLEAR_PASSES = 8
+"""Rounds of projections ``keep_clear`` makes before it gives up and stands the human (two
+limits at an angle meet within a few)."""
 
 
 @dataclass(frozen=True)
@@ -152,6 +161,10 @@ class SocialForce:
     turn_back_time: float = 6.0
     """s of its path a human walks backwards after it was held back on both sides for its
     ``patience`` each, before it turns round again (0: it never turns back)."""
+    wall_stop: bool = True
+    """Whether a human's velocity into a wall or fixed object it touches (within
+    ``clearance_margin``) is dropped before it is kept clear of the others (``keep_clear``);
+    False: the model before issue 25's walkers that slid along a wall into the robot."""
     cutoff: float = 3.0
     """m between footprints beyond which another agent exerts no force (cheap, and smooth
     enough: A exp(-3/0.5) is 0.015 m/s^2)."""
@@ -247,22 +260,36 @@ def social_acceleration(model: SocialForce, x: float, y: float, vx: float, vy: f
 
 
 def keep_clear(model: SocialForce, x: float, y: float, vx: float, vy: float, radius: float,
-               others: list[Agent]) -> Vec:
+               others: list[Agent], touching: Sequence[Vec] = ()) -> Vec:
     """The velocity (vx, vy) with its component towards each other body limited to
-    (gap - clearance_margin) / clearance_time (none at all closer than the margin); the
-    component across is kept, so the human slides round rather than stands."""
+    (gap - clearance_margin) / clearance_time (none at all closer than the margin) and none
+    into a wall it is ``touching`` (unit vectors towards each, ``wall_normals``); the
+    component across is kept, so the human slides round rather than stands.
+
+    The limits hold together: the wall would take away the part into it anyway, and what
+    it left of a velocity turned off the robot into the wall slid along the wall into the
+    robot (issue 25: a walker pinned against a wall beside a passing robot). They are met by
+    projecting onto each in turn until all hold; a human they leave no way out stands."""
+    limits = [(n, 0.0) for n in touching]
     for other in others:
         dx, dy = other.x - x, other.y - y
         dist = math.hypot(dx, dy)
         if dist < 1e-9:
             continue
-        nx, ny = dx / dist, dy / dist
-        closing = vx * nx + vy * ny
         gap = dist - radius - other.radius - model.clearance_margin
-        allowed = max(gap, 0.0) / model.clearance_time
-        if closing > allowed:
-            vx -= (closing - allowed) * nx
-            vy -= (closing - allowed) * ny
+        limits.append(((dx / dist, dy / dist), max(gap, 0.0) / model.clearance_time))
+    for _ in range(KEEP_CLEAR_PASSES):
+        done = True
+        for (nx, ny), allowed in limits:
+            closing = vx * nx + vy * ny
+            if closing > allowed:
+                vx -= (closing - allowed) * nx
+                vy -= (closing - allowed) * ny
+                done = done and closing - allowed < 1e-12
+        if done:
+            return vx, vy
+    if any(vx * nx + vy * ny > allowed + 1e-9 for (nx, ny), allowed in limits):
+        return 0.0, 0.0
     return vx, vy
 
 
@@ -290,6 +317,23 @@ def wall_distance(walls: np.ndarray, x: float, y: float) -> float:
     qx = np.abs(c * dx + s * dy) - walls[:, 3]
     qy = np.abs(-s * dx + c * dy) - walls[:, 4]
     return float(np.hypot(np.maximum(qx, 0.0), np.maximum(qy, 0.0)).min())
+
+
+def wall_normals(walls: np.ndarray, x: float, y: float, reach: float) -> list[Vec]:
+    """Unit vectors from (x, y) towards the nearest point of each of the boxes ``walls`` (as
+    in ``wall_distance``) within ``reach`` of it: the walls a human there touches."""
+    if not len(walls):
+        return []
+    c, s = np.cos(walls[:, 2]), np.sin(walls[:, 2])
+    dx, dy = x - walls[:, 0], y - walls[:, 1]
+    lx, ly = c * dx + s * dy, -s * dx + c * dy
+    # From the point to the box's nearest point, in the box's frame, then in the world's.
+    ex = np.clip(lx, -walls[:, 3], walls[:, 3]) - lx
+    ey = np.clip(ly, -walls[:, 4], walls[:, 4]) - ly
+    dist = np.hypot(ex, ey)
+    near = (dist <= reach) & (dist > 1e-9)
+    wx, wy = c * ex - s * ey, s * ex + c * ey
+    return [(float(wx[i] / dist[i]), float(wy[i] / dist[i])) for i in np.flatnonzero(near)]
 
 
 def fits_past(model: SocialForce, walls: np.ndarray, x: float, y: float, radius: float,

@@ -34,7 +34,8 @@ from rei.runtime.run import RunConfig, RunRecord, generate_world, run_mission
 from rei.runtime.world.manifest import load_manifest
 
 SCENES = Path(__file__).parent / "scenes"
-OLD_SOCIAL = SocialForce(turn_back_time=0.0)
+OLD_SOCIAL = SocialForce(turn_back_time=0.0, wall_stop=False)
+"""The social model before issue 25: no turning back, and walking into the walls it touches."""
 OLD_YIELDING = YieldRule(turn_back_time=0.0, aside_room=0.0)
 NEAR = 1.5
 """m between centres within which a human standing still keeps a waiting robot waiting."""
