@@ -312,11 +312,8 @@ def wall_distance(walls: np.ndarray, x: float, y: float) -> float:
     x, half y); inf when there are none."""
     if not len(walls):
         return math.inf
-    c, s = np.cos(walls[:, 2]), np.sin(walls[:, 2])
-    dx, dy = x - walls[:, 0], y - walls[:, 1]
-    qx = np.abs(c * dx + s * dy) - walls[:, 3]
-    qy = np.abs(-s * dx + c * dy) - walls[:, 4]
-    return float(np.hypot(np.maximum(qx, 0.0), np.maximum(qy, 0.0)).min())
+    ex, ey, _, _ = _to_nearest(walls, x, y)
+    return float(np.hypot(ex, ey).min())
 
 
 def wall_normals(walls: np.ndarray, x: float, y: float, reach: float) -> list[Vec]:
@@ -324,16 +321,22 @@ def wall_normals(walls: np.ndarray, x: float, y: float, reach: float) -> list[Ve
     in ``wall_distance``) within ``reach`` of it: the walls a human there touches."""
     if not len(walls):
         return []
+    ex, ey, c, s = _to_nearest(walls, x, y)
+    dist = np.hypot(ex, ey)
+    near = (dist <= reach) & (dist > 1e-9)
+    wx, wy = c * ex - s * ey, s * ex + c * ey  # in the world's frame
+    return [(float(wx[i] / dist[i]), float(wy[i] / dist[i])) for i in np.flatnonzero(near)]
+
+
+def _to_nearest(walls: np.ndarray, x: float, y: float
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """From (x, y) to the nearest point of each box ``walls`` (as in ``wall_distance``), in
+    the box's frame (zero from inside it), with the cosine and sine of each box's yaw."""
     c, s = np.cos(walls[:, 2]), np.sin(walls[:, 2])
     dx, dy = x - walls[:, 0], y - walls[:, 1]
     lx, ly = c * dx + s * dy, -s * dx + c * dy
-    # From the point to the box's nearest point, in the box's frame, then in the world's.
-    ex = np.clip(lx, -walls[:, 3], walls[:, 3]) - lx
-    ey = np.clip(ly, -walls[:, 4], walls[:, 4]) - ly
-    dist = np.hypot(ex, ey)
-    near = (dist <= reach) & (dist > 1e-9)
-    wx, wy = c * ex - s * ey, s * ex + c * ey
-    return [(float(wx[i] / dist[i]), float(wy[i] / dist[i])) for i in np.flatnonzero(near)]
+    return (np.clip(lx, -walls[:, 3], walls[:, 3]) - lx,
+            np.clip(ly, -walls[:, 4], walls[:, 4]) - ly, c, s)
 
 
 def fits_past(model: SocialForce, walls: np.ndarray, x: float, y: float, radius: float,
