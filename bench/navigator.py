@@ -54,7 +54,10 @@ class Outcome:
 
 def missions_of(suite: str, folder: Path) -> list[Path]:
     if suite == "examples":
-        return sorted(REPO.glob("examples/*/*.mission"))
+        # Not examples/faults: its faults fire on the monitor's signals, and this benchmark
+        # runs with the monitor off to measure the navigator alone (`rei run` refuses such a
+        # fault unmonitored: FAULT-SIGNAL).
+        return sorted(m for m in REPO.glob("examples/*/*.mission") if m.parent.name != "faults")
     preset, count, seed = SUITES[suite]
     out = folder / suite
     subprocess.run([str(Path(sys.executable).parent / "rei-gen"), "rooms", "-o", str(out),
