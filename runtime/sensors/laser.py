@@ -12,13 +12,14 @@ pybullet.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import cast
 
 import numpy as np
 
 from rei.catalogue import Box, Cylinder, LaserSpec
-from rei.runtime.world.manifest import BodySpec
+from rei.runtime.world.manifest import BodySpec, WorldManifest
 
 RESOLUTION = 1e-3
 
@@ -62,6 +63,17 @@ def shapes_of(bodies: list[BodySpec], poses: np.ndarray) -> ShapeSet:
             boxes.append((x, y, yaw, fp.size_x / 2, fp.size_y / 2))
     return ShapeSet(np.array(boxes, dtype=float).reshape(-1, 5),
                     np.array(circles, dtype=float).reshape(-1, 3))
+
+
+def scene_shapes(manifest: WorldManifest, bodies: Sequence[BodySpec]) -> ShapeSet:
+    """What the scan plane cuts of a room, as one fixed shape set: its walls (tiles merged)
+    and those of ``bodies`` taller than the plane, at their poses in the manifest."""
+    plane = manifest.laser.mount_z
+    walls = merge_wall_tiles(tuple(w for w in manifest.walls if w.height > plane),
+                             manifest.tile_size)
+    seen = [b for b in bodies if b.height > plane]
+    shapes = shapes_of(seen, np.array([(b.x, b.y, b.yaw) for b in seen]).reshape(-1, 3))
+    return ShapeSet(np.concatenate((walls, shapes.boxes)), shapes.circles)
 
 
 def ray_boxes(origin: np.ndarray, dirs: np.ndarray, boxes: np.ndarray) -> np.ndarray:
