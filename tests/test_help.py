@@ -22,6 +22,7 @@ import pytest
 
 from rei.lang.cli import DESCRIPTION as GEN_DESCRIPTION
 from rei.lang.cli_support import build_parser
+from rei.lang.vepl_parameters import FUNCTIONS_HELP
 from rei.runtime.cli import DESCRIPTION as RUN_DESCRIPTION
 from rei.runtime.commands.run import CONTROLLER_HELP, exit_code, final_line
 from rei.runtime.robot.teleop import SCRIPTS
@@ -104,6 +105,18 @@ def test_controller_help_lists_every_teleop_script() -> None:
     for name in ("run", "campaign", "demo", "robot"):
         (action,) = [a for a in found[name]._actions if "--controller" in a.option_strings]
         assert CONTROLLER_HELP in str(action.help)
+
+
+def test_every_functions_option_says_the_same() -> None:
+    """--functions is one option (rei.lang.vepl_parameters.add_functions_option) wherever a
+    specification is loaded; its help had drifted into four wordings over six commands."""
+    found = commands(parser_of("rei"))
+    offering = {name: action for name, command in found.items() for action in command._actions
+                if "--functions" in action.option_strings}
+    assert {"run", "replay", "campaign", "shrink", "monitor", "watch"} <= set(offering)
+    for name, action in offering.items():
+        assert str(action.help).startswith(FUNCTIONS_HELP), name
+        assert action.metavar == "MODULE" and action.default is None, name
 
 
 @pytest.mark.parametrize("program", sorted(PROGRAMS))
