@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from rei.runtime.scratch import make_scratch, start_ticks, sweep_stale
+from rei.runtime.scratch import make_scratch, pid_namespace, start_ticks, sweep_stale
 from rei.runtime.supervisor import SCRATCH_PREFIX
 from tests.conftest import EXAMPLES, REPO
 
@@ -29,8 +29,9 @@ pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"),
                                 reason="owners are told apart by /proc/PID/stat (Linux)")
 
 
-def owned_name(pid: int, start: int) -> str:
-    return f"{SCRATCH_PREFIX}{pid}-{start}-abcd_123"
+def owned_name(pid: int, start: int, space: int | None = None) -> str:
+    """A folder's name as make_scratch gives it (in this pid namespace unless ``space``)."""
+    return f"{SCRATCH_PREFIX}{pid}-{start}-{pid_namespace() if space is None else space}-ab_12"
 
 
 def waiting_process() -> subprocess.Popen[bytes]:
@@ -52,7 +53,8 @@ def test_the_folder_names_its_living_owner(tmp_path: Path,
     monkeypatch.setattr("tempfile.tempdir", str(tmp_path))
     folder = Path(make_scratch(SCRATCH_PREFIX))
     assert folder.parent == tmp_path
-    assert folder.name.startswith(f"{SCRATCH_PREFIX}{os.getpid()}-{start_ticks(os.getpid())}-")
+    assert folder.name.startswith(f"{SCRATCH_PREFIX}{os.getpid()}-{start_ticks(os.getpid())}-"
+                                  f"{pid_namespace()}-")
     assert sweep_stale(SCRATCH_PREFIX, str(tmp_path)) == []  # its owner (this test) runs
     assert folder.is_dir()
 
@@ -65,11 +67,15 @@ def test_folders_of_ended_owners_are_swept_and_no_other(tmp_path: Path) -> None:
     reused = tmp_path / owned_name(os.getpid(), me + 1)  # this pid, started at another time
     live = tmp_path / owned_name(os.getpid(), me)
     unowned = tmp_path / f"{SCRATCH_PREFIX}k2j4_x9a"  # an older REI's: no owner to check
+    space = pid_namespace()
+    assert space is not None
+    # A container sharing the folder: its pids are not this namespace's, its owner unseen.
+    elsewhere = tmp_path / owned_name(pid, start, space + 1)
     other_prefix = tmp_path / f"rei-controller-{pid}-{start}-abcd_123"
     a_file = tmp_path / owned_name(pid, start + 1)
     target = tmp_path / "kept"
     link = tmp_path / owned_name(pid, start + 2)
-    for folder in (stale, reused, live, unowned, other_prefix, target):
+    for folder in (stale, reused, live, unowned, elsewhere, other_prefix, target):
         folder.mkdir()
         (folder / "inside.txt").write_text("x")
     a_file.write_text("x")
@@ -79,7 +85,7 @@ def test_folders_of_ended_owners_are_swept_and_no_other(tmp_path: Path) -> None:
 
     assert sorted(removed) == sorted([stale, reused])
     assert not stale.exists() and not reused.exists()
-    for kept in (live, unowned, other_prefix, target):
+    for kept in (live, unowned, elsewhere, other_prefix, target):
         assert (kept / "inside.txt").read_text() == "x"
     assert a_file.read_text() == "x" and link.is_symlink()
 
