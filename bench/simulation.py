@@ -57,8 +57,6 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 import rei.runtime.robot as robot_package
 from rei.runtime.collector import TraceWriter, load_monitor_config
 from rei.runtime.commands.run import run_into
@@ -66,7 +64,7 @@ from rei.runtime.robot.host import HostedController
 from rei.runtime.robot.protocol import Controller, ControllerContext
 from rei.runtime.robot.select import load_controller
 from rei.runtime.run import RunConfig, RunRecord, generate_world, run_mission
-from rei.runtime.sensors.laser import Laser2D, ShapeSet, merge_wall_tiles, shapes_of
+from rei.runtime.sensors.laser import Laser2D, scene_shapes
 from rei.runtime.world import WorldManifest, load_manifest
 from rei.runtime.world.bullet import BulletWorld
 
@@ -137,10 +135,7 @@ def bare_rate(manifest: WorldManifest, steps: int) -> tuple[float, float]:
 def laser_costs(manifest: WorldManifest, scans: int = 50) -> tuple[float, float]:
     """Milliseconds per 360-beam scan: REI's numpy caster, pybullet's rayTestBatch."""
     plane = manifest.laser.mount_z
-    walls = merge_wall_tiles(manifest.walls, manifest.tile_size)
-    bodies = [b for b in manifest.objects if b.height > plane]
-    shapes = shapes_of(bodies, np.array([(b.x, b.y, b.yaw) for b in bodies]).reshape(-1, 3))
-    laser = Laser2D(manifest.laser, ShapeSet(np.concatenate((walls, shapes.boxes)), shapes.circles))
+    laser = Laser2D(manifest.laser, scene_shapes(manifest, manifest.objects))
     pose = (manifest.robot.x, manifest.robot.y, manifest.robot.yaw)
     start = time.perf_counter()
     for _ in range(scans):

@@ -11,7 +11,9 @@ parameters the file declares and every parameter rule (VEPL-PARAM) against the v
 force, so every command that loads a specification with overrides refuses the same bad ones
 (exit 2). Overrides travel as ``ParameterValues``: a name -> value mapping kept sorted by
 name, so that records and command lines made from it are the same bytes for the same values.
-This module must never import the runtime.
+The other option every such command offers, ``--functions MODULE`` (the module of the
+specification's user functions), is declared here too (``add_functions_option``), for the
+same reason. This module must never import the runtime.
 """
 
 from __future__ import annotations
@@ -87,3 +89,14 @@ def add_parameter_option(parser: argparse.ArgumentParser | argparse._ArgumentGro
     parser.add_argument(PARAM_OPTION, dest="param", action="append", default=[],
                         type=parameter_argument, metavar=PARAM_METAVAR,
                         help=help_prefix + PARAM_HELP)
+
+
+FUNCTIONS_HELP = ("Python module (dotted name or .py file) defining the user functions the "
+                  "specification declares with 'function'")
+
+
+def add_functions_option(parser: argparse.ArgumentParser, note: str = "") -> None:
+    """``--functions MODULE`` into ``args.functions`` (rei.runtime.monitor.functions loads
+    it), one help text everywhere; ``note`` says what the command does with it beyond."""
+    parser.add_argument("--functions", default=None, metavar="MODULE",
+                        help=FUNCTIONS_HELP + note)

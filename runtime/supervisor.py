@@ -32,6 +32,9 @@ The child's temporary files (the hosted controller's working folder ``rei-contro
 whatever a controller puts in ``$TMPDIR``) are made in a folder this process creates, hands
 down (``TMPDIR`` and ``tempfile.tempdir`` of the child, so of every process it starts) and
 removes however the child ended: a child killed with SIGKILL cannot clean up after itself.
+The folder's name says which process owns it (``rei.runtime.scratch``), and each supervisor
+first removes those of supervisors that are gone: a `rei run` killed with SIGKILL leaves its
+folder only until the next `rei run` starts.
 
 This module must never import the simulator or the monitor in the supervising process: its
 cost there is an interpreter start-up, not a second copy of REI's heavy imports.
@@ -63,12 +66,16 @@ from rei.runtime.processes import (
     start_child,
     stop_child,
 )
+from rei.runtime.scratch import make_scratch, sweep_stale
 
 SETUP_LIMIT = 120.0
 """Wall-clock seconds REI's own set-up or output writing may go without a report."""
 
 MIN_MARGIN = 5.0
 """Seconds the supervisor waits beyond the controller's watchdog, at least."""
+
+SCRATCH_PREFIX = "rei-run-scratch-"
+"""The name of the folders of the children's temporary files begins with it."""
 
 EXIT_RUN_ERROR = 3
 EXIT_INTERRUPTED = 130
@@ -197,7 +204,9 @@ def _signal_group(process: Child, number: int) -> None:
 def supervise(request: RunRequest) -> SupervisedRun:
     """Run ``request`` in a child process and wait for it under the liveness limits; a child
     that dies or hangs gets summary.json written here (outcome error)."""
-    scratch = tempfile.mkdtemp(prefix="rei-run-scratch-")
+    # The folders of runs killed with SIGKILL (this process could not remove them) first.
+    sweep_stale(SCRATCH_PREFIX)
+    scratch = make_scratch(SCRATCH_PREFIX)
     try:
         return _supervise(request, scratch)
     finally:

@@ -24,7 +24,7 @@ from types import FrameType
 from typing import TYPE_CHECKING
 
 from rei.lang.cli_support import EXIT_INTERRUPTED
-from rei.lang.vepl_parameters import add_parameter_option, parameter_values
+from rei.lang.vepl_parameters import add_functions_option, add_parameter_option, parameter_values
 
 if TYPE_CHECKING:
     from rei.runtime.campaign.engines import CampaignEngine
@@ -115,8 +115,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                         help="monitor specification passed to `rei run`")
     add_parameter_option(parser, "passed to `rei run` and recorded in the plan (a resume "
                                  "with other values is refused, exit 2): ")
-    parser.add_argument("--functions", default=None, metavar="MODULE",
-                        help="module of the specification's user functions, passed to `rei run`")
+    add_functions_option(parser, "; passed to every `rei run`")
     parser.add_argument("--duration", type=_seconds, default=None, metavar="S",
                         help="simulated seconds per run, passed to `rei run` (smoke tests)")
     add_engine_arguments(parser)

@@ -20,7 +20,7 @@ from pathlib import Path
 
 from rei.lang.cli_support import EXIT_BAD_INPUT, EXIT_RUN_ERROR
 from rei.lang.errors import printable_lines
-from rei.lang.vepl_parameters import add_parameter_option, parameter_values
+from rei.lang.vepl_parameters import add_functions_option, add_parameter_option, parameter_values
 from rei.runtime.commands.robot import add_bus_options, join_bus
 from rei.runtime.commands.run import (
     EVENTS,
@@ -55,8 +55,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.add_argument("--vepl", type=Path, default=None, metavar="FILE",
                         help="the specification (default: REI's default.vepl)")
     add_parameter_option(parser)
-    parser.add_argument("--functions", default=None, metavar="MODULE",
-                        help="Python module defining the specification's user functions")
+    add_functions_option(parser)
     parser.add_argument("--silence", type=float, default=60.0, metavar="S",
                         help="wall seconds without a sample after which the run counts as "
                              "cut off (default 60)")

@@ -32,7 +32,12 @@ from typing import TYPE_CHECKING, Any, cast
 
 from rei.lang.cli_support import EXIT_BAD_INPUT, EXIT_RUN_ERROR
 from rei.lang.errors import printable_lines
-from rei.lang.vepl_parameters import ParameterValues, add_parameter_option, parameter_values
+from rei.lang.vepl_parameters import (
+    ParameterValues,
+    add_functions_option,
+    add_parameter_option,
+    parameter_values,
+)
 from rei.runtime.commands.run import (
     REPLAY_VERBOSE_HELP,
     add_verbosity,
@@ -95,9 +100,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                              "may read only the data the trace carries (its header's "
                              "\"data\"), else exit 2")
     add_parameter_option(parser)
-    parser.add_argument("--functions", default=None, metavar="MODULE",
-                        help="Python module (dotted name or .py file) defining the user "
-                             "functions the specification declares with 'function'")
+    add_functions_option(parser)
     parser.add_argument("-o", "--output", type=Path, required=True, metavar="DIR",
                         help="output folder (created if missing)")
     add_verbosity(parser, REPLAY_VERBOSE_HELP)

@@ -46,6 +46,7 @@ from rei.lang.mission.faults import (
 from rei.lang.source import unreadable
 from rei.lang.vepl_parameters import (
     ParameterValues,
+    add_functions_option,
     add_parameter_option,
     parameter_text,
     parameter_values,
@@ -160,9 +161,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                              "queries may read only the data the mission collects (its "
                              "monitor block), else exit 2")
     add_parameter_option(parser)
-    parser.add_argument("--functions", default=None, metavar="MODULE",
-                        help="Python module (dotted name or .py file) defining the user "
-                             "functions the specification declares with 'function'")
+    add_functions_option(parser)
     parser.add_argument("--no-monitor", action="store_true",
                         help="record the trace only (monitor it later with `rei replay`)")
     parser.add_argument("--page", choices=PAGE_POLICIES, default="all",

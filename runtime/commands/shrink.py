@@ -24,7 +24,7 @@ from rei.lang.cli_support import (
     EXIT_RUN_ERROR,
 )
 from rei.lang.errors import printable_lines
-from rei.lang.vepl_parameters import add_parameter_option, parameter_values
+from rei.lang.vepl_parameters import add_functions_option, add_parameter_option, parameter_values
 
 HELP_EXAMPLES = """\
 rei shrink examples/navigation/navigation.mission -o out/shrunk \\
@@ -82,8 +82,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser.add_argument("--vepl", type=Path, default=None, metavar="FILE",
                         help="monitoring specification passed to `rei run`")
     add_parameter_option(parser, "passed to `rei run`: ")
-    parser.add_argument("--functions", default=None, metavar="MODULE",
-                        help="module of the specification's user functions")
+    add_functions_option(parser, "; passed to every `rei run`")
     parser.add_argument("--duration", type=float, default=None, metavar="S",
                         help="simulated seconds per run, passed to `rei run`")
     parser.add_argument("--timeout", type=float, default=None, metavar="S",

@@ -24,7 +24,7 @@ from typing import Any
 
 from rei.lang.cli_support import EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_RUN_ERROR
 from rei.lang.errors import printable_lines
-from rei.lang.vepl_parameters import add_parameter_option, parameter_values
+from rei.lang.vepl_parameters import add_functions_option, add_parameter_option, parameter_values
 from rei.runtime.commands.robot import add_bus_options
 
 EXAMPLES = """\
@@ -109,9 +109,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
                              "default.vepl); objects' states need its queries "
                              "findCloseToObject and findCollisionToObject")
     add_parameter_option(parser)
-    parser.add_argument("--functions", default=None, metavar="MODULE",
-                        help="Python module defining the user functions the specification "
-                             "declares with 'function'")
+    add_functions_option(parser)
     parser.add_argument("--foxglove", type=_port, default=None, metavar="PORT",
                         help="also serve the run to Foxglove (WebSocket on 127.0.0.1:PORT; 0 "
                              "picks a free port, printed on stderr); needs the 'watch' extra")

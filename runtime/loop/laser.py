@@ -15,7 +15,7 @@ import numpy as np
 from rei.runtime.loop.board import Board
 from rei.runtime.loop.scheduler import Clock
 from rei.runtime.messages import LaserScan, ScanReading
-from rei.runtime.sensors.laser import Laser2D, ShapeSet, merge_wall_tiles, shapes_of
+from rei.runtime.sensors.laser import Laser2D, scene_shapes, shapes_of
 from rei.runtime.world.manifest import WorldManifest
 
 
@@ -41,13 +41,8 @@ class LaserRun:
         manifest = spec.manifest
         self.spec, self.board, self.rng = spec, board, rng
         self.laser_spec = manifest.laser
-        plane = manifest.laser.mount_z
-        static_seen = [b for b in manifest.objects if b.height > plane and b.fixed]
-        walls = merge_wall_tiles(tuple(w for w in manifest.walls if w.height > plane),
-                                 manifest.tile_size)
-        statics = shapes_of(static_seen, np.array([(b.x, b.y, b.yaw) for b in static_seen]))
-        self.laser = Laser2D(manifest.laser, ShapeSet(np.concatenate((walls, statics.boxes)),
-                                                      statics.circles))
+        self.laser = Laser2D(manifest.laser,
+                             scene_shapes(manifest, [b for b in manifest.objects if b.fixed]))
         self.seen = spec.moving_seen
         self.seen_specs = [manifest.objects[i] for i in self.seen]
         self.rows = list(self.seen)

@@ -12,13 +12,14 @@ pybullet.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import cast
 
 import numpy as np
 
 from rei.catalogue import Box, Cylinder, LaserSpec
-from rei.runtime.world.manifest import BodySpec
+from rei.runtime.world.manifest import BodySpec, WorldManifest
 
 RESOLUTION = 1e-3
 
@@ -64,6 +65,17 @@ def shapes_of(bodies: list[BodySpec], poses: np.ndarray) -> ShapeSet:
                     np.array(circles, dtype=float).reshape(-1, 3))
 
 
+def scene_shapes(manifest: WorldManifest, bodies: Sequence[BodySpec]) -> ShapeSet:
+    """What the scan plane cuts of a room, as one fixed shape set: its walls (tiles merged)
+    and those of ``bodies`` taller than the plane, at their poses in the manifest."""
+    plane = manifest.laser.mount_z
+    walls = merge_wall_tiles(tuple(w for w in manifest.walls if w.height > plane),
+                             manifest.tile_size)
+    seen = [b for b in bodies if b.height > plane]
+    shapes = shapes_of(seen, np.array([(b.x, b.y, b.yaw) for b in seen]).reshape(-1, 3))
+    return ShapeSet(np.concatenate((walls, shapes.boxes)), shapes.circles)
+
+
 def ray_boxes(origin: np.ndarray, dirs: np.ndarray, boxes: np.ndarray) -> np.ndarray:
     """(N,) nearest hit distance of each ray against (M, 5) boxes; inf where none."""
     if len(boxes) == 0:
@@ -102,6 +114,38 @@ def ray_circles(origin: np.ndarray, dirs: np.ndarray, circles: np.ndarray) -> np
     return cast(np.ndarray, t.min(axis=0))
 
 
+class RayCaster:
+    """Ray casting against a fixed set of shapes (immutable once built): the one step both the
+    laser model and a navigator's comparison with its map (rei.runtime.robot.mapcast) take."""
+
+    def __init__(self, shapes: ShapeSet) -> None:
+        self.shapes = shapes
+        self._box_radius = np.hypot(shapes.boxes[:, 3], shapes.boxes[:, 4])
+
+    def cast(self, origin: np.ndarray, dirs: np.ndarray, reach: float,
+             moving: ShapeSet | None = None) -> np.ndarray:
+        """(N,) distance from ``origin`` along each unit direction (N, 2; world frame) to the
+        first shape hit, ``inf`` where none is; 0 from inside a shape. Every distance up to
+        ``reach`` is exact; beyond it a shape may be left out (it may read ``inf``).
+
+        Only the fixed shapes a beam of ``reach`` can touch are cast (a room has hundreds of
+        wall tiles): those whose bounding circle comes within ``reach``, boundary included,
+        so a shape touched at exactly ``reach`` is a hit at ``reach``. ``moving`` shapes
+        (given per cast) are all cast."""
+        boxes, circles = self.shapes.boxes, self.shapes.circles
+        near = np.hypot(boxes[:, 0] - origin[0], boxes[:, 1] - origin[1]) \
+            - self._box_radius <= reach
+        cnear = np.hypot(circles[:, 0] - origin[0], circles[:, 1] - origin[1]) \
+            - circles[:, 2] <= reach
+        box_sets, circle_sets = [boxes[near]], [circles[cnear]]
+        if moving is not None:
+            box_sets.append(moving.boxes)
+            circle_sets.append(moving.circles)
+        return cast(np.ndarray, np.minimum(ray_boxes(origin, dirs, np.concatenate(box_sets)),
+                                           ray_circles(origin, dirs,
+                                                       np.concatenate(circle_sets))))
+
+
 class Laser2D:
     """Scans a fixed set of static shapes plus moving shapes given per scan."""
 
@@ -110,8 +154,7 @@ class Laser2D:
         self.angle_min = -spec.fov / 2
         self.angle_increment = spec.fov / spec.beams
         self.angles = self.angle_min + self.angle_increment * np.arange(spec.beams)
-        self.static = static
-        self._box_radius = np.hypot(static.boxes[:, 3], static.boxes[:, 4])
+        self.caster = RayCaster(static)
 
     def origin(self, pose: tuple[float, float, float]) -> np.ndarray:
         x, y, yaw = pose
@@ -131,16 +174,7 @@ class Laser2D:
         world_angles = self.angles + pose[2]
         dirs = np.stack((np.cos(world_angles), np.sin(world_angles)), axis=1)
         reach = spec.max_range
-        boxes = self.static.boxes
-        near = np.hypot(boxes[:, 0] - o[0], boxes[:, 1] - o[1]) - self._box_radius < reach
-        circles = self.static.circles
-        cnear = np.hypot(circles[:, 0] - o[0], circles[:, 1] - o[1]) - circles[:, 2] < reach
-        box_sets, circle_sets = [boxes[near]], [circles[cnear]]
-        if moving is not None:
-            box_sets.append(moving.boxes)
-            circle_sets.append(moving.circles)
-        t = np.minimum(ray_boxes(o, dirs, np.concatenate(box_sets)),
-                       ray_circles(o, dirs, np.concatenate(circle_sets)))
+        t = self.caster.cast(o, dirs, reach, moving)
         if noise > 0 and rng is not None:
             hit = t <= reach
             t = np.where(hit, t + rng.normal(0.0, noise, size=t.shape), t)

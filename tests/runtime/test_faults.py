@@ -22,7 +22,7 @@ from rei.runtime.errors import RunError
 from rei.runtime.faults import NO_FAULTS, FaultPlan, FaultStage, fault_stage
 from rei.runtime.messages import LaserScan
 from rei.runtime.run import generate_world
-from rei.runtime.sensors.laser import Laser2D, ShapeSet, merge_wall_tiles, shapes_of
+from rei.runtime.sensors.laser import Laser2D, scene_shapes
 from rei.runtime.world import load_manifest
 from tests.conftest import EXAMPLES
 
@@ -33,10 +33,7 @@ def scans(tmp_path_factory: pytest.TempPathFactory) -> list[LaserScan]:
     out_dir: Path = tmp_path_factory.mktemp("simple_wall")
     generate_world(EXAMPLES / "simple_wall" / "simple_wall.mission", out_dir)
     m = load_manifest(out_dir)
-    walls = merge_wall_tiles(m.walls, m.tile_size)
-    bodies = [b for b in m.objects if b.height > m.laser.mount_z]
-    shapes = shapes_of(bodies, np.array([(b.x, b.y, b.yaw) for b in bodies]).reshape(-1, 3))
-    laser = Laser2D(m.laser, ShapeSet(np.concatenate((walls, shapes.boxes)), shapes.circles))
+    laser = Laser2D(m.laser, scene_shapes(m, m.objects))
     x0, y0, yaw = m.robot.x, m.robot.y, m.robot.yaw
     out = []
     for i in range(40):

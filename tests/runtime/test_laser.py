@@ -9,7 +9,7 @@ import pytest
 
 from rei.generators.concrete.build import load_concrete_mission
 from rei.runtime.run import generate_world
-from rei.runtime.sensors.laser import Laser2D, ShapeSet, merge_wall_tiles, shapes_of
+from rei.runtime.sensors.laser import Laser2D, merge_wall_tiles, scene_shapes
 from rei.runtime.world import load_manifest
 from rei.runtime.world.bullet import BulletWorld
 from tests.conftest import EXAMPLES
@@ -20,10 +20,7 @@ def test_numpy_laser_matches_pybullet_rays(example: str, tmp_path: Path) -> None
     generate_world(EXAMPLES / example / f"{example}.mission", tmp_path)
     m = load_manifest(tmp_path)
     plane = m.laser.mount_z
-    walls = merge_wall_tiles(m.walls, m.tile_size)
-    bodies = [b for b in m.objects if b.height > plane]
-    shapes = shapes_of(bodies, np.array([(b.x, b.y, b.yaw) for b in bodies]).reshape(-1, 3))
-    laser = Laser2D(m.laser, ShapeSet(np.concatenate((walls, shapes.boxes)), shapes.circles))
+    laser = Laser2D(m.laser, scene_shapes(m, m.objects))
     rng = np.random.default_rng(3)
     with BulletWorld(m, 100.0) as sim:
         x0, y0, x1, y1 = m.bounds

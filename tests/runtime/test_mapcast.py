@@ -9,6 +9,7 @@ import pytest
 
 from rei.runtime.robot.mapcast import MapCaster
 from rei.runtime.robot.protocol import MapObstacle
+from rei.runtime.sensors.laser import RayCaster, ShapeSet
 
 MAP = (
     MapObstacle("table", "static", 1.0, 0.5, 0.6, "box", 0.8, 0.6),
@@ -73,3 +74,15 @@ def test_a_beam_grazing_a_corner_hits_it_when_the_map_is_grown() -> None:
     assert grown == pytest.approx(float(np.hypot(*corner)), abs=0.02)
     # The exact map misses the corner (the check above can fail).
     assert MapCaster((table, wall)).ranges((0.0, 0.0), beam, 3.0)[0] > 0.45
+
+
+def test_a_shape_touched_at_exactly_the_reach_is_a_hit_at_the_reach() -> None:
+    """The laser and the map caster share one cast (RayCaster): a shape whose nearest point
+    is exactly at the reach is cast, and hit there — as the laser's own `t <= reach` counts
+    a hit — whether it is a map's pillar or a body the laser sees."""
+    pillar = MapObstacle("pillar", "static", 3.0, 0.0, 0.0, "cylinder", radius=1.0)
+    east = np.array([[1.0, 0.0]])
+    assert MapCaster((pillar,)).ranges((0.0, 0.0), east, 2.0)[0] == 2.0
+    caster = RayCaster(ShapeSet(np.zeros((0, 5)), np.array([[3.0, 0.0, 1.0]])))
+    assert caster.cast(np.zeros(2), east, 2.0)[0] == 2.0
+    assert math.isinf(caster.cast(np.zeros(2), east, 1.999)[0])  # out of reach: left out
