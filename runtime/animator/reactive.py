@@ -59,7 +59,11 @@ as often as a human-blind one; reactive humans make the test fair.
   Turning back also ends a herding: a robot driving at a human held it back on both sides
   as it retreated, once 3 m off its loop through a doorway, where it stood for good against
   the wall between it and its path, beside the goal (issue 25); now it turns back after
-  6 s, its target runs the other way, and it walks off round the robot. A hard bound on how
+  6 s, its target runs the other way, and it walks off round the robot. A robot on the
+  move no longer drives a human ahead of it at all (``away_from_approach``): its push along
+  its heading is turned across it, and a human passes a crossing robot behind it (a
+  walker that passed in front of the robot was driven 2.2 m off its loop into a corner
+  beside the goal, issue 25). A hard bound on how
   far a human lets itself be pushed from its target (1.2 m: it gave no more ground there)
   was tried and dropped: pressed by the robot into a corner of a wall and a box 1 m off its
   path, a human held there stood for good, and the reference failed that search room.
