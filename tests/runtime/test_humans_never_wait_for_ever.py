@@ -151,17 +151,22 @@ def test_a_human_the_robot_drives_at_steps_off_its_line_and_is_not_cornered(
     passed the robot driving west across its loop on the side the robot drove to, and was
     driven ahead of it to x = -5.2, into the corner beside goal_2, where the robot waited
     0.5 m from it until goal_2 timed out. Now it passes behind the robot and steps off its
-    line: it stays near its loop and the robot reaches every goal, touching no one."""
+    line: it stays within about a metre of its loop, never nearer goal_2 than 1 m, and the
+    robot reaches every goal, touching no one."""
     old, t, walker, robot = _scene("cornered", 555834123, tmp_path / "old", monkeypatch,
                                    Reactions(social=SocialForce(dodge=0.0)))
+    goal_2 = np.array([-5.0, -1.0])
     assert old.outcome == "failed"
     assert walker[:, 0].min() < -5.0
+    assert np.hypot(*(walker - goal_2).T).min() < 0.3
     assert longest_wait(t, walker, robot) > 25.0
     new, t, walker, robot = _scene("cornered", 555834123, tmp_path / "new", monkeypatch,
                                    Reactions())
     assert new.outcome == "completed", new.reason
     assert new.measurements["collisions"] == 0
-    assert walker[:, 0].min() > -4.0
+    # a step aside is at most about a metre off its loop, never into the corner
+    assert walker[:, 0].min() > -4.2
+    assert np.hypot(*(walker - goal_2).T).min() > 1.0
     assert longest_wait(t, walker, robot) < 10.0
 
 
