@@ -171,10 +171,12 @@ def test_a_human_the_robot_drives_at_steps_off_its_line_and_is_not_cornered(
 
 
 @pytest.mark.slow
-def test_turning_back_is_the_same_bit_for_bit_with_the_same_seed(
-        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    a = _scene("waits_on_goal", 1179214411, tmp_path / "a", monkeypatch, Reactions())
-    b = _scene("waits_on_goal", 1179214411, tmp_path / "b", monkeypatch, Reactions())
+@pytest.mark.parametrize(("scene", "seed"), [("waits_on_goal", 1179214411),
+                                             ("cornered", 555834123)])
+def test_turning_back_and_stepping_off_are_the_same_bit_for_bit_with_the_same_seed(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, scene: str, seed: int) -> None:
+    a = _scene(scene, seed, tmp_path / "a", monkeypatch, Reactions())
+    b = _scene(scene, seed, tmp_path / "b", monkeypatch, Reactions())
     assert a[0].measurements == b[0].measurements
     assert a[2].tobytes() == b[2].tobytes() and a[3].tobytes() == b[3].tobytes()
 
