@@ -449,7 +449,8 @@ class Animator:
                               -self._side[k]):
             self._side[k], self._held[k] = -self._side[k], 0.0
         ax, ay = social_acceleration(model, pose[0], pose[1], vx, vy, item.radius, desired,
-                                     others, self._path_speed[k], self._side[k])
+                                     others, self._path_speed[k], self._side[k], robot,
+                                     self.walls)
         vx, vy = limit_speed(vx + ax * dt, vy + ay * dt, v_max)
         # What it touches of walls and fixed objects: a velocity into one is not kept but
         # turned along it by the contact, and must not be turned into the robot.

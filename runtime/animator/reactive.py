@@ -59,7 +59,11 @@ as often as a human-blind one; reactive humans make the test fair.
   Turning back also ends a herding: a robot driving at a human held it back on both sides
   as it retreated, once 3 m off its loop through a doorway, where it stood for good against
   the wall between it and its path, beside the goal (issue 25); now it turns back after
-  6 s, its target runs the other way, and it walks off round the robot. A hard bound on how
+  6 s, its target runs the other way, and it walks off round the robot. A robot on the
+  move no longer drives a human ahead of it at all (``away_from_approach``): its push along
+  its heading is turned across it, and a human passes a crossing robot behind it (a
+  walker that passed in front of the robot was driven 2.2 m off its loop into a corner
+  beside the goal, issue 25). A hard bound on how
   far a human lets itself be pushed from its target (1.2 m: it gave no more ground there)
   was tried and dropped: pressed by the robot into a corner of a wall and a box 1 m off its
   path, a human held there stood for good, and the reference failed that search room.
@@ -161,6 +165,18 @@ class SocialForce:
     turn_back_time: float = 6.0
     """s of its path a human walks backwards after it was held back on both sides for its
     ``patience`` each, before it turns round again (0: it never turns back)."""
+    dodge: float = 1.0
+    """Share of the robot's repulsion along its heading that is turned across it while it
+    comes at the human against (or across) the human's way (``away_from_approach``): a
+    person in front of an advancing robot steps off its line, to the side it stands on (the
+    other where that has no ``dodge_room``), instead of retreating ahead of it; and a human
+    passes a robot crossing its way behind it, not in front (0: the model before issue 25's
+    herded walker, which the robot drove 2.2 m ahead of it into a corner beside its goal)."""
+    dodge_room: float = 0.5
+    """m: a human steps off the robot's line to a side only where the place this far that
+    way keeps its radius from every wall (``room_aside``)."""
+    dodge_speed: float = 0.05
+    """m/s: a robot slower than this is standing, and repels the human straight away."""
     wall_stop: bool = True
     """Whether a human's velocity into a wall or fixed object it touches (within
     ``clearance_margin``) is dropped before it is kept clear of the others (``keep_clear``);
@@ -226,11 +242,14 @@ def yield_factor(rule: YieldRule, x: float, y: float, radius: float, direction: 
 
 def social_acceleration(model: SocialForce, x: float, y: float, vx: float, vy: float,
                         radius: float, desired: Vec, others: list[Agent],
-                        walking_speed: float = 0.0, side: float = 1.0) -> Vec:
+                        walking_speed: float = 0.0, side: float = 1.0,
+                        robot: Agent | None = None, walls: np.ndarray | None = None) -> Vec:
     """dv/dt of a human at (x, y) with velocity (vx, vy) that wants to walk at ``desired``
     along a path walked at ``walking_speed`` (m/s; the repulsion's scale, see
     ``SocialForce.reference_speed``), passing what is ahead on its right (``side`` 1) or
-    its left (-1)."""
+    its left (-1). ``robot`` (one of ``others``) is the one body it steps off the line of
+    and passes behind when it moves (``away_from_approach``; ``walls`` as in
+    ``wall_distance``)."""
     strength = model.strength * max(1.0, walking_speed / model.reference_speed)
     ax = (desired[0] - vx) / model.relaxation_time
     ay = (desired[1] - vy) / model.relaxation_time
@@ -250,13 +269,57 @@ def social_acceleration(model: SocialForce, x: float, y: float, vx: float, vy: f
         cos_phi = -(nx * hx + ny * hy)
         weight = model.anisotropy + (1.0 - model.anisotropy) * (1.0 + cos_phi) / 2.0
         push = strength * math.exp(-gap / model.range) * weight
+        passes = side
+        if other is robot and model.dodge > 0.0:
+            (nx, ny), passes = away_from_approach(model, walls, x, y, radius, (nx, ny),
+                                                  other, desired, (hx, hy), side)
         ax += push * nx
         ay += push * ny
         if cos_phi > 0.0:  # only what is ahead deflects the human sideways, to its right
-            turn = side * model.passing * push * cos_phi
+            turn = passes * model.passing * push * cos_phi
             ax += turn * hy
             ay += turn * -hx
     return ax, ay
+
+
+def away_from_approach(model: SocialForce, walls: np.ndarray | None, x: float, y: float,
+                       radius: float, away: Vec, robot: Agent, desired: Vec, heading: Vec,
+                       side: float) -> tuple[Vec, float]:
+    """Which way a robot on the move repels a human at (x, y) (a unit vector; ``away`` is
+    straight away from it) and the side (1 right, -1 left of ``heading``) the human passes
+    it on (``side`` when it stands).
+
+    Pushed straight away from a robot that comes at it, a human retreats along the robot's
+    heading, ahead of it, for as long as it comes on: issue 25's TPE room, where the robot
+    drove a walker 2.2 m off its loop into a corner beside its goal and waited there for
+    it until the goal aborted. People step off the line of what comes at them, so the part
+    of the push along the robot's heading is turned across it (``dodge`` of it), to the side
+    of the robot's line the human stands on, or to the other where only that has
+    ``dodge_room``; in full when the robot comes against the human's way, not at all when
+    it follows it (it then pushes the human on along its way). And a human passes a robot
+    crossing its way behind it: passing in front of a moving robot on the side it moves to
+    led the human along with it."""
+    speed = math.hypot(robot.vx, robot.vy)
+    if speed < model.dodge_speed:
+        return away, side
+    ux, uy = robot.vx / speed, robot.vy / speed
+    crossing = heading[1] * ux - heading[0] * uy  # the robot's heading along the human's right
+    passes = side if abs(crossing) < 0.5 else (-1.0 if crossing > 0.0 else 1.0)
+    ahead = away[0] * ux + away[1] * uy
+    if ahead <= 0.0:
+        return away, passes
+    dx, dy = _unit(desired)
+    share = model.dodge * ahead * (1.0 - max(0.0, ux * dx + uy * dy))
+    lx, ly = -uy, ux  # the robot's left
+    stands = 1.0 if away[0] * lx + away[1] * ly >= 0.0 else -1.0
+    if walls is not None and not room_aside(walls, x, y, radius, (stands * lx, stands * ly),
+                                            model.dodge_room) \
+            and room_aside(walls, x, y, radius, (-stands * lx, -stands * ly), model.dodge_room):
+        stands = -stands
+    tx = away[0] + share * (stands * lx - ux)
+    ty = away[1] + share * (stands * ly - uy)
+    norm = math.hypot(tx, ty)
+    return ((tx / norm, ty / norm) if norm > 1e-9 else away), passes
 
 
 def keep_clear(model: SocialForce, x: float, y: float, vx: float, vy: float, radius: float,

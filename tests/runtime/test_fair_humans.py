@@ -252,7 +252,8 @@ def test_a_social_human_held_back_tries_its_other_side(
     fair = _held_back(tmp_path / "fair", monkeypatch, SocialForce())
     assert fair.measurements["collisions"] == 0, fair.measurements["collided_with"]
     old = _held_back(tmp_path / "old", monkeypatch,
-                     SocialForce(patience=math.inf, wall_stop=False), blind_to_walls=True)
+                     SocialForce(patience=math.inf, wall_stop=False, dodge=0.0),
+                     blind_to_walls=True)
     assert old.measurements["collided_with"] == ["walker_1"]
 
 

@@ -10,7 +10,11 @@ correct robot waiting for each other until the goal aborted:
   came back, yielded again, stepped into the wall again (scenes/steps_into_wall);
 * a social human the robot drove at retreated ahead of it 3 m off its path, through a
   doorway, and stood for good against the wall between it and its path, beside the goal
-  (scenes/herded).
+  (scenes/herded);
+* a social human passed on its right a robot driving across its loop, in front of it, and
+  was driven ahead of it 2.2 m off its loop into a corner beside the robot's goal
+  (scenes/cornered): now it steps off the line of a robot coming at it and passes a moving
+  robot behind it (``SocialForce.dodge``).
 
 Now a human held back for its patience on both sides (social), or with no room to step
 aside (yielding), turns back along its path for a while. Each scene runs the real simulator
@@ -28,14 +32,22 @@ import pytest
 
 from rei.lang.room.spline import CatmullRom
 from rei.runtime.animator.animator import Animated, Animator, Reactions
-from rei.runtime.animator.reactive import SocialForce, room_aside, way_aside
+from rei.runtime.animator.reactive import (
+    Agent,
+    SocialForce,
+    away_from_approach,
+    room_aside,
+    social_acceleration,
+    way_aside,
+)
 from rei.runtime.collector import SampleList, load_monitor_config
 from rei.runtime.run import RunConfig, RunRecord, generate_world, run_mission
 from rei.runtime.world.manifest import load_manifest
 
 SCENES = Path(__file__).parent / "scenes"
-OLD_SOCIAL = SocialForce(turn_back_time=0.0, wall_stop=False)
-"""The social model before issue 25: no turning back, and walking into the walls it touches."""
+OLD_SOCIAL = SocialForce(turn_back_time=0.0, wall_stop=False, dodge=0.0)
+"""The social model before issue 25: no turning back, walking into the walls it touches, and
+retreating straight ahead of a robot that comes at it."""
 NEAR = 1.5
 """m between centres within which a human standing still keeps a waiting robot waiting."""
 
@@ -132,10 +144,39 @@ def test_a_herded_social_human_turns_back_and_stays_in_its_room(
 
 
 @pytest.mark.slow
-def test_turning_back_is_the_same_bit_for_bit_with_the_same_seed(
+def test_a_human_the_robot_drives_at_steps_off_its_line_and_is_not_cornered(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    a = _scene("waits_on_goal", 1179214411, tmp_path / "a", monkeypatch, Reactions())
-    b = _scene("waits_on_goal", 1179214411, tmp_path / "b", monkeypatch, Reactions())
+    """Its loop is x = -3 (y from -1 to 1); goal_2 is at (-5, -1), in the south-west
+    corner. Before (``dodge`` 0: the same run as before the change, byte for byte), it
+    passed the robot driving west across its loop on the side the robot drove to, and was
+    driven ahead of it to x = -5.2, into the corner beside goal_2, where the robot waited
+    0.5 m from it until goal_2 timed out. Now it passes behind the robot and steps off its
+    line: it stays within about a metre of its loop, never nearer goal_2 than 1 m, and the
+    robot reaches every goal, touching no one."""
+    old, t, walker, robot = _scene("cornered", 555834123, tmp_path / "old", monkeypatch,
+                                   Reactions(social=SocialForce(dodge=0.0)))
+    goal_2 = np.array([-5.0, -1.0])
+    assert old.outcome == "failed"
+    assert walker[:, 0].min() < -5.0
+    assert np.hypot(*(walker - goal_2).T).min() < 0.3
+    assert longest_wait(t, walker, robot) > 25.0
+    new, t, walker, robot = _scene("cornered", 555834123, tmp_path / "new", monkeypatch,
+                                   Reactions())
+    assert new.outcome == "completed", new.reason
+    assert new.measurements["collisions"] == 0
+    # a step aside is at most about a metre off its loop, never into the corner
+    assert walker[:, 0].min() > -4.2
+    assert np.hypot(*(walker - goal_2).T).min() > 1.0
+    assert longest_wait(t, walker, robot) < 10.0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("scene", "seed"), [("waits_on_goal", 1179214411),
+                                             ("cornered", 555834123)])
+def test_turning_back_and_stepping_off_are_the_same_bit_for_bit_with_the_same_seed(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, scene: str, seed: int) -> None:
+    a = _scene(scene, seed, tmp_path / "a", monkeypatch, Reactions())
+    b = _scene(scene, seed, tmp_path / "b", monkeypatch, Reactions())
     assert a[0].measurements == b[0].measurements
     assert a[2].tobytes() == b[2].tobytes() and a[3].tobytes() == b[3].tobytes()
 
@@ -210,3 +251,79 @@ def test_room_aside_and_way_aside() -> None:
     assert way_aside(end, 2.0, 0.0, 0.25, across, away, 0.5) is None
     # with room 0 (the old model) it steps across without looking
     assert way_aside(PASSAGE_WALLS, 2.0, 0.0, 0.25, across, away, 0.0) == across
+
+
+# The model alone, in the open: a social human whose loop runs across the line of a robot
+# driving at 0.12 m/s (the reference's speed near a human) across it, as in scenes/cornered.
+# The robot's footprint is driven through whatever is in its way: the human has to move.
+LOOP = CatmullRom(np.array([0.0, 2.5, 5.0]), np.array([[0.0, 1.0], [0.0, -1.0], [0.0, 1.0]]),
+                  True)
+"""Out and back along x = 0 from y = 1 to y = -1, 0.8 m/s."""
+CROSSING_Y = -0.4
+"""The robot's line: it drives -x along y = -0.4 from x = 2."""
+
+
+def _driven_across(social: SocialForce, seconds: float = 50.0) -> tuple[np.ndarray, float]:
+    """The human's (x, y) at every control tick, and the smallest gap between the footprints."""
+    paths = Animator([Animated(1, LOOP, True, "social")], physics_rate=10.0,
+                     robot_radius=ROBOT_RADIUS, reactions=Reactions(social=social))
+    x, y, rx, speed = 0.0, 1.0, 2.0, 0.12
+    track, smallest = [], math.inf
+    for step in range(int(seconds * 10)):
+        paths.correct(step, [(x, y, 0.0)], (rx, CROSSING_Y, math.pi), (-speed, 0.0, 0.0))
+        _, vx, vy, _ = paths.commands(step)[0]
+        x, y, rx = x + vx / 10.0, y + vy / 10.0, rx - speed / 10.0
+        smallest = min(smallest, math.hypot(x - rx, y - CROSSING_Y) - 0.25 - ROBOT_RADIUS)
+        track.append((x, y))
+    return np.array(track), smallest
+
+
+def test_a_human_steps_off_the_line_of_a_robot_driving_across_its_loop() -> None:
+    # The model before: it passes in front of the robot and is pushed ahead of it along
+    # the robot's heading, more than 1 m off its loop.
+    track, _ = _driven_across(SocialForce(dodge=0.0))
+    assert track[:, 0].min() < -1.0
+    # Now it lets the robot by behind it and never leaves its loop westwards, and is back
+    # on its loop at the end; neither run touches the robot.
+    track, smallest = _driven_across(SocialForce())
+    assert track[:, 0].min() > -0.3
+    assert abs(track[-1, 0]) < 0.05
+    assert smallest > 0.0
+
+
+def test_away_from_approach() -> None:
+    model = SocialForce()
+    human, heading, desired = (0.0, 0.0), (1.0, 0.0), (0.8, 0.0)
+    # a robot 1 m ahead, a little to the human's left, coming at it against its way
+    robot = Agent(1.0, 0.2, ROBOT_RADIUS, -0.12, 0.0)
+    norm = math.hypot(1.0, 0.2)
+    away = (-1.0 / norm, -0.2 / norm)
+    (ax, ay), side = away_from_approach(model, None, *human, 0.25, away, robot, desired,
+                                        heading, 1.0)
+    # turned across the robot's heading, to the side of its line the human stands on
+    assert ay < -0.7 and ax > away[0]
+    assert side == 1.0  # the robot does not cross the human's way: its own side
+    # standing, or following the human along its way: straight away, as before
+    still = Agent(1.0, 0.2, ROBOT_RADIUS)
+    assert away_from_approach(model, None, *human, 0.25, away, still, desired, heading,
+                              1.0) == (away, 1.0)
+    behind = Agent(-1.0, 0.2, ROBOT_RADIUS, 0.12, 0.0)
+    back = (1.0 / norm, -0.2 / norm)
+    assert away_from_approach(model, None, *human, 0.25, back, behind, desired, heading,
+                              1.0) == (back, 1.0)
+    # a wall on the human's side: it steps to the other side of the robot's line
+    wall = np.array([[0.0, -1.0, 0.0, 5.0, 0.4]])  # fills y <= -0.6
+    (_, ay), _ = away_from_approach(model, wall, *human, 0.25, away, robot, desired, heading,
+                                    1.0)
+    assert ay > 0.7
+    # in the force: the human is pushed to its side, where before (dodge 0) it was pushed
+    # back ahead of the robot, as far to the side as the passing turn took it
+    before = social_acceleration(SocialForce(dodge=0.0), *human, 0.8, 0.0, 0.25, desired,
+                                 [robot], 0.8, 1.0, robot)
+    after = social_acceleration(model, *human, 0.8, 0.0, 0.25, desired, [robot], 0.8, 1.0,
+                                robot)
+    assert after[1] < before[1] - 0.5 and after[0] > before[0]
+    # a robot crossing the human's way ahead, to the human's right: passed behind, on the left
+    crossing = Agent(1.0, 0.5, ROBOT_RADIUS, 0.0, -0.12)
+    assert away_from_approach(model, None, *human, 0.25, (-0.9, -0.45), crossing, desired,
+                              heading, 1.0)[1] == -1.0
