@@ -13,6 +13,7 @@ navigator as it was: the side these tests show failing.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -51,7 +52,7 @@ def clearances(nav: ReferenceNavigator, arcs: tuple[float, ...], standing: float
     return out
 
 
-def commands(cls: type[ReferenceNavigator], ticks: list[tuple[float, ...]],
+def commands(cls: type[ReferenceNavigator], ticks: Sequence[tuple[float, ...]],
              standing: float) -> list[VelocityCommand]:
     """The commands of a navigator facing its goal down a corridor, nobody in sight, tick by
     tick, while its local planner admits ``clearances(nav, ticks[k], standing)`` at tick k."""
