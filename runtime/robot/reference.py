@@ -90,8 +90,25 @@ tie: the arcs past either side scored within a centimetre or two, the laser's no
 the choice from tick to tick, and the robot weaved in front of a person who had stopped for
 it (issue 22: SMOOTH_MOTION in 2 of 1,000 medium runs). The hysteresis of Nav2 DWB's
 oscillation critic, as a cost: a side is kept unless the other is clearly better. Turning on
-the spot is no weaving and neither pays nor sets it; away from people the planner is as
-before."""
+the spot is no weaving and neither pays nor sets it; in a squeeze (``SQUEEZE_GAP``) the side
+is held outright; elsewhere the planner is as before."""
+SQUEEZE_GAP = 0.1
+"""Metres: while a laser point is this near the footprint where it stands (the local grid's
+reading, up to ~5.7 cm under the truth), the robot squeezes past something, and it does not
+drive an arc against its last driving turn of the last ``SIDE_MEMORY`` seconds at all (it
+may still turn on the spot, or drive straight). There the roll-outs' clearances sit at
+``MARGIN`` and the laser's 1 cm noise admits and refuses arcs from scan to scan: between two
+tables 0.45 m apart the arcs towards the path were refused for one scan, the planner took
+the only forward arc left, a sharp turn the other way, and the next scan admitted the first
+side again: right, left, right within 0.8 s at 0.065-0.26 m/s (issue 25: SMOOTH_MOTION in 1
+of 1,000 medium runs, nobody near). ``TURN_COMMITMENT``'s cost was not enough there: in a
+squeeze the scores of the few admissible arcs differ by tenths. Nav2 DWB's oscillation
+critic refuses such a flip outright, as this does. Away from obstacles and people the
+planner is as before, so a heading controller that weaves in the open is as visible as
+before (bench/defects: oscillating-heading)."""
+SIDE_MEMORY = 4.0
+"""Seconds a driving turn's side is held in a squeeze: the span within which turning back
+and forth while driving is weaving (the default .vepl's SMOOTH_MOTION window)."""
 SLOW_ZONE_RADIUS = 0.8
 """Metres from the footprint: an unmapped laser point this close puts the robot in its slow
 zone (the promise requirements may check, with ``SLOW_ZONE_SPEED``)."""
@@ -182,6 +199,8 @@ class ReferenceNavigator:
         self._turn_side = 0.0
         """Sign of the local planner's last driving turn (0: none since the goal or a
         recovery)."""
+        self._turn_time = -math.inf
+        """When the local planner last chose a driving turn."""
         self._align_first = False
         hx, hy = context.robot_size[0] / 2, context.robot_size[1] / 2
         self._half = (hx, hy)
@@ -297,6 +316,8 @@ class ReferenceNavigator:
         ws = self._wmax * np.array([-0.6, -0.35, -0.18, -0.08, 0.0, 0.08, 0.18, 0.35, 0.6])
         v, w = np.meshgrid(vs, ws, indexing="ij")
         self._cmds = np.stack((v.ravel(), w.ravel()), axis=1)
+        self._standing = int(np.nonzero((self._cmds == 0.0).all(axis=1))[0][0])
+        """Index of standing still: its roll-out's clearance is the footprint's gap now."""
         fine = ROLLOUT_STEPS * 2
         ts = np.linspace(0.0, HORIZON, fine + 1)
         vv, ww = self._cmds[:, 0:1], self._cmds[:, 1:2]
@@ -473,8 +494,11 @@ class ReferenceNavigator:
             align = self._turn_to_path(pose, points, margin)
             if align is not None:
                 return align
+        hold = now - self._turn_time < SIDE_MEMORY and self._squeezed(points)
         chosen = self._choose(pose, points, dist, margin,
-                              self.turn_commitment if now < self._slow_until else 0.0)
+                              self.turn_commitment if now < self._slow_until else 0.0, hold)
+        if chosen is not None and chosen.angular != 0.0 and chosen.linear != 0.0:
+            self._turn_time = now
         heading = self._path_heading((x, y))
         aligned = heading is not None and abs(math.remainder(heading - yaw, math.tau)) < 0.5
         # Turning on the spot although already facing the path is the local planner's way
@@ -605,10 +629,11 @@ class ReferenceNavigator:
                 math.remainder(p0[2] + f * dyaw, math.tau))
 
     def _choose(self, pose: tuple[float, float, float], points: np.ndarray,
-                dist: float, margin: float = MARGIN, commit: float = 0.0
-                ) -> VelocityCommand | None:
+                dist: float, margin: float = MARGIN, commit: float = 0.0,
+                hold: bool = False) -> VelocityCommand | None:
         """The best admissible velocity pair, None when none is; ``commit``: the score an
-        arc turning against the last driving turn loses (``TURN_COMMITMENT``)."""
+        arc turning against the last driving turn loses (``TURN_COMMITMENT``); ``hold``:
+        such an arc is not admissible at all (``SQUEEZE_GAP``)."""
         x, y, yaw = pose
         target = self._lookahead((x, y))
         c, s = math.cos(yaw), math.sin(yaw)
@@ -625,10 +650,10 @@ class ReferenceNavigator:
         # Close to the goal, slow down so the robot stops within tolerance.
         slow = min(1.0, max(0.25, dist / 0.6))
         over = np.maximum(v - self._vmax * slow, 0.0)
+        against = (w * self._turn_side < 0) & (v != 0.0)
         score = (-1.0 * to_target - 0.35 * heading_err + 0.6 * clearance
-                 + 0.25 * v / self._vmax - 3.0 * over - 0.4 * (v < 0)
-                 - commit * ((w * self._turn_side < 0) & (v != 0.0)))
-        score = np.where(hit, -np.inf, score)
+                 + 0.25 * v / self._vmax - 3.0 * over - 0.4 * (v < 0) - commit * against)
+        score = np.where(hit | (hold & against), -np.inf, score)
         # Standing still is admissible but never progress: only chosen when nothing else is.
         score = np.where((v == 0.0) & (w == 0.0), -np.inf, score)
         best = int(np.argmax(score))
@@ -637,6 +662,11 @@ class ReferenceNavigator:
         if w[best] != 0.0 and v[best] != 0.0:
             self._turn_side = math.copysign(1.0, float(w[best]))
         return VelocityCommand(float(v[best]), float(w[best]))
+
+    def _squeezed(self, points: np.ndarray) -> bool:
+        """Whether a laser point is within ``SQUEEZE_GAP`` of the footprint where it stands."""
+        clearance = self._rollout_clearance(points, self._scan_pose)
+        return bool(clearance[self._standing] < SQUEEZE_GAP)
 
     def _rollout_clearance(self, points: np.ndarray,
                            pose: tuple[float, float, float]) -> np.ndarray:

@@ -37,7 +37,12 @@ class RoundedClearance(ArcsAround):
     """The reference before the fix: a roll-out's gap is the grid's rounded one only. It also
     leaves a goal behind it to the local planner's forward arcs, as the reference did when the
     search found the scene: turning on the spot first (issue 22) the robot no longer swings
-    into the corner's trap in this room, which is no fix of the rounding."""
+    into the corner's trap in this room, which is no fix of the rounding. Nor did it hold its
+    turning side in a squeeze (issue 25, tests/runtime/test_squeeze.py), which also keeps it
+    out of the trap here."""
+
+    def _squeezed(self, points: np.ndarray) -> bool:
+        return False
 
     def _exact_clearance(self, k: int, points: np.ndarray, rounded: np.ndarray,
                          mapped: np.ndarray) -> float:

@@ -44,6 +44,7 @@ def clearances(nav: ReferenceNavigator, left: float, right: float) -> np.ndarray
     out = np.full(len(v), -1.0)
     out[slow & np.isclose(w, 0.18 * nav._wmax)] = left
     out[slow & np.isclose(w, -0.18 * nav._wmax)] = right
+    out[nav._standing] = 0.5  # the person is ahead, not beside it: no squeeze (SQUEEZE_GAP)
     return out
 
 
