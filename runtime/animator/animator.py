@@ -35,8 +35,11 @@ from rei.lang.room.model import DEFAULT_BEHAVIOUR, WALKING_SPEEDS, Behaviour
 from rei.lang.room.spline import CatmullRom
 from rei.runtime.animator.reactive import (
     Agent,
+    Dodge,
     SocialForce,
+    Vec,
     YieldRule,
+    dodge_sides,
     fits_past,
     gap_beside,
     gap_in_the_way,
@@ -209,6 +212,10 @@ class Animator:
         """Social humans: switched side while held back, not yet got on since."""
         self._free = [0.0] * len(items)
         """Social humans: seconds not held back."""
+        self._dodge: list[Dodge | None] = [None] * len(items)
+        """Social humans: the sides they get past a robot coming at them by."""
+        self._dodge_age = [0.0] * len(items)
+        """Social humans: seconds since the robot last came at them (``dodge_memory``)."""
         self._giving_way = [False] * len(items)
         self._away = [False] * len(items)
         """Yielding humans giving way: stepping away from the robot (no room across)."""
@@ -448,9 +455,9 @@ class Animator:
                 and fits_past(model, self.walls, pose[0], pose[1], item.radius, desired, robot,
                               -self._side[k]):
             self._side[k], self._held[k] = -self._side[k], 0.0
+        dodge = self._dodge_sides(k, model, pose, item.radius, (vx, vy), desired, robot, dt)
         ax, ay = social_acceleration(model, pose[0], pose[1], vx, vy, item.radius, desired,
-                                     others, self._path_speed[k], self._side[k], robot,
-                                     self.walls)
+                                     others, self._path_speed[k], self._side[k], robot, dodge)
         vx, vy = limit_speed(vx + ax * dt, vy + ay * dt, v_max)
         # What it touches of walls and fixed objects: a velocity into one is not kept but
         # turned along it by the contact, and must not be turned into the robot.
@@ -473,6 +480,26 @@ class Animator:
             self._side[k], self._held[k], self._tried[k] = side, 0.0, True
         self._velocity[k] = (vx, vy)
         self._feedback[k] = (0.0, 0.0, _turn(item.face_motion, vx, vy, pose[2], FACING_SPEED))
+
+    def _dodge_sides(self, k: int, model: SocialForce, pose: Pose, radius: float,
+                     velocity: Vec, desired: Vec, robot: Agent | None, dt: float
+                     ) -> Dodge | None:
+        """The sides social human ``k`` gets past the robot by (``dodge_sides``): chosen when
+        the robot comes at it and kept while it does, and for ``dodge_memory`` after."""
+        if robot is None:
+            return None
+        kept = self._dodge[k]
+        near = math.hypot(pose[0] - robot.x, pose[1] - robot.y) - radius - robot.radius \
+            <= model.dodge_near
+        chosen = dodge_sides(model, self.walls, pose[0], pose[1], radius, velocity, desired,
+                             robot, self._side[k], kept if model.dodge_memory > 0.0 else None)
+        if chosen is not None and near:
+            self._dodge[k], self._dodge_age[k] = chosen, 0.0
+            return chosen
+        self._dodge_age[k] += dt
+        if kept is not None and self._dodge_age[k] >= model.dodge_memory:
+            self._dodge[k] = kept = None
+        return chosen if chosen is not None else kept
 
     def commands(self, step: int) -> list[tuple[int, float, float, float]]:
         """(body, vx, vy, wz) moving each body along its curve from ``step`` to ``step + 1``."""

@@ -177,6 +177,18 @@ class SocialForce:
     way keeps its radius from every wall (``room_aside``)."""
     dodge_speed: float = 0.05
     """m/s: a robot slower than this is standing, and repels the human straight away."""
+    dodge_memory: float = 2.0
+    """s a human keeps the sides it chose to step off a robot's line and to pass it on
+    (``dodge_sides``) after the robot last came at it within ``dodge_near`` (0: it chooses
+    them afresh at every step). Chosen afresh at every step, both flipped from step to step: a
+    human on the line of a crawling robot, whose speed hovered about ``dodge_speed``,
+    stepped left, right and left again in front of it, and the robot weaving round it
+    failed SMOOTH_MOTION (issue 25's protocol, seed 3). People commit to a side, as the
+    reference navigator does (``TURN_COMMITMENT``)."""
+    dodge_near: float = 1.0
+    """m between footprints within which a human commits to the sides it chose; farther
+    off it weighs them afresh at every step (committed from 3 m off, a human that chose
+    before the robot turned its way passed it in front)."""
     wall_stop: bool = True
     """Whether a human's velocity into a wall or fixed object it touches (within
     ``clearance_margin``) is dropped before it is kept clear of the others (``keep_clear``);
@@ -243,13 +255,13 @@ def yield_factor(rule: YieldRule, x: float, y: float, radius: float, direction: 
 def social_acceleration(model: SocialForce, x: float, y: float, vx: float, vy: float,
                         radius: float, desired: Vec, others: list[Agent],
                         walking_speed: float = 0.0, side: float = 1.0,
-                        robot: Agent | None = None, walls: np.ndarray | None = None) -> Vec:
+                        robot: Agent | None = None, dodge: Dodge | None = None) -> Vec:
     """dv/dt of a human at (x, y) with velocity (vx, vy) that wants to walk at ``desired``
     along a path walked at ``walking_speed`` (m/s; the repulsion's scale, see
     ``SocialForce.reference_speed``), passing what is ahead on its right (``side`` 1) or
     its left (-1). ``robot`` (one of ``others``) is the one body it steps off the line of
-    and passes behind when it moves (``away_from_approach``; ``walls`` as in
-    ``wall_distance``)."""
+    and passes as ``dodge`` says (``dodge_sides``, ``away_from_approach``; None: it
+    repels like any other)."""
     strength = model.strength * max(1.0, walking_speed / model.reference_speed)
     ax = (desired[0] - vx) / model.relaxation_time
     ay = (desired[1] - vy) / model.relaxation_time
@@ -270,9 +282,8 @@ def social_acceleration(model: SocialForce, x: float, y: float, vx: float, vy: f
         weight = model.anisotropy + (1.0 - model.anisotropy) * (1.0 + cos_phi) / 2.0
         push = strength * math.exp(-gap / model.range) * weight
         passes = side
-        if other is robot and model.dodge > 0.0:
-            (nx, ny), passes = away_from_approach(model, walls, x, y, radius, (nx, ny),
-                                                  other, desired, (hx, hy), side)
+        if other is robot and dodge is not None:
+            (nx, ny), passes = away_from_approach(model, (nx, ny), other, desired, dodge)
         ax += push * nx
         ay += push * ny
         if cos_phi > 0.0:  # only what is ahead deflects the human sideways, to its right
@@ -282,44 +293,81 @@ def social_acceleration(model: SocialForce, x: float, y: float, vx: float, vy: f
     return ax, ay
 
 
-def away_from_approach(model: SocialForce, walls: np.ndarray | None, x: float, y: float,
-                       radius: float, away: Vec, robot: Agent, desired: Vec, heading: Vec,
-                       side: float) -> tuple[Vec, float]:
-    """Which way a robot on the move repels a human at (x, y) (a unit vector; ``away`` is
-    straight away from it) and the side (1 right, -1 left of ``heading``) the human passes
-    it on (``side`` when it stands).
+@dataclass(frozen=True)
+class Dodge:
+    """How a human gets past a robot coming at it (``dodge_sides``): the side of the robot's
+    line it steps off to and the side it passes the robot on (each 1 right, -1 left; the
+    first of the robot's heading, the second of the human's), and the robot's and the
+    human's headings they were chosen for (unit vectors)."""
+
+    steps: float
+    passes: float
+    towards: Vec
+    walking: Vec
+
+
+def dodge_sides(model: SocialForce, walls: np.ndarray | None, x: float, y: float,
+                radius: float, velocity: Vec, desired: Vec, robot: Agent, side: float,
+                kept: Dodge | None = None) -> Dodge | None:
+    """The sides a human at (x, y) walking at ``velocity`` (or wanting to, ``desired``)
+    takes to get past a robot on the move (None while the robot stands: it repels straight away, and
+    the human passes it on ``side``); ``kept``: the sides it chose a moment ago, which it
+    keeps (``SocialForce.dodge_memory``) unless the robot or the human has turned away from
+    the heading they were chosen for by more than a right angle.
 
     Pushed straight away from a robot that comes at it, a human retreats along the robot's
     heading, ahead of it, for as long as it comes on: issue 25's TPE room, where the robot
     drove a walker 2.2 m off its loop into a corner beside its goal and waited there for
-    it until the goal aborted. People step off the line of what comes at them, so the part
-    of the push along the robot's heading is turned across it (``dodge`` of it), to the side
+    it until the goal aborted. People step off the line of what comes at them: to the side
     of the robot's line the human stands on, or to the other where only that has
-    ``dodge_room``; in full when the robot comes against the human's way, not at all when
-    it follows it (it then pushes the human on along its way). And a human passes a robot
-    crossing its way behind it: passing in front of a moving robot on the side it moves to
-    led the human along with it."""
+    ``dodge_room``. And a human passes a robot crossing its way (at 30 degrees or more)
+    behind it: passing in front of a moving robot on the side it moves to led the human
+    along with it."""
+    speed = math.hypot(robot.vx, robot.vy)
+    if model.dodge <= 0.0 or speed < model.dodge_speed:
+        return None
+    ux, uy = robot.vx / speed, robot.vy / speed
+    lx, ly = -uy, ux  # the robot's left
+    pace = math.hypot(*velocity)
+    hx, hy = (velocity[0] / pace, velocity[1] / pace) if pace > 1e-6 else _unit(desired)
+    if kept is not None and kept.towards[0] * ux + kept.towards[1] * uy >= 0.0 \
+            and kept.walking[0] * hx + kept.walking[1] * hy >= 0.0:
+        steps, passes, towards, walking = kept.steps, kept.passes, kept.towards, kept.walking
+    else:
+        crossing = hy * ux - hx * uy  # the robot's heading along the human's right
+        passes = side if abs(crossing) < 0.5 else (-1.0 if crossing > 0.0 else 1.0)
+        steps = 1.0 if (x - robot.x) * lx + (y - robot.y) * ly >= 0.0 else -1.0
+        towards, walking = (ux, uy), (hx, hy)
+    if walls is not None and not room_aside(walls, x, y, radius, (steps * lx, steps * ly),
+                                            model.dodge_room) \
+            and room_aside(walls, x, y, radius, (-steps * lx, -steps * ly), model.dodge_room):
+        steps = -steps
+    return Dodge(steps, passes, towards, walking)
+
+
+def away_from_approach(model: SocialForce, away: Vec, robot: Agent, desired: Vec,
+                       dodge: Dodge) -> tuple[Vec, float]:
+    """Which way a robot on the move repels a human (a unit vector; ``away`` is straight
+    away from it) that gets past it as ``dodge`` says, and the side it passes it on: the
+    part of the push along the robot's heading is turned across it, to ``dodge.steps``
+    (``dodge`` of it), in full when the robot comes against the human's way (``desired``),
+    not at all when it follows it (it then pushes the human on along its way). A robot
+    that stopped a moment ago (``dodge_memory``) pushes straight away, and the human
+    passes it on the side it chose."""
     speed = math.hypot(robot.vx, robot.vy)
     if speed < model.dodge_speed:
-        return away, side
+        return away, dodge.passes
     ux, uy = robot.vx / speed, robot.vy / speed
-    crossing = heading[1] * ux - heading[0] * uy  # the robot's heading along the human's right
-    passes = side if abs(crossing) < 0.5 else (-1.0 if crossing > 0.0 else 1.0)
     ahead = away[0] * ux + away[1] * uy
     if ahead <= 0.0:
-        return away, passes
+        return away, dodge.passes
     dx, dy = _unit(desired)
     share = model.dodge * ahead * (1.0 - max(0.0, ux * dx + uy * dy))
-    lx, ly = -uy, ux  # the robot's left
-    stands = 1.0 if away[0] * lx + away[1] * ly >= 0.0 else -1.0
-    if walls is not None and not room_aside(walls, x, y, radius, (stands * lx, stands * ly),
-                                            model.dodge_room) \
-            and room_aside(walls, x, y, radius, (-stands * lx, -stands * ly), model.dodge_room):
-        stands = -stands
-    tx = away[0] + share * (stands * lx - ux)
-    ty = away[1] + share * (stands * ly - uy)
+    lx, ly = -dodge.steps * uy, dodge.steps * ux
+    tx = away[0] + share * (lx - ux)
+    ty = away[1] + share * (ly - uy)
     norm = math.hypot(tx, ty)
-    return ((tx / norm, ty / norm) if norm > 1e-9 else away), passes
+    return ((tx / norm, ty / norm) if norm > 1e-9 else away), dodge.passes
 
 
 def keep_clear(model: SocialForce, x: float, y: float, vx: float, vy: float, radius: float,
