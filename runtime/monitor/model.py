@@ -24,7 +24,14 @@ from rei.lang.vepl.linker import NAMED_STATES
 from rei.lang.vepl.model import MISSION_STATES, TASK_FAILURES, TASK_STATES
 from rei.runtime.messages import MissionEvent, Sample, StreamHeader
 from rei.runtime.monitor.automata import QueryInputs
-from rei.runtime.monitor.efficiency import FloorGraph, TaskEfficiency, TaskProgress, judge_task
+from rei.runtime.monitor.efficiency import (
+    FloorGraph,
+    FreeSpace,
+    TaskEfficiency,
+    TaskProgress,
+    footprint_shapes,
+    judge_task,
+)
 from rei.runtime.monitor.geometry import FootprintSet
 from rei.runtime.monitor.hazard import HazardSensor
 from rei.runtime.monitor.laser import BeamEdges, clearance
@@ -191,7 +198,7 @@ class RuntimeModel:
         self.pushed_top_speed = 0.0
         self._last_time: float | None = None
         self._task: TaskProgress | None = None
-        self._graph: FloorGraph | None = None
+        self._graph: FreeSpace | FloorGraph | None = None
         self._graph_built = False
         self.efficiency: list[tuple[str, TaskEfficiency]] = []
         """(task, figures) of every task that succeeded, in order."""
@@ -284,7 +291,7 @@ class RuntimeModel:
             self.path_length += step
         self._last_xy = (x, y)
         if not self._graph_built:
-            self._graph, self._graph_built = self._floor_graph(s), True
+            self._graph, self._graph_built = self.path_space(s), True
         if self._task is not None:
             self._task.observe((x, y), step, own.speed, own.yaw_rate, dt)
         scan = s.belief.scan
@@ -418,17 +425,26 @@ class RuntimeModel:
         self._judged = judge_task(task, e.time, shortest, self.speed_limit)
         self.efficiency.append((task.goal.name, self._judged))
 
-    def _floor_graph(self, s: Sample) -> FloorGraph | None:
-        """The floors as a graph, tiles under a static object's centre blocked (from the
-        first sample's poses: static objects stay put); None when the floors are off-grid."""
+    def path_space(self, s: Sample) -> FreeSpace | FloorGraph | None:
+        """The shortest paths' space, from the first sample's poses (static objects stay
+        put): the floors less the walls' and static objects' footprints inflated by the
+        robot's inradius; the tile estimate (tiles under a static object's centre blocked)
+        when the header lists neither; None when the floors are off-grid."""
         if not self.floors.on_grid or not len(self.floor_names):
             return None
         blocked = np.zeros(len(self.floor_names), dtype=bool)
         static = [i for i, o in enumerate(self.header.objects) if o.role == "static"]
+        poses = np.asarray(s.poses, dtype=float)
         if static:
-            under = self.floors.of(np.asarray(s.poses, dtype=float)[static, :2])
+            under = self.floors.of(poses[static, :2])
             blocked[under[under >= 0]] = True
-        return FloorGraph(self.floors.grid, self.floors.origin, self.floors.tile, blocked)
+        tiles = FloorGraph(self.floors.grid, self.floors.origin, self.floors.tile, blocked)
+        solid = [i for i, o in enumerate(self.header.objects) if o.role in ("wall", "static")]
+        if not solid:
+            return tiles
+        shapes = footprint_shapes([self.header.objects[i].footprint for i in solid],
+                                  poses[solid, :3], self.floors.tile, self.inradius)
+        return FreeSpace(tiles, shapes, self.inradius)
 
     def _own_task_arrays(self) -> None:
         """Copy the task arrays before changing them in place: the inputs handed out
