@@ -60,26 +60,32 @@ def replay(trace: Path) -> tuple[list[tuple[float, float, float]], float]:
     return tasks, model.idle_travel
 
 
-def rejudge(trace: Path) -> tuple[list[tuple[float, float, float, float, float, float]], float]:
+def rejudge(trace: Path) -> tuple[list[tuple[float, float, float, float, float, float]],
+                                  tuple[float, float]]:
     """((tile shortest, its path ratio, its time ratio, footprint shortest, its path ratio,
-    its time ratio) of every task that succeeded, CPU seconds of the two estimates) of one
-    run, from its poses and mission events: the runtime model's own bookkeeping (a task
-    starts where the sample carrying its start puts the robot, and adds each later step)."""
+    its time ratio) of every task that succeeded, (CPU s of the tile estimate, of the
+    footprint one: construction and every task's distance)) of one run, from its poses and
+    mission events: the runtime model's own bookkeeping (a task starts where the sample
+    carrying its start puts the robot, and adds each later step)."""
     header, samples = read_trace(trace)
     model = RuntimeModel(header)
     facts = header.mission_facts
     speed = facts.speed_limit if facts is not None else math.inf
+    tiles: FloorGraph | None = None
     space: FreeSpace | FloorGraph | None = None
     last: tuple[float, float] | None = None
     task: TaskProgress | None = None
     out: list[tuple[float, float, float, float, float, float]] = []
-    cpu = 0.0
+    cpu = [0.0, 0.0]
     for n, sample in enumerate(samples):
         x, y = float(sample.robot_pose[0]), float(sample.robot_pose[1])
         if n == 0:
             began = time.process_time()
-            space = model.path_space(sample)
-            cpu += time.process_time() - began
+            tiles = model.tile_space(sample)
+            between = time.process_time()
+            space = model.free_space(sample, tiles) if tiles is not None else None
+            cpu[0] += between - began
+            cpu[1] += time.process_time() - between
         if task is not None and last is not None:
             task.travelled += math.hypot(x - last[0], y - last[1])
         last = (x, y)
@@ -92,34 +98,36 @@ def rejudge(trace: Path) -> tuple[list[tuple[float, float, float, float, float, 
                     continue
                 goal = (done.goal.x, done.goal.y)
                 began = time.process_time()
-                tiles = space.tiles if isinstance(space, FreeSpace) else space
                 old = tiles.distance(done.start_xy, goal) if tiles is not None else math.inf
+                between = time.process_time()
                 new = space.distance(done.start_xy, goal) if space is not None else math.inf
-                cpu += time.process_time() - began
+                cpu[0] += between - began
+                cpu[1] += time.process_time() - between
                 a, b = judge_task(done, e.time, old, speed), judge_task(done, e.time, new, speed)
                 out.append((old, a.path_ratio, a.time_ratio, new, b.path_ratio, b.time_ratio))
-    return out, cpu
+    return out, (cpu[0], cpu[1])
 
 
-def estimates(traces: list[Path], max_path: float, max_time: float,
+def estimates(traces: list[tuple[Path, Path]], max_path: float, max_time: float,
               rows_csv: Path | None = None) -> int:
     """Print the two estimates' figures over ``traces`` (see the module's docstring); with
     ``rows_csv``, write every task's figures there too (one row per task)."""
     rows: dict[str, list[tuple[float, float, float, float, float, float]]] = {}
-    cpu, mismatched = 0.0, 0
-    for trace in traces:
-        name = trace.parent.name
+    cpu, mismatched = [0.0, 0.0], 0
+    for folder, trace in traces:
+        name = str(trace.parent.relative_to(folder)).removeprefix("runs/")
         rows[name], spent = rejudge(trace)
-        cpu += spent
+        cpu = [cpu[0] + spent[0], cpu[1] + spent[1]]
         summary = trace.parent / "summary.json"
         if summary.exists():
+            # recorded by a monitor of either estimate: its figures must be one's or the other's
             recorded = json.loads(summary.read_text())["measurements"]["efficiency"]
-            if len(recorded) != len(rows[name]) or any(
-                    not math.isclose(r["path_ratio"], t[1], rel_tol=1e-6, abs_tol=1e-9)
-                    or not math.isclose(r["time_ratio"], t[2], rel_tol=1e-6, abs_tol=1e-9)
-                    for r, t in zip(recorded, rows[name], strict=False)):
+            if len(recorded) != len(rows[name]) or not any(all(
+                    math.isclose(r["path_ratio"], t[at + 1], rel_tol=1e-6, abs_tol=1e-9)
+                    and math.isclose(r["time_ratio"], t[at + 2], rel_tol=1e-6, abs_tol=1e-9)
+                    for r, t in zip(recorded, rows[name], strict=True)) for at in (0, 3)):
                 mismatched += 1
-                print(f"{name}: the tile estimate's figures differ from summary.json")
+                print(f"{name}: neither estimate reproduces summary.json's figures")
     if rows_csv is not None:
         rows_csv.write_text("run,task,tile_shortest,tile_path_ratio,tile_time_ratio,"
                             "footprint_shortest,footprint_path_ratio,footprint_time_ratio\n"
@@ -127,7 +135,9 @@ def estimates(traces: list[Path], max_path: float, max_time: float,
                                       for n, r in rows.items() for k, t in enumerate(r)))
     print(f"{len(traces)} runs, {sum(map(len, rows.values()))} tasks that succeeded; "
           f"{mismatched} runs whose recorded figures the re-judging does not reproduce; "
-          f"{cpu:.1f} CPU s in the two estimates")
+          f"CPU s (construction and every task's distance): tile estimate {cpu[0]:.2f}, "
+          f"footprint estimate {cpu[1]:.2f} (the tile one's construction apart), ratio "
+          f"{cpu[1] / cpu[0] if cpu[0] > 0 else math.inf:.2f}")
     for label, at in (("tile estimate", 0), ("footprint estimate", 3)):
         paths = [t[at + 1] for r in rows.values() for t in r if t[at + 1] > 0]
         times = [t[at + 2] for r in rows.values() for t in r if t[at + 2] > 0]
@@ -167,7 +177,7 @@ def main() -> int:
     parser.add_argument("--csv", type=Path, help="with --estimates: every task's figures")
     args = parser.parse_args()
     if args.estimates:
-        return estimates(sorted(t for f in args.folders for t in f.rglob("trace.jsonl")
+        return estimates(sorted((f, t) for f in args.folders for t in f.rglob("trace.jsonl")
                                 if "static" not in t.parts), args.max_path, args.max_time,
                          args.csv)
     groups: dict[str, list[Path]] = {}
