@@ -2,20 +2,20 @@
 path, and how much the robot turned in place near its goal (thesis 2.4: goals reached "with
 minimal manoeuvring and in the possible shortest time").
 
-The shortest path runs from where the robot was when the task started to the goal's point,
-through the robot's real free space (``FreeSpace``): the floors less every wall's and static
-object's footprint inflated by the robot's inradius about its reference point, any angle,
-bending only at the obstacles' convex vertices (an A* search; shapely for the geometry). It
-is a lower bound of any route the robot can drive without touching anything (issue 25: a
-tile-level estimate made a chair close its whole tile, and the reference's path ratios fell
-to 0.74 in a cluttered room, so a wasteful detour passed): the geodesic distance of the
-success-weighted path length (SPL) of the navigation literature. Where the header lists no
-wall or static object, and past the vertex budget in a hall of hundreds of objects, the tile
-estimate (``FloorGraph``) stands in: over the stream header's floor tiles, a tile under a
-static object's centre blocked, exact for that abstract environment (a visibility graph of
-the blocked tiles' corners, searched with networkx). A task is judged only when that path
-less the goal's tolerance is at least ``MIN_JUDGED`` long: nearer goals give ratios of noise.
-This module must never import the simulator.
+The shortest path runs from where the robot was when the task started to the goal's point: the
+geodesic distance of the success-weighted path length (SPL) of the navigation literature. Two
+estimates of it. ``FloorGraph``, the one judged with: over the stream header's floor tiles
+(walls are no floors, a tile under a static object's centre blocked), any angle, never through
+a blocked tile nor between two blocked tiles that touch only at a corner; exact for that
+abstract environment (a visibility graph of the blocked tiles' corners, searched with
+networkx). ``FreeSpace`` (issue 25; ``RuntimeModel.FOOTPRINT_PATHS``): through the robot's
+real free space, the floors less every wall's and static object's footprint inflated by the
+robot's inradius, bending only at the obstacles' convex vertices (an A* search; shapely for the
+geometry); a lower bound of any route the robot can drive without touching anything, where the
+tile estimate closes a small object's whole tile and keeps no distance from walls (errs both
+ways by up to a third). A task is judged only when that path less the goal's tolerance is at
+least ``MIN_JUDGED`` long: nearer goals give ratios of noise. This module must never import
+the simulator.
 """
 
 from __future__ import annotations
