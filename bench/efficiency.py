@@ -18,7 +18,12 @@ figures of the tile estimate are checked against the run's summary.json), and pr
 estimate's distribution of path and time ratios, the runs whose worst task fails a bound and
 the smallest margins.
 
-Usage: python bench/efficiency.py FOLDER... [--estimates] [--max-path 1.5] [--max-time 4.0]
+With --halls it measures the two estimates' CPU cost in bench/simulation.py's halls of 200,
+1,000 and 2,000 objects (the same lattice of the same catalogue types, walls round them):
+building each, and a short task, one across the hall each way and one among the objects.
+
+Usage: python bench/efficiency.py FOLDER... [--estimates] [--max-path 1.5] [--max-time 3.0]
+       python bench/efficiency.py --halls
 """
 
 from __future__ import annotations
@@ -160,6 +165,54 @@ def estimates(traces: list[tuple[Path, Path]], max_path: float, max_time: float,
     return 0
 
 
+def halls() -> int:
+    """Print the estimates' CPU cost in bench/simulation.py's halls (see the docstring)."""
+    from bench.simulation import SCALING_HALLS, TYPES
+    from rei.catalogue import Tile
+    from rei.catalogue.loader import default_catalogue
+    from rei.runtime.monitor.efficiency import footprint_shapes
+    from rei.runtime.monitor.geometry import FootprintSet
+    from rei.runtime.monitor.model import FloorMap
+
+    catalogue = default_catalogue()
+    robot = catalogue.types["turtlebot3_waffle"].footprint
+    inradius = FootprintSet.build(robot, [], 1.0).robot_inradius()
+    print("| hall | vertices | build: tiles / footprints (CPU s) | task | tiles: m, CPU s | "
+          "footprints: m, CPU s |\n|---|---:|---|---|---|---|")
+    for cols, rows, statics in SCALING_HALLS:
+        floors = [(float(c), float(r)) for r in range(1, rows + 1) for c in range(1, cols + 1)]
+        walls = [(float(c), float(r)) for r in range(rows + 2) for c in range(cols + 2)
+                 if r in (0, rows + 1) or c in (0, cols + 1)]
+        lattice = [(float(c), float(r)) for r in range(2, rows + 1, 2)
+                   for c in range(2, cols, 2)][:statics]
+        began = time.process_time()
+        grid = FloorMap(np.array(floors), 1.0)
+        blocked = np.zeros(len(floors), dtype=bool)
+        blocked[grid.of(np.array(lattice))] = True
+        tiles = FloorGraph(grid.grid, grid.origin, 1.0, blocked)
+        built_tiles = time.process_time() - began
+        began = time.process_time()
+        footprints = [Tile()] * len(walls) + [catalogue.types[TYPES[n % len(TYPES)]].footprint
+                                              for n in range(len(lattice))]
+        poses = np.array([(x, y, 0.0) for x, y in walls + lattice])
+        space = FreeSpace(tiles, footprint_shapes(footprints, poses, 1.0, inradius), inradius)
+        built_space = time.process_time() - began
+        tasks = {"short": ((1.0, 1.0), (1.3, 1.1)), "across": ((1.0, 1.0), (cols, rows)),
+                 "back": ((cols - 1.0, rows - 1.0), (1.0, 1.0)),
+                 "among objects": ((5.0, 3.0), (9.0, 7.0))}
+        for n, (name, (p, q)) in enumerate(tasks.items()):
+            began = time.process_time()
+            old = tiles.distance(p, q)
+            between = time.process_time()
+            new = space.distance(p, q)
+            done = time.process_time()
+            head = (f"| {statics + 8} | {len(space.vertices)} | {built_tiles:.3f} / "
+                    f"{built_space:.3f}") if n == 0 else "| | |"
+            print(f"{head} | {name} | {old:.2f}, {between - began:.3f} | "
+                  f"{new:.2f}, {done - between:.3f} |")
+    return 0
+
+
 def quantiles(values: list[float]) -> str:
     if not values:
         return "—"
@@ -169,13 +222,19 @@ def quantiles(values: list[float]) -> str:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("folders", nargs="+", type=Path)
+    parser.add_argument("folders", nargs="*", type=Path)
     parser.add_argument("--estimates", action="store_true",
                         help="compare the tile and the footprint shortest-path estimates")
     parser.add_argument("--max-path", type=float, default=1.5)
-    parser.add_argument("--max-time", type=float, default=4.0)
+    parser.add_argument("--max-time", type=float, default=3.0)
     parser.add_argument("--csv", type=Path, help="with --estimates: every task's figures")
+    parser.add_argument("--halls", action="store_true",
+                        help="the estimates' CPU cost in bench/simulation.py's halls")
     args = parser.parse_args()
+    if args.halls:
+        return halls()
+    if not args.folders:
+        parser.error("give at least one FOLDER (or --halls)")
     if args.estimates:
         return estimates(sorted((f, t) for f in args.folders for t in f.rglob("trace.jsonl")
                                 if "static" not in t.parts), args.max_path, args.max_time,
