@@ -396,10 +396,14 @@ def test_a_detour_fails_efficient_path_against_the_real_free_space(
     pillar passes either way."""
     monkeypatch.setattr(RuntimeModel, "FOOTPRINT_PATHS", not tiles_only)
     header, samples = _corridor_run(detour)
-    _, result = monitor(header, samples, tmp_path)
+    _, result = monitor(header, samples, tmp_path / "a")
     verdicts = {v.requirement: v.status for v in result.verdicts}
     assert verdicts["MISSION_GOALS_REACHED"] == "pass"
     assert verdicts["EFFICIENT_PATH"] == status
+    _, again = monitor(header, samples, tmp_path / "b")  # the same stream, the same bytes
+    assert (tmp_path / "a" / "events.csv").read_bytes() == \
+        (tmp_path / "b" / "events.csv").read_bytes()
+    assert again.measurements["efficiency"] == result.measurements["efficiency"]
     figures = result.measurements["efficiency"][0]
     assert figures["shortest"] == pytest.approx(8.16 if tiles_only else 6.0, abs=0.1)
     if not detour:  # the tile estimate reads the drive past the pillar far below 1
