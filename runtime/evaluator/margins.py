@@ -201,7 +201,7 @@ class MarginTracker:
             "GOAL_HEADING": lambda: _finite(self.heading_left),
             "EFFICIENT_PATH": lambda: p.get("max_path_ratio", 1.5) - self.path_ratio
             if self.path_ratio > 0 else None,
-            "TIME_TO_GOAL": lambda: p.get("max_time_ratio", 4.0) - self.time_ratio
+            "TIME_TO_GOAL": lambda: p.get("max_time_ratio", 3.0) - self.time_ratio
             if self.time_ratio > 0 else None,
             "NO_SPIN_AT_GOAL": lambda: _finite(p.get("max_goal_spin", 4.7) - self.spin),
             "SETTLE": lambda: p.get("settle_tolerance", 0.1) - self.settle,

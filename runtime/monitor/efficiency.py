@@ -2,15 +2,20 @@
 path, and how much the robot turned in place near its goal (thesis 2.4: goals reached "with
 minimal manoeuvring and in the possible shortest time").
 
-The shortest path runs from where the robot was when the task started to the goal's point,
-over the room's floor tiles (the stream header's floor centres; walls are no floors, a tile
-under a static object's centre is blocked), any angle, never through a blocked tile nor between
-two blocked tiles that touch only at a corner: the geodesic distance of the success-weighted
-path length (SPL) of the navigation literature, on the abstract environment the queries already
-read. It is exact for that environment: straight where the goal is in sight, otherwise bending
-only at the corners of blocked tiles (a visibility graph, searched with networkx). A task is
-judged only when that path less the goal's tolerance is at least ``MIN_JUDGED`` long: nearer
-goals give ratios of noise. This module must never import the simulator.
+The shortest path runs from where the robot was when the task started to the goal's point: the
+geodesic distance of the success-weighted path length (SPL) of the navigation literature. Two
+estimates of it. ``FloorGraph``, the one judged with: over the stream header's floor tiles
+(walls are no floors, a tile under a static object's centre blocked), any angle, never through
+a blocked tile nor between two blocked tiles that touch only at a corner; exact for that
+abstract environment (a visibility graph of the blocked tiles' corners, searched with
+networkx). ``FreeSpace`` (issue 25; ``RuntimeModel.FOOTPRINT_PATHS``): through the robot's
+real free space, the floors less every wall's and static object's footprint inflated by the
+robot's inradius, bending only at the obstacles' convex vertices (an A* search; shapely for the
+geometry); a lower bound of any route the robot can drive without touching anything, where the
+tile estimate closes a small object's whole tile and keeps no distance from walls (errs both
+ways by up to a third). A task is judged only when that path less the goal's tolerance is at
+least ``MIN_JUDGED`` long: nearer goals give ratios of noise. This module must never import
+the simulator.
 """
 
 from __future__ import annotations
@@ -21,8 +26,11 @@ from dataclasses import dataclass
 
 import networkx as nx
 import numpy as np
+import shapely
 
+from rei.catalogue import Footprint
 from rei.runtime.messages import GoalFacts
+from rei.runtime.monitor.geometry import local_shape
 
 MIN_JUDGED = 0.5
 """m: a task whose shortest path less its tolerance is shorter is not judged (ratios 0)."""
@@ -41,6 +49,9 @@ path pulled taut (``FloorGraph._pulled``) bounds the task's path, and the exact 
 over the corners within that bound's ellipse when they are at most this many; else the
 bound stands in (longer than the shortest path by a few per cent on average: ratios judged
 against it err on the robot's side)."""
+VERTICES_PER_CORNER = 2
+"""An inflated footprint's corner is cut by one chord (two vertices): ``FreeSpace`` searches
+over all its vertices up to this many per corner of ``EXACT_CORNERS``."""
 _STEPS = ((1, 0, 1.0), (-1, 0, 1.0), (0, 1, 1.0), (0, -1, 1.0), (1, 1, math.sqrt(2.0)),
           (1, -1, math.sqrt(2.0)), (-1, 1, math.sqrt(2.0)), (-1, -1, math.sqrt(2.0)))
 
@@ -239,6 +250,159 @@ class FloorGraph:
             length += float(np.hypot(*(points[far] - points[at])))
             at = far
         return length
+
+
+class FreeSpace:
+    """Shortest paths of the robot's reference point through the room's real free space, in
+    metres: the floors less every wall and static object's footprint inflated by the robot's
+    inradius about that point (``FootprintSet.robot_inradius``: the largest disc about the
+    point inside the robot, so whatever way the robot faces, the point keeps that far from
+    any obstacle). The free space it searches holds every place the point can be, so its
+    shortest path is a lower bound of any route a robot drives without touching anything: a
+    chair in a tile's centre no longer closes the tile, and a gap narrower than the robot's
+    width is still closed. Inflated corners are cut by chords whose ends lie on the arc
+    (shapely's buffer), which makes the obstacles a hair smaller (at most 0.3 of the
+    inradius at a corner), never bigger. Paths bend only at the obstacles' convex vertices:
+    an A* search over them, each vertex's sight lines tested when it is expanded (shapely,
+    a prepared polygon). Past ``EXACT_CORNERS * VERTICES_PER_CORNER`` vertices (a hall of
+    hundreds of objects) the search runs over the vertices within the ellipse of a bound
+    round the two ends (the tile estimate, then the path found, which is exact once the
+    path is no longer than the bound); where even that holds too many, the tile estimate
+    (``FloorGraph``) stands in, as it does for a room whose header lists no wall or
+    static object."""
+
+    def __init__(self, tiles: FloorGraph, obstacles: list[shapely.Geometry],
+                 clearance: float) -> None:
+        """``obstacles``: the walls' and static objects' footprints already inflated by
+        ``clearance``, the robot's inradius (``footprint_shapes``)."""
+        self.tiles = tiles
+        self.clearance = float(clearance)
+        t = tiles.tile
+        floor = np.argwhere(tiles.floor)  # padded grid: tile (i, j) has centre at i - 1
+        centres = tiles.origin + (floor - 1.0) * t
+        floors = shapely.union_all(shapely.box(centres[:, 0] - t / 2, centres[:, 1] - t / 2,
+                                               centres[:, 0] + t / 2, centres[:, 1] + t / 2))
+        lo = tiles.origin - 1.5 * t
+        hi = tiles.origin + (np.array(tiles.floor.shape) - 1.5) * t
+        self._frame = shapely.box(*lo, *hi)
+        self.floors = floors
+        # Off the floors is closed too, not inflated: nothing stands there to keep off.
+        self.blocked = shapely.union_all([self._frame.difference(floors), *obstacles])
+        self.free, self.vertices = self._prepare(self.blocked)
+
+    def _prepare(self, blocked: shapely.Geometry) -> tuple[shapely.Geometry, np.ndarray]:
+        """The free region (prepared) and its reflex vertices (the obstacles' convex ones:
+        the only places a shortest path bends)."""
+        free = shapely.orient_polygons(self._frame.difference(blocked))
+        shapely.prepare(free)
+        points: list[np.ndarray] = []
+        for polygon in getattr(free, "geoms", [free]):
+            if polygon.is_empty:
+                continue
+            for ring in (polygon.exterior, *polygon.interiors):
+                xy = np.asarray(ring.coords)[:-1]
+                if len(xy) < 3:
+                    continue
+                before, after = xy - np.roll(xy, 1, axis=0), np.roll(xy, -1, axis=0) - xy
+                turn = before[:, 0] * after[:, 1] - before[:, 1] * after[:, 0]
+                points.append(xy[turn < 0])  # a right turn with the free side on the left
+        return free, np.concatenate(points) if points else np.zeros((0, 2))
+
+    def _clear(self, free: shapely.Geometry, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Whether each segment a[k]-b[k] stays in ``free`` (its boundary included)."""
+        lines = shapely.linestrings(np.stack((a, b), axis=1))
+        return np.asarray(shapely.covers(free, lines), dtype=bool)
+
+    def distance(self, start: tuple[float, float], goal: tuple[float, float]) -> float:
+        """Metres of the shortest collision-free path of the robot's reference point from
+        ``start`` to ``goal`` (inf when either is off the floors or nothing connects them).
+        A disc of the inradius round each end counts as free, so a robot that starts beside
+        an object, or a goal the robot can only reach within its tolerance, still has a
+        path."""
+        p, q = np.asarray(start, dtype=float), np.asarray(goal, dtype=float)
+        if not (np.isfinite(p).all() and np.isfinite(q).all()):
+            return math.inf
+        ends = shapely.points([p, q])
+        if not shapely.covers(self.floors, ends).all():
+            return math.inf
+        free, vertices = self.free, self.vertices
+        if not shapely.covers(free, ends).all():
+            discs = shapely.union_all(shapely.buffer(ends, self.clearance, quad_segs=2))
+            free, vertices = self._prepare(self.blocked.difference(
+                discs.intersection(self.floors)))
+        if self._clear(free, p[None], q[None])[0]:
+            return float(np.hypot(*(q - p)))
+        if len(vertices) <= EXACT_CORNERS * VERTICES_PER_CORNER:
+            return self._search(free, vertices, p, q)
+        # Many vertices: any bound on the path keeps the search to the vertices within its
+        # ellipse round the two ends; the path found there is exact once it is no longer
+        # than the bound (the shortest path, no longer, lies wholly in the ellipse).
+        tiles = bound = self.tiles.distance(start, goal)
+        gap = np.hypot(*(vertices - p).T) + np.hypot(*(vertices - q).T)
+        for _ in range(8):
+            if not math.isfinite(bound):
+                bound = 2.0 * float(np.hypot(*(q - p)))
+            near = vertices[gap <= bound + _EPS]
+            if len(near) > EXACT_CORNERS * VERTICES_PER_CORNER:
+                break
+            found = self._search(free, near, p, q)
+            if found <= bound + _EPS:
+                return found
+            bound = found if math.isfinite(found) else 2.0 * bound
+        return tiles
+
+    def _search(self, free: shapely.Geometry, vertices: np.ndarray, p: np.ndarray,
+                q: np.ndarray) -> float:
+        """A* from ``p`` to ``q`` over ``vertices``, the sight lines of a vertex tested when
+        it is expanded (the straight distance to ``q`` is the heuristic: consistent, so a
+        vertex expanded is settled)."""
+        nodes = np.concatenate((vertices, q[None]))
+        goal = len(nodes) - 1
+        h = np.hypot(*(nodes - q).T)
+        best = np.full(len(nodes), math.inf)
+        settled = np.zeros(len(nodes), dtype=bool)
+        heap: list[tuple[float, float, int]] = []
+
+        def expand(at: np.ndarray, cost: float) -> None:
+            open_ = np.flatnonzero(~settled)
+            length = np.hypot(*(nodes[open_] - at).T)
+            better = cost + length < best[open_] - _EPS
+            open_, length = open_[better], length[better]
+            if not len(open_):
+                return
+            seen = self._clear(free, np.broadcast_to(at, (len(open_), 2)), nodes[open_])
+            for k, d in zip(open_[seen].tolist(), length[seen].tolist(), strict=True):
+                best[k] = cost + d
+                heapq.heappush(heap, (cost + d + h[k], cost + d, k))
+
+        expand(p, 0.0)
+        while heap:
+            _, cost, k = heapq.heappop(heap)
+            if settled[k] or cost > best[k]:
+                continue
+            if k == goal:
+                return cost
+            settled[k] = True
+            expand(nodes[k], cost)
+        return math.inf
+
+
+def footprint_shapes(footprints: list[Footprint], poses: np.ndarray, tile: float,
+                     clearance: float = 0.0) -> list[shapely.Geometry]:
+    """The footprints placed at ``poses`` ((N, 3): x, y, yaw) and inflated by ``clearance``,
+    as shapely polygons whose vertices lie on the inflated outline (a hair smaller than it,
+    never bigger): a polygon's corners rounded by one chord each, a circle an octagon."""
+    shapes: list[shapely.Geometry] = []
+    for fp, (x, y, yaw) in zip(footprints, np.asarray(poses, dtype=float), strict=True):
+        local, radius = local_shape(fp, tile)
+        if local is None:
+            shapes.append(shapely.Point(x, y).buffer(radius + clearance, quad_segs=2))
+            continue
+        c, s = math.cos(yaw), math.sin(yaw)
+        placed = shapely.Polygon(np.column_stack((c * local[:, 0] - s * local[:, 1] + x,
+                                                  s * local[:, 0] + c * local[:, 1] + y)))
+        shapes.append(placed.buffer(clearance, quad_segs=1) if clearance > 0 else placed)
+    return shapes
 
 
 @dataclass
