@@ -90,8 +90,11 @@ tie: the arcs past either side scored within a centimetre or two, the laser's no
 the choice from tick to tick, and the robot weaved in front of a person who had stopped for
 it (issue 22: SMOOTH_MOTION in 2 of 1,000 medium runs). The hysteresis of Nav2 DWB's
 oscillation critic, as a cost: a side is kept unless the other is clearly better. Turning on
-the spot is no weaving and neither pays nor sets it; in a squeeze (``SQUEEZE_GAP``) the side
-is held outright; elsewhere the planner is as before."""
+the spot is no weaving and neither pays nor sets it. While the slow zone holds, and in a
+squeeze (``SQUEEZE_GAP``), the side of the last driving turn is held outright for
+``SIDE_MEMORY`` (as DWB's critic refuses a flip): creeping round a person at 0.06 m/s, the
+cost let single ticks of the other side through, left, right, left within 2 s (issue 25's
+protocol, TPE cand0045: SMOOTH_MOTION). Elsewhere the planner is as before."""
 SQUEEZE_GAP = 0.1
 """Metres: while a laser point is this near the footprint where it stands (the local grid's
 reading, up to ~5.7 cm under the truth), the robot squeezes past something, and it does not
@@ -494,9 +497,11 @@ class ReferenceNavigator:
             align = self._turn_to_path(pose, points, margin)
             if align is not None:
                 return align
-        hold = now - self._turn_time < SIDE_MEMORY and self._squeezed(points)
+        slow = now < self._slow_until
+        hold = now - self._turn_time < SIDE_MEMORY and (
+            (slow and self.turn_commitment > 0.0) or self._squeezed(points))
         chosen = self._choose(pose, points, dist, margin,
-                              self.turn_commitment if now < self._slow_until else 0.0, hold)
+                              self.turn_commitment if slow else 0.0, hold)
         if chosen is not None and chosen.angular != 0.0 and chosen.linear != 0.0:
             self._turn_time = now
         heading = self._path_heading((x, y))

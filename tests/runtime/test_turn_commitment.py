@@ -82,11 +82,18 @@ def test_near_ties_between_the_sides_no_longer_make_the_robot_weave() -> None:
     assert after == [1] * 8  # the first side, kept
 
 
-def test_a_side_that_is_clearly_better_still_wins() -> None:
+def test_near_a_person_the_side_is_held_even_against_a_clearly_better_one() -> None:
     # Left first; then the right is 0.3 m clearer (0.18 of score, beyond the commitment).
+    # Near a person a driving arc against the last driving turn is refused outright for
+    # SIDE_MEMORY, as Nav2 DWB's oscillation critic refuses it: the cost alone let single
+    # ticks of the other side through while the robot crept round a person, left, right,
+    # left (issue 25's protocol, TPE cand0045). The robot may still turn on the spot or
+    # drive straight, which a real scene offers and these crafted clearances do not (the
+    # hold's release after a straight stretch: tests/runtime/test_squeeze.py).
     gaps = [(0.12, 0.10)] * 3 + [(0.10, 0.40)] * 3
     assert 0.6 * 0.30 > TURN_COMMITMENT
-    assert sides(commands(ReferenceNavigator, gaps)) == [1, 1, 1, -1, -1, -1]
+    assert sides(commands(ReferenceNavigator, gaps)) == [1] * 6
+    assert sides(commands(Fickle, gaps)) == [1, 1, 1, -1, -1, -1]
 
 
 def test_away_from_people_the_planner_is_as_before() -> None:
