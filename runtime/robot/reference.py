@@ -179,6 +179,10 @@ class ReferenceNavigator:
     forward protective field; a subclass tuned otherwise sets its own, and the default
     .vepl's ``react_zone`` is this value, to be set with `--param` for such a robot)."""
     turn_commitment = TURN_COMMITMENT
+    hold_near_people = True
+    """Whether, while the slow zone holds, the side of the last driving turn is held outright
+    for ``SIDE_MEMORY`` (``TURN_COMMITMENT``; False: only its cost, the planner before issue
+    25's TPE cand0045)."""
 
     def __init__(self) -> None:
         self._tracker = GoalTracker()
@@ -499,7 +503,8 @@ class ReferenceNavigator:
                 return align
         slow = now < self._slow_until
         hold = now - self._turn_time < SIDE_MEMORY and (
-            (slow and self.turn_commitment > 0.0) or self._squeezed(points))
+            (slow and self.hold_near_people and self.turn_commitment > 0.0)
+            or self._squeezed(points))
         chosen = self._choose(pose, points, dist, margin,
                               self.turn_commitment if slow else 0.0, hold)
         if chosen is not None and chosen.angular != 0.0 and chosen.linear != 0.0:

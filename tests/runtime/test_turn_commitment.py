@@ -12,7 +12,10 @@ failing.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
+import pytest
 
 from rei.runtime.robot import NavGoal
 from rei.runtime.robot.protocol import Observation, VelocityCommand
@@ -25,6 +28,8 @@ from tests.runtime.test_reference_recovery import (
     scan_of,
 )
 
+REPO = Path(__file__).resolve().parents[2]
+SCENES = Path(__file__).parent / "scenes"
 PERSON = Circle(1.2, 0.0, 0.25)
 """Straight ahead, within the slow zone: unmapped laser points."""
 
@@ -33,6 +38,13 @@ class Fickle(ReferenceNavigator):
     """The reference before the fix: the better-scored side wins however small the margin."""
 
     turn_commitment = 0.0
+
+
+class Creeping(ReferenceNavigator):
+    """The reference before issue 25's TPE cand0045: near a person the commitment is a cost
+    only, never a hold."""
+
+    hold_near_people = False
 
 
 def clearances(nav: ReferenceNavigator, left: float, right: float) -> np.ndarray:
@@ -104,3 +116,26 @@ def test_away_from_people_the_planner_is_as_before() -> None:
 
 def test_the_commitment_is_deterministic() -> None:
     assert commands(ReferenceNavigator, NOISE) == commands(ReferenceNavigator, NOISE)
+
+
+@pytest.mark.slow
+def test_creeping_round_a_person_the_robot_does_not_weave(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """scenes/creeps: the robot creeps round the walker standing 0.6 m ahead of it. With the
+    commitment a cost only, single ticks of the other side got through: left, right, left
+    while driving, SMOOTH_MOTION failed. Held, it passes every requirement, the same bytes
+    for the same seed."""
+    from rei.runtime.commands.run import run_into  # noqa: PLC0415
+
+    monkeypatch.chdir(REPO)  # `tests.runtime.test_turn_commitment:Creeping` is imported here
+    scene, seed = SCENES / "creeps.mission", 1199988182
+    old, _ = run_into(scene, tmp_path / "old", "tests.runtime.test_turn_commitment:Creeping",
+                      seed=seed)
+    assert {v.requirement for v in old.verdicts if v.status == "fail"} == {"SMOOTH_MOTION"}
+    new, _ = run_into(scene, tmp_path / "new", seed=seed)
+    assert new.passed, [v for v in new.verdicts if v.status != "pass"]
+    assert new.measurements["tasks_succeeded"] == 4
+    again, _ = run_into(scene, tmp_path / "again", seed=seed)
+    for name in ("trace.jsonl", "events.csv"):
+        assert (tmp_path / "new" / name).read_bytes() == (tmp_path / "again" / name).read_bytes()
+    assert again.passed
