@@ -265,8 +265,7 @@ def social_acceleration(model: SocialForce, x: float, y: float, vx: float, vy: f
     strength = model.strength * max(1.0, walking_speed / model.reference_speed)
     ax = (desired[0] - vx) / model.relaxation_time
     ay = (desired[1] - vy) / model.relaxation_time
-    speed = math.hypot(vx, vy)
-    hx, hy = (vx / speed, vy / speed) if speed > 1e-6 else _unit(desired)
+    hx, hy = heading_of((vx, vy), desired)
     for other in others:
         dx, dy = x - other.x, y - other.y
         dist = math.hypot(dx, dy)
@@ -328,8 +327,7 @@ def dodge_sides(model: SocialForce, walls: np.ndarray | None, x: float, y: float
         return None
     ux, uy = robot.vx / speed, robot.vy / speed
     lx, ly = -uy, ux  # the robot's left
-    pace = math.hypot(*velocity)
-    hx, hy = (velocity[0] / pace, velocity[1] / pace) if pace > 1e-6 else _unit(desired)
+    hx, hy = heading_of(velocity, desired)
     if kept is not None and kept.towards[0] * ux + kept.towards[1] * uy >= 0.0 \
             and kept.walking[0] * hx + kept.walking[1] * hy >= 0.0:
         steps, passes, towards, walking = kept.steps, kept.passes, kept.towards, kept.walking
@@ -510,6 +508,15 @@ def limit_speed(vx: float, vy: float, limit: float) -> Vec:
     if speed <= limit or speed < 1e-12:
         return vx, vy
     return vx * limit / speed, vy * limit / speed
+
+
+def heading_of(velocity: Vec, desired: Vec) -> Vec:
+    """Where a human heads (a unit vector): along its velocity while it walks, else where it
+    wants to walk."""
+    speed = math.hypot(*velocity)
+    if speed > 1e-6:
+        return velocity[0] / speed, velocity[1] / speed
+    return _unit(desired)
 
 
 def _unit(v: Vec) -> Vec:

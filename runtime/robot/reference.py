@@ -110,8 +110,8 @@ critic refuses such a flip outright, as this does. Away from obstacles and peopl
 planner is as before, so a heading controller that weaves in the open is as visible as
 before (bench/defects: oscillating-heading)."""
 SIDE_MEMORY = 4.0
-"""Seconds a driving turn's side is held in a squeeze: the span within which turning back
-and forth while driving is weaving (the default .vepl's SMOOTH_MOTION window)."""
+"""Seconds a driving turn's side is held in a squeeze or near a person: the span within which
+turning back and forth while driving is weaving (the default .vepl's SMOOTH_MOTION window)."""
 SLOW_ZONE_RADIUS = 0.8
 """Metres from the footprint: an unmapped laser point this close puts the robot in its slow
 zone (the promise requirements may check, with ``SLOW_ZONE_SPEED``)."""
@@ -643,7 +643,8 @@ class ReferenceNavigator:
                 hold: bool = False) -> VelocityCommand | None:
         """The best admissible velocity pair, None when none is; ``commit``: the score an
         arc turning against the last driving turn loses (``TURN_COMMITMENT``); ``hold``:
-        such an arc is not admissible at all (``SQUEEZE_GAP``)."""
+        such an arc is not admissible at all (in a squeeze, ``SQUEEZE_GAP``, or near a
+        person, ``hold_near_people``)."""
         x, y, yaw = pose
         target = self._lookahead((x, y))
         c, s = math.cos(yaw), math.sin(yaw)
