@@ -54,7 +54,7 @@ os.environ["PYTHONPATH"] = os.pathsep.join(
     p for p in (str(REPO), os.environ.get("PYTHONPATH", "")) if p)
 
 from bench.defects import DEFECTS  # noqa: E402
-from rei.runtime.campaign import LocalEngine, RunRecord, plan_campaign, run_campaign  # noqa: E402
+from rei.runtime.campaigns import LocalEngine, RunRecord, plan_campaign, run_campaign  # noqa: E402
 from rei.runtime.robot import load_controller  # noqa: E402
 
 REFERENCE = "reference"

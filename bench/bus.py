@@ -116,7 +116,7 @@ def throughput(folder: Path, n: int) -> None:
 def _rei(*args: str, env: dict[str, str], ready: bool = False) -> subprocess.Popen[bytes]:
     """A `rei` process; with ``ready``, once it said its first line on stderr (it has
     imported what it needs and joined)."""
-    process = subprocess.Popen([sys.executable, "-m", "rei.runtime.cli", *args], cwd=REPO,
+    process = subprocess.Popen([sys.executable, "-m", "rei.runtime.commands", *args], cwd=REPO,
                                env=env, stdout=subprocess.PIPE,
                                stderr=subprocess.PIPE if ready else subprocess.DEVNULL)
     if ready:

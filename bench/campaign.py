@@ -14,7 +14,8 @@ per run (the same campaign with runs cut after --startup-duration simulated seco
 wall time of `rei demo` on 2 workers. --compare pages: before = every run its full page
 (--pages all), after = full pages only for runs that did not pass (--pages failed, the
 default of campaigns; issue 26). --compare warm (default): before = REI_WARM=off (every
-process a fresh interpreter), after = warm workers (rei.runtime.warm: a fork server per worker,
+process a fresh interpreter), after = warm workers (rei.runtime.platform.warm: a fork server per
+worker,
 the simulation and the robot's host forked), the cache on in both; --compare cache: before =
 REI_CACHE_DIR=off, after = the campaign's cache. CPU time is every process of the campaign,
 the runs' children included (getrusage of the waited-for children), so other jobs on a shared
@@ -49,16 +50,16 @@ from contextlib import contextmanager, redirect_stdout
 from pathlib import Path
 
 from rei.lang.cli import main as rei_gen
-from rei.runtime.campaign import (
+from rei.runtime.campaigns import (
     CampaignStore,
     DaskEngine,
     LocalEngine,
     plan_campaign,
     run_campaign,
 )
-from rei.runtime.campaign.cluster import loopback_cluster
-from rei.runtime.campaign.engines import CampaignEngine
-from rei.runtime.campaign.plan import CampaignPlan
+from rei.runtime.campaigns.dask_cluster import loopback_cluster
+from rei.runtime.campaigns.engines import CampaignEngine
+from rei.runtime.campaigns.plan import CampaignPlan
 
 
 def timed(plan: CampaignPlan, engine: CampaignEngine, out: Path) -> float:
@@ -149,7 +150,7 @@ def demo(out: Path, compare: str, on: bool) -> tuple[float, float]:
     with setting(compare, on):
         cpu = children_cpu()
         start = time.perf_counter()
-        subprocess.run([sys.executable, "-m", "rei.runtime.cli", "demo", "-o", str(out),
+        subprocess.run([sys.executable, "-m", "rei.runtime.commands", "demo", "-o", str(out),
                         "--workers", "2", "--pages", pages(compare, on), "-q"], check=False,
                        stdout=subprocess.DEVNULL,
                        stderr=subprocess.DEVNULL)
@@ -263,7 +264,7 @@ def alone(args: argparse.Namespace, root: Path) -> int:
         for on in (False, True):
             with setting(args.compare, on):
                 cpu = children_cpu()
-                subprocess.run([sys.executable, "-m", "rei.runtime.cli", "run", str(mission),
+                subprocess.run([sys.executable, "-m", "rei.runtime.commands", "run", str(mission),
                                 "-o", str(root / f"alone-{on}-{i}"), "--duration", "0.01",
                                 "--page", pages(args.compare, on), "-q"], check=False,
                                stdout=subprocess.DEVNULL)
@@ -365,7 +366,7 @@ def main() -> int:
 
 
 def runs_wall(folder: Path) -> list[float]:
-    from rei.runtime.campaign import CampaignStore  # noqa: PLC0415
+    from rei.runtime.campaigns import CampaignStore  # noqa: PLC0415
 
     return [r.wall_time for r in CampaignStore.read(folder)[2]]
 

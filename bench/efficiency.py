@@ -2,7 +2,8 @@
 
 Replays every run's trace.jsonl under the given folders (campaign folders, or bench/bugs.py's
 output: one folder per navigator) through the monitor's runtime model alone
-(rei.runtime.monitor.model.RuntimeModel: the same code `rei run` judges with) and prints, per
+(rei.runtime.observation.model.runtime_model.RuntimeModel: the same code `rei run` judges with) and
+prints, per
 navigator, the distribution of each task's path ratio, time ratio and turning in place near
 the goal (tasks that succeeded and were long enough to judge), and of the robot's own travel
 after its last task. This is how the default .vepl's thresholds (max_path_ratio,
@@ -12,7 +13,8 @@ goal, so their settle travel reads 0.
 
 With --estimates it compares the two shortest-path estimates instead (issue 25): the tile
 estimate (a tile under a static object's centre blocked) and the footprint one (walls' and
-static objects' footprints inflated by the robot's inradius, rei.runtime.monitor.efficiency
+static objects' footprints inflated by the robot's inradius,
+rei.runtime.observation.model.efficiency
 ``FreeSpace``), re-judging each task from the trace's poses and mission events alone (the
 figures of the tile estimate are checked against the run's summary.json), and prints each
 estimate's distribution of path and time ratios, the runs whose worst task fails a bound and
@@ -41,14 +43,14 @@ import json  # noqa: E402
 import math  # noqa: E402
 import time  # noqa: E402
 
-from rei.runtime.collector.trace import read_trace  # noqa: E402
-from rei.runtime.monitor.efficiency import (  # noqa: E402
+from rei.runtime.observation.model.efficiency import (  # noqa: E402
     FloorGraph,
     FreeSpace,
     TaskProgress,
     judge_task,
 )
-from rei.runtime.monitor.model import RuntimeModel  # noqa: E402
+from rei.runtime.observation.model.runtime_model import RuntimeModel  # noqa: E402
+from rei.runtime.trace import read_trace  # noqa: E402
 
 
 def replay(trace: Path) -> tuple[list[tuple[float, float, float]], float]:
@@ -170,9 +172,9 @@ def halls() -> int:
     from bench.simulation import SCALING_HALLS, TYPES
     from rei.catalogue import Tile
     from rei.catalogue.loader import default_catalogue
-    from rei.runtime.monitor.efficiency import footprint_shapes
-    from rei.runtime.monitor.geometry import FootprintSet
-    from rei.runtime.monitor.model import FloorMap
+    from rei.runtime.observation.model.efficiency import footprint_shapes
+    from rei.runtime.observation.model.geometry import FootprintSet
+    from rei.runtime.observation.model.runtime_model import FloorMap
 
     catalogue = default_catalogue()
     robot = catalogue.types["turtlebot3_waffle"].footprint

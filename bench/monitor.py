@@ -33,7 +33,6 @@ import numpy as np
 
 from rei.catalogue import Box, Cylinder
 from rei.lang.vepl import load_vepl
-from rei.runtime.collector.trace import read_trace, write
 from rei.runtime.messages import (
     SCHEMA_VERSION,
     LaserScan,
@@ -44,9 +43,10 @@ from rei.runtime.messages import (
     Sample,
     StreamHeader,
 )
-from rei.runtime.monitor import MonitorSink, generate_automata
-from rei.runtime.monitor.geometry import FootprintSet
-from rei.runtime.monitor.laser import BeamEdges, clearance
+from rei.runtime.observation.model.geometry import FootprintSet
+from rei.runtime.observation.model.laser_clearance import BeamEdges, clearance
+from rei.runtime.observation.monitor import MonitorSink, generate_automata
+from rei.runtime.trace import read_trace, write
 
 ROBOT = ObservedObject("robot", "static", "turtlebot3_waffle", Box(0.281, 0.306), 0.2)
 MOUNT = (-0.064, 0.0)

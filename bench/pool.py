@@ -1,4 +1,4 @@
-"""Benchmark of the kept worker pool (rei.runtime.campaign.engines.WorkerPool, issue 26 item 1):
+"""Benchmark of the kept worker pool (rei.runtime.campaigns.engines.WorkerPool, issue 26 item 1):
 CPU seconds per candidate of a shrink (its failure oracle) and of a search (its batches),
 before (each candidate or batch starts its own workers and fork servers, as before the pool)
 and after (one pool for the whole command), alternating in the same invocation.
@@ -19,12 +19,12 @@ import resource
 import tempfile
 from pathlib import Path
 
-from rei.runtime.campaign import LocalEngine
-from rei.runtime.campaign.engines import WorkerPool, kept_workers
-from rei.runtime.search import run_search
-from rei.runtime.search.run import SearchConfig
-from rei.runtime.shrink.case import load_case
-from rei.runtime.shrink.oracle import FailureOracle, RunSettings
+from rei.runtime.campaigns import LocalEngine
+from rei.runtime.campaigns.engines import WorkerPool, kept_workers
+from rei.runtime.campaigns.search import run_search
+from rei.runtime.campaigns.search.driver import SearchConfig
+from rei.runtime.campaigns.shrink.case import load_case
+from rei.runtime.campaigns.shrink.oracle import FailureOracle, RunSettings
 
 MISSION = Path(__file__).resolve().parents[1] / "examples" / "simple_wall" / \
     "simple_wall.mission"

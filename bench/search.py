@@ -54,11 +54,11 @@ os.environ["PYTHONPATH"] = os.pathsep.join(
     p for p in (str(REPO), os.environ.get("PYTHONPATH", "")) if p)
 
 from bench.defects import DEFECTS  # noqa: E402
-from rei.runtime.campaign import LocalEngine, plan_campaign, run_campaign  # noqa: E402
-from rei.runtime.search import SearchConfig, run_search  # noqa: E402
-from rei.runtime.search.run import CandidateResult  # noqa: E402
-from rei.runtime.shrink import size_reduction  # noqa: E402
-from rei.runtime.shrink.oracle import RunSettings  # noqa: E402
+from rei.runtime.campaigns import LocalEngine, plan_campaign, run_campaign  # noqa: E402
+from rei.runtime.campaigns.search import SearchConfig, run_search  # noqa: E402
+from rei.runtime.campaigns.search.driver import CandidateResult  # noqa: E402
+from rei.runtime.campaigns.shrink import size_reduction  # noqa: E402
+from rei.runtime.campaigns.shrink.oracle import RunSettings  # noqa: E402
 
 REFERENCE = "reference"
 

@@ -3,7 +3,7 @@
 Each case is a mission that a navigator of bench/defects (one known defect) fails on every
 seed. For each, the baseline is measured first in the same invocation: judging the original
 case once on the K seeds (K `rei run` processes, CPU seconds of the process tree). Then
-`rei shrink` runs (``rei.runtime.shrink.shrink_into``, the original's verdicts reused from
+`rei shrink` runs (``rei.runtime.campaigns.shrink.shrink_into``, the original's verdicts reused from
 that judgement) and the table reports: elements before and after (humans, objects, goals,
 floors and trajectory vertices), the size reduction (1 - after/before, elements and
 characters), runs spent, and the shrink's CPU time as a multiple of the baseline judgement.
@@ -33,9 +33,9 @@ from typing import Any
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))  # bench.defects for the runs, started from REPO
 
-from rei.runtime.shrink import RunSettings, load_case, shrink_into  # noqa: E402
-from rei.runtime.shrink.oracle import FailureOracle  # noqa: E402
-from rei.runtime.shrink.shrinker import JOURNAL  # noqa: E402
+from rei.runtime.campaigns.shrink import RunSettings, load_case, shrink_into  # noqa: E402
+from rei.runtime.campaigns.shrink.oracle import FailureOracle  # noqa: E402
+from rei.runtime.campaigns.shrink.shrinker import JOURNAL  # noqa: E402
 
 EXAMPLES = REPO / "examples"
 

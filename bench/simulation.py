@@ -12,7 +12,7 @@ For each bundled example mission and a generated 200-object room (192 static obj
   under start-up);
 * where the CPU goes: the same mission once more, profiled (cProfile) with the navigator in
   this process, each function's own time given to a component by its module's path (numpy
-  and builtins to their caller): physics (pybullet, rei/runtime/world), laser, odometry,
+  and builtins to their caller): physics (pybullet, runtime/simulation/world), laser, odometry,
   navigator (rei/runtime/robot), mission, animator, collector, trace writer, monitor,
   evaluator, run loop; plus the controller IPC, the difference between the hosted and the
   in-process loop's CPU;
@@ -58,15 +58,16 @@ from pathlib import Path
 from typing import Any
 
 import rei.runtime.robot as robot_package
-from rei.runtime.collector import TraceWriter, load_monitor_config
+from rei.runtime.artifacts.monitor import load_monitor_config
+from rei.runtime.artifacts.world import WorldManifest, load_manifest
 from rei.runtime.commands.run import run_into
+from rei.runtime.robot.contract import Controller, ControllerContext
 from rei.runtime.robot.host import HostedController
-from rei.runtime.robot.protocol import Controller, ControllerContext
-from rei.runtime.robot.select import load_controller
-from rei.runtime.run import RunConfig, RunRecord, generate_world, run_mission
-from rei.runtime.sensors.laser import Laser2D, scene_shapes
-from rei.runtime.world import WorldManifest, load_manifest
-from rei.runtime.world.bullet import BulletWorld
+from rei.runtime.robot.selection import load_controller
+from rei.runtime.simulation.assembly import RunConfig, RunRecord, generate_world, run_mission
+from rei.runtime.simulation.sensors.laser import Laser2D, scene_shapes
+from rei.runtime.simulation.world.bullet import BulletWorld
+from rei.runtime.trace import TraceWriter
 
 REPO = Path(__file__).resolve().parent.parent
 EXAMPLES = ["navigation", "simple_wall", "small_dense", "medium_sparse"]
@@ -236,25 +237,28 @@ def equal_rate(mission_file: Path, work: Path, laser_rate: float) -> dict[str, A
 
 
 COMPONENTS = (
-    ("pybullet", "physics"), ("rei/runtime/world/", "physics"),
-    # the run's components (rei.runtime.loop), each under its own name
-    ("rei/runtime/loop/world", "physics"), ("rei/runtime/loop/laser", "laser"),
-    ("rei/runtime/loop/odometry", "odometry"), ("rei/runtime/loop/faults", "faults"),
-    ("rei/runtime/loop/mission", "mission"), ("rei/runtime/loop/animator", "animator"),
-    ("rei/runtime/loop/collector", "collector"), ("rei/runtime/loop/", "run loop"),
-    ("rei/runtime/faults", "faults"),
-    ("rei/runtime/sensors/laser", "laser"), ("rei/runtime/sensors/odometry", "odometry"),
-    ("rei/runtime/robot/host", "controller IPC"), ("rei/runtime/robot/watchdog", "run loop"),
-    ("rei/runtime/robot/", "navigator"), ("rei/runtime/mission", "mission"),
-    ("rei/runtime/animator", "animator"), ("rei/runtime/collector/trace", "trace writer"),
-    ("json/", "trace writer"), ("rei/runtime/collector", "collector"),
-    ("rei/runtime/monitor", "monitor"), ("/automata/automata.py", "monitor"),
-    ("reactivex", "monitor"), ("rei/runtime/evaluator", "evaluator"),
-    ("rei/runtime/run.py", "run loop"), ("rei/runtime/messages", "run loop"),
+    ("pybullet", "physics"), ("runtime/simulation/world/", "physics"),
+    # the run's components (rei.runtime.simulation.loop), each under its own name
+    ("simulation/loop/physics", "physics"), ("simulation/loop/scans", "laser"),
+    ("simulation/loop/dead_reckoning", "odometry"), ("simulation/loop/fault_injection", "faults"),
+    ("simulation/loop/tasks", "mission"), ("simulation/loop/humans", "animator"),
+    ("simulation/loop/sampling", "collector"), ("simulation/loop/", "run loop"),
+    ("simulation/faults", "faults"),
+    ("simulation/sensors/laser", "laser"), ("simulation/sensors/odometry", "odometry"),
+    ("runtime/raycast", "laser"),
+    ("runtime/robot/host", "controller IPC"), ("runtime/robot/watchdog", "run loop"),
+    ("runtime/robot/", "navigator"), ("simulation/mission", "mission"),
+    ("simulation/animator", "animator"), ("runtime/trace", "trace writer"),
+    ("json/", "trace writer"), ("simulation/sampler", "collector"),
+    ("observation/evaluator", "evaluator"), ("runtime/observation", "monitor"),
+    ("/automata/automata.py", "monitor"), ("reactivex", "monitor"),
+    ("simulation/assembly.py", "run loop"), ("runtime/messages", "run loop"),
     ("arpeggio", "set-up"), ("textx", "set-up"), ("jinja2", "set-up"), ("rei/lang", "set-up"),
-    ("rei/generators", "set-up"), ("<frozen", "set-up"),
+    ("rei_lang/", "set-up"), ("rei/generators", "set-up"), ("generators/", "set-up"),
+    ("<frozen", "set-up"),
 )
-"""Module path fragment -> component, first match wins (paths as installed: rei/...)."""
+"""Module path fragment -> component, first match wins (a fragment matches both an installed
+path, .../rei/runtime/..., and a checkout's, .../runtime/...)."""
 _CALLER_PAYS = ("~", "numpy/", "dataclasses.py", "functools.py", "enum.py", "typing.py",
                 "abc.py", "copy.py", "contextlib.py", "threading.py", "queue.py")
 """Builtins and helpers whose own time goes to the component that called them."""
@@ -308,7 +312,7 @@ def profiled(mission_file: Path, work: Path) -> tuple[Counter[str], RunRecord]:
     def make(spec: str, folder: str | None = None) -> Controller:
         return load_controller(spec, folder)
 
-    import rei.runtime.run as run_module  # noqa: PLC0415
+    import rei.runtime.simulation.assembly as run_module  # noqa: PLC0415
 
     loop = run_module.run_mission
 

@@ -110,7 +110,7 @@ _READS: ContextVar[Reads | None] = ContextVar("rei_source_reads", default=None)
 def recorded_reads() -> Iterator[Reads]:
     """Every file ``read_bounded`` is asked for while the block runs, in order: (absolute
     path, sha256 of the bytes read, or None when it could not be read). The inputs a result
-    was made from, by which a cache of generated artifacts (rei.runtime.cache) knows when
+    was made from, by which a cache of generated artifacts (rei.runtime.runs.cache) knows when
     that result is stale."""
     reads: Reads = []
     token = _READS.set(reads)

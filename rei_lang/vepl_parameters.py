@@ -96,7 +96,8 @@ FUNCTIONS_HELP = ("Python module (dotted name or .py file) defining the user fun
 
 
 def add_functions_option(parser: argparse.ArgumentParser, note: str = "") -> None:
-    """``--functions MODULE`` into ``args.functions`` (rei.runtime.monitor.functions loads
+    """``--functions MODULE`` into ``args.functions`` (rei.runtime.observation.monitor.functions
+    loads
     it), one help text everywhere; ``note`` says what the command does with it beyond."""
     parser.add_argument("--functions", default=None, metavar="MODULE",
                         help=FUNCTIONS_HELP + note)

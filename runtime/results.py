@@ -29,7 +29,8 @@ the user), unjudged (no requirement was checked: ``rei run --no-monitor``)."""
 PAGE_POLICIES = ("all", "failed", "none")
 """Which runs get their page, report.html (`rei run --page`, `rei campaign --pages`): ``all``
 the full page; ``failed`` the full page for a run that did not pass, a brief one (verdicts,
-no plots or map) for a run that did; ``none`` no page. Here, not in rei.runtime.report, so
+no plots or map) for a run that did; ``none`` no page. Here, not in
+rei.runtime.presentation.campaign_report, so
 that the commands' parsers need not import the report's libraries."""
 
 @dataclass(frozen=True)
@@ -42,7 +43,8 @@ class Verdict:
     objects: tuple[str, ...] = ()
     """What the deciding event involved: objects, humans or tasks (names)."""
     margin: float | None = None
-    """How far the run was from failing it (rei.runtime.evaluator.margins): negative exactly
+    """How far the run was from failing it (rei.runtime.observation.evaluator.margins): negative
+    exactly
     when it failed; None when the requirement has no natural margin, or for an inconclusive
     or not-applicable verdict."""
     margin_unit: str = ""

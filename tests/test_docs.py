@@ -22,7 +22,7 @@ import pytest
 
 from rei.lang.cli import DESCRIPTION as GEN_DESCRIPTION
 from rei.lang.cli_support import build_parser
-from rei.runtime.cli import DESCRIPTION as RUN_DESCRIPTION
+from rei.runtime.commands.cli import DESCRIPTION as RUN_DESCRIPTION
 from tests.conftest import REPO
 
 DOCUMENTS = [REPO / "README.md", *sorted((REPO / "docs").glob("*.md"))]
@@ -170,7 +170,8 @@ def test_the_check_finds_what_went_stale(tmp_path: Path) -> None:
                     "--seeds 3\nrei run MISSION -o DIR --wachdog 5\n"
                     "rei run examples/simple_wall/simple_wall.mission -o out/ok --seed 3\n```\n"
                     "See `rei campain DIR`, `rei report DIR --html`, examples/nowhere/x.room "
-                    "and rei.runtime.sensors.laser.Laser3D; rei.runtime.sensors.laser.Laser2D "
+                    "and rei.runtime.simulation.sensors.laser.Laser3D; "
+                    "rei.runtime.simulation.sensors.laser.Laser2D "
                     "is fine.\n", encoding="utf-8")
     found = document_problems(page)
     assert len(found) == 6, found

@@ -23,7 +23,7 @@ import pytest
 from rei.lang.cli import DESCRIPTION as GEN_DESCRIPTION
 from rei.lang.cli_support import build_parser
 from rei.lang.vepl_parameters import FUNCTIONS_HELP
-from rei.runtime.cli import DESCRIPTION as RUN_DESCRIPTION
+from rei.runtime.commands.cli import DESCRIPTION as RUN_DESCRIPTION
 from rei.runtime.commands.run import CONTROLLER_HELP, exit_code, final_line
 from rei.runtime.robot.teleop import SCRIPTS
 from tests.campaign.records import summary_for
@@ -190,7 +190,7 @@ def test_a_command_line_builds_only_its_own_commands_parser(program: str) -> Non
 
 def test_rei_run_imports_no_other_commands_module() -> None:
     probe = ("import sys\n"
-             "from rei.runtime.cli import main\n"
+             "from rei.runtime.commands.cli import main\n"
              "try:\n"
              "    main(['run', '--help'])\n"
              "except SystemExit:\n"

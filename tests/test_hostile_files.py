@@ -23,13 +23,13 @@ def command(module: str, *args: str) -> subprocess.CompletedProcess[str]:
 
 
 @pytest.mark.parametrize(("module", "argv", "said"), [
-    ("rei.runtime.cli", ["campaign", "{input}", "-o", "{out}"],
+    ("rei.runtime.commands.cli", ["campaign", "{input}", "-o", "{out}"],
      "rei: error: {input}: cannot read the suite index: expected a regular file, found {kind}"),
     ("rei.lang.cli", ["show", "{input}", "-o", "{out}.png"],
      "rei-gen: error: cannot read the index '{input}': expected a regular file, found {kind}"),
-    ("rei.runtime.cli", ["replay", "{input}", "-o", "{out}"],
+    ("rei.runtime.commands.cli", ["replay", "{input}", "-o", "{out}"],
      "rei: error: cannot read the trace '{input}': expected a regular file, found {kind}"),
-    ("rei.runtime.cli", ["run", "--config", "{input}", "-o", "{out}"],
+    ("rei.runtime.commands.cli", ["run", "--config", "{input}", "-o", "{out}"],
      "rei: error: {input}: cannot read the run configuration: expected a regular file, "
      "found {kind}"),
 ])
@@ -53,7 +53,7 @@ def test_a_fifo_or_a_device_is_refused_unread(tmp_path: Path, module: str, argv:
 def test_control_characters_from_the_input_are_shown_not_interpreted(tmp_path: Path) -> None:
     # An ESC sequence in a controller name reached the terminal raw (it can recolour or
     # clear it, or hide a line of a CI log).
-    done = command("rei.runtime.cli", "run", "examples/simple_wall/simple_wall.mission",
+    done = command("rei.runtime.commands.cli", "run", "examples/simple_wall/simple_wall.mission",
                    "-o", str(tmp_path / "out"), "--controller", "\x1b[2Jevil:X")
     assert done.returncode == 2
     assert "\x1b" not in done.stderr and "\\x1b[2Jevil" in done.stderr
@@ -70,6 +70,6 @@ def test_a_recordings_texts_are_shown_not_interpreted(tmp_path: Path) -> None:
     assert "\\u001b[31m" in lines[-1]
     trace = tmp_path / "trace.jsonl"
     trace.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    done = command("rei.runtime.cli", "replay", str(trace), "-o", str(tmp_path / "replay"))
+    done = command("rei.runtime.commands.cli", "replay", str(trace), "-o", str(tmp_path / "replay"))
     assert done.returncode in (0, 1), done.stderr
     assert "\x1b" not in done.stdout and "\\x1b[31m" in done.stdout

@@ -25,7 +25,7 @@ from tests.conftest import REPO
 README = REPO / "README.md"
 SECTION = "## A test case, end to end"
 ACTIVATE = ". .venv/bin/activate"
-PARSERS = {"rei": ("rei.runtime.cli", "rei.runtime.commands"),
+PARSERS = {"rei": ("rei.runtime.commands.cli", "rei.runtime.commands"),
            "rei-gen": ("rei.lang.cli", "rei.lang.commands")}
 VERDICT_COMMANDS = {("rei", "run"), ("rei", "replay"), ("rei", "campaign")}
 """Commands whose exit status 1 is a verdict (a requirement failed or was inconclusive)."""

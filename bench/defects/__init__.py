@@ -1,6 +1,7 @@
 """Navigators with one known defect each, for the bug-finding benchmark (bench/bugs.py).
 
-Every class is the reference navigator (runtime/robot/reference.py) with one realistic defect
+Every class is the reference navigator (runtime/robot/navigator/reference.py) with one realistic
+defect
 of a kind real navigation stacks ship with, a few lines on top of it. Its docstring says the
 defect, the real-world bug it imitates and which requirement should catch it. Run one with
 ``rei run MISSION --controller bench.defects.MODULE:Class`` from the repository root (REI adds

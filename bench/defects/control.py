@@ -8,9 +8,9 @@ from dataclasses import replace
 import numpy as np
 
 from rei.runtime.messages import NavState
-from rei.runtime.robot.protocol import ControllerContext, Observation, VelocityCommand
-from rei.runtime.robot.recovery import motion_is_safe
-from rei.runtime.robot.reference import ReferenceNavigator
+from rei.runtime.robot.contract import ControllerContext, Observation, VelocityCommand
+from rei.runtime.robot.navigator.recovery import motion_is_safe
+from rei.runtime.robot.navigator.reference import ReferenceNavigator
 
 OVERSPEED = 2.5
 """ExceedsDriveLimit believes the drive is this many times faster than it is."""

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from rei.runtime.robot.protocol import Observation, VelocityCommand
-from rei.runtime.robot.reference import ReferenceNavigator
+from rei.runtime.robot.contract import Observation, VelocityCommand
+from rei.runtime.robot.navigator.reference import ReferenceNavigator
 
 ODOM_OFFSET = (0.35, 0.0)
 """Metres OdometryOffset adds to the odometry position (map frame)."""

@@ -6,7 +6,7 @@ import math
 from dataclasses import replace
 
 from rei.runtime.messages import NavState
-from rei.runtime.robot.protocol import (
+from rei.runtime.robot.contract import (
     STOP,
     ControllerContext,
     GoalTracker,
@@ -14,7 +14,7 @@ from rei.runtime.robot.protocol import (
     Observation,
     VelocityCommand,
 )
-from rei.runtime.robot.reference import ReferenceNavigator
+from rei.runtime.robot.navigator.reference import ReferenceNavigator
 
 EARLY = 0.5
 """Metres from its goal at which ClaimsSuccessEarly reports success."""

@@ -6,8 +6,8 @@ import math
 
 import numpy as np
 
-from rei.runtime.robot.protocol import Observation
-from rei.runtime.robot.reference import ReferenceNavigator
+from rei.runtime.robot.contract import Observation
+from rei.runtime.robot.navigator.reference import ReferenceNavigator
 
 BLIND_FROM = math.radians(60.0)
 BLIND_TO = math.radians(120.0)

@@ -8,9 +8,9 @@ from dataclasses import replace
 import numpy as np
 
 from rei.runtime.messages import NavState
-from rei.runtime.robot.gridplan import GridGraph
-from rei.runtime.robot.protocol import ControllerContext, Observation, VelocityCommand
-from rei.runtime.robot.reference import COMFORT, ReferenceNavigator
+from rei.runtime.robot.contract import ControllerContext, Observation, VelocityCommand
+from rei.runtime.robot.navigator.gridplan import GridGraph
+from rei.runtime.robot.navigator.reference import COMFORT, ReferenceNavigator
 
 FOOTPRINT_SCALE = 0.5
 """FootprintTooSmall plans with the footprint scaled by this along both axes."""

@@ -6,8 +6,8 @@ from collections import deque
 from dataclasses import replace
 
 from rei.runtime.messages import LaserScan
-from rei.runtime.robot.protocol import STOP, ControllerContext, Observation, VelocityCommand
-from rei.runtime.robot.reference import ReferenceNavigator
+from rei.runtime.robot.contract import STOP, ControllerContext, Observation, VelocityCommand
+from rei.runtime.robot.navigator.reference import ReferenceNavigator
 
 SCAN_EVERY = 5
 """StaleScans uses one scan in this many."""

@@ -158,7 +158,8 @@ class ConcreteMission:
     data: tuple[str, ...] = COLLECTED_DATA
     """What the data collector forwards (the mission's ``monitor`` block)."""
     faults: tuple[FaultDefinition, ...] = ()
-    """The mission's ``fault`` section (rei.runtime.faults.fault_stage builds the stage)."""
+    """The mission's ``fault`` section (rei.runtime.simulation.faults.fault_stage builds the
+    stage)."""
     settle: float = 0.0
     """Seconds the mission goes on after its last task ended (the .mission's ``settle``)."""
 

@@ -86,7 +86,8 @@ latest when the oncoming person, at its slowest and latest, has stepped aside be
 tile: a person and a robot face to face inside a one-tile corridor would wait for each other
 for good (outside it the person has room to give way)."""
 HUMAN_SLOWEST = 0.85
-"""The slowest per-run speed scale of a human (runtime/animator/variation.py, 1 - 0.15)."""
+"""The slowest per-run speed scale of a human (runtime/simulation/animator/variation.py,
+1 - 0.15)."""
 CART_LEAD = 1.2
 """m before the crossing point the planned robot is when the cart's centre crosses."""
 CART_CLEARANCE = 0.2

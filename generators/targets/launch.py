@@ -186,7 +186,8 @@ GROUND_TRUTH = "/rei/ground_truth"
 tree (map -> odom -> base_link) is untouched."""
 RECORDED_TOPICS = ("/clock", "/tf", "/tf_static", "/odom", "/scan", "/cmd_vel", GROUND_TRUTH,
                    "/navigate_to_pose/_action/status")
-"""Exactly what `rei replay BAG --mission` reads (rei.runtime.recording.bag; a test keeps
+"""Exactly what `rei replay BAG --mission` reads (rei.runtime.observation.recordings.foreign; a
+test keeps
 the two equal): the time, the stack's frames, its belief, its commands, the ground truth
 and Nav2's navigate_to_pose status (a hidden action topic: recorded with
 --include-hidden-topics)."""

@@ -2,7 +2,8 @@
 
 The module (``automata.py``) holds the queries as vectorised numpy functions, the query
 events, complex events and signals as reactivex pipelines on a virtual-time scheduler, and
-the requirements as data; rei.runtime.monitor.host loads it. Deterministic text from the
+the requirements as data; rei.runtime.observation.monitor.automata_host loads it. Deterministic
+text from the
 same specification. This module must never import the runtime's host or write files itself.
 """
 
@@ -26,7 +27,8 @@ from rei.lang.vepl.linker import NAMED_STATES
 
 OUTPUT = "automata.py"
 FORMAT_VERSION = 4
-"""Must equal rei.runtime.monitor.automata.FORMAT_VERSION (3: commands, approach, failure
+"""Must equal rei.runtime.observation.automata.records.FORMAT_VERSION (3: commands, approach,
+failure
 causes, scenario facts, requirement premises; 4: queries with several parameters, the floors
 of objects and goals)."""
 INTERPOLATED = {"laser_min", "laser_clearance", "speed", "time", "odom_error", "turn_rate",

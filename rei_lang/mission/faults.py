@@ -8,7 +8,7 @@ A fault is written as one entry of a mission's ``fault { }`` section, or as the 
 
 ``FaultDefinition`` is the checked, immutable definition: its kind, every parameter of that
 kind (defaults filled in) and when it is active (``Activation``). The run-time models that
-apply a definition live in ``rei.runtime.faults``; their semantics are in docs/faults.md.
+apply a definition live in ``rei.runtime.simulation.faults``; their semantics are in docs/faults.md.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """The bus: REI's components in separate processes (or machines) over a Zenoh router.
 
-In one process the board (``rei.runtime.loop.board``) carries the run's messages; across
+In one process the board (``rei.runtime.simulation.loop.board``) carries the run's messages; across
 processes the same stamped messages travel over the bus, with the wire schema of
 ``schema`` (docs/bus.md), the roles and access rules of ``access``, the router of
 ``router`` (`rei bus`) and the client of ``client``. Zenoh is an optional dependency

@@ -47,7 +47,7 @@ _ZENOH: dict[str, tuple[tuple[str, tuple[str, ...]], ...]] = {
 """Action -> (flow, Zenoh message kinds) the router must allow for it."""
 
 ROBOT_CALL = f"{PREFIX}/robot/call"
-"""The robot contract's requests: ``ROBOT_CALL/<op>`` (``rei.runtime.bus.robot``)."""
+"""The robot contract's requests: ``ROBOT_CALL/<op>`` (``rei.runtime.bus.remote_robot``)."""
 
 
 def key_includes(pattern: str, key: str) -> bool:

@@ -11,7 +11,7 @@ says, whatever its language:
   and answered with one JSON object;
 * the run's sample stream travels on ``rei/v1/trace`` for monitors and viewers: trace.jsonl's
   own lines (header, samples, end), a keyframe of every object's row before every 10th
-  sample and the sample count before the end (``rei.runtime.bus.run``).
+  sample and the sample count before the end (``rei.runtime.bus.distributed_run``).
 
 The version is in the key, so a v2 can run beside v1 on one router. Payloads larger than
 ``MAX_PAYLOAD`` are refused by the sender and dropped by the receiver. This module must

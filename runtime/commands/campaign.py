@@ -3,7 +3,7 @@
 Writes the results store (results.parquet / results.csv, a folder per run), report.html and
 junit.xml into DIR. Each mission gets a verdict against the required pass rate (--pass-rate,
 judged on the Wilson interval of its rate; see docs/campaign.md). Exit status (one rule for
-`rei campaign`, `rei demo` and `rei report`: rei.runtime.campaign.stats.campaign_outcome) 0
+`rei campaign`, `rei demo` and `rei report`: rei.runtime.campaigns.stats.campaign_outcome) 0
 when every mission passes, 1 when a mission fails, is flaky or is inconclusive, 2 for bad
 input, 3 when any run errored (crashed, hung, a run error), 130 when interrupted — Ctrl-C or
 SIGTERM of the campaign, the only way a run goes unrecorded (run the same command to resume).
@@ -27,7 +27,7 @@ from rei.lang.cli_support import EXIT_INTERRUPTED
 from rei.lang.vepl_parameters import add_functions_option, add_parameter_option, parameter_values
 
 if TYPE_CHECKING:
-    from rei.runtime.campaign.engines import CampaignEngine
+    from rei.runtime.campaigns.engines import CampaignEngine
 
 EXIT_STATUS_HELP = ("Exit status: 0 every mission passes (--pass-rate), 1 a mission fails, is "
                     "flaky or is inconclusive (none failed, one could not be decided), 2 bad "
@@ -176,7 +176,7 @@ def add_engine_arguments(parser: argparse.ArgumentParser) -> None:
 
 def engine_of(args: argparse.Namespace) -> CampaignEngine:
     """The campaign engine the options of ``add_engine_arguments`` ask for."""
-    from rei.runtime.campaign import CampaignError, DaskEngine, LocalEngine  # noqa: PLC0415
+    from rei.runtime.campaigns import CampaignError, DaskEngine, LocalEngine  # noqa: PLC0415
 
     if args.engine == "dask":
         if not args.scheduler:
@@ -193,7 +193,7 @@ def _faults(args: argparse.Namespace) -> tuple[str, ...]:
     """The --fault entries as written for every run, checked before any run starts: a
     signal the specification does not define would fail every run alike."""
     from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
-    from rei.runtime.faults.setup import run_faults  # noqa: PLC0415
+    from rei.runtime.simulation.faults.configuration import run_faults  # noqa: PLC0415
 
     faults = tuple(args.fault or ())
     if any(f.activation.signal or f.activation.stop for f in faults):
@@ -205,9 +205,9 @@ def _faults(args: argparse.Namespace) -> tuple[str, ...]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rei.runtime.campaign import plan_campaign, run_campaign  # noqa: PLC0415
-    from rei.runtime.campaign.plan import STATIC  # noqa: PLC0415
-    from rei.runtime.campaign.provenance import collect  # noqa: PLC0415
+    from rei.runtime.campaigns import plan_campaign, run_campaign  # noqa: PLC0415
+    from rei.runtime.campaigns.plan import STATIC  # noqa: PLC0415
+    from rei.runtime.campaigns.provenance import collect  # noqa: PLC0415
 
     plan = plan_campaign(list(args.missions), repeat=args.repeat, seed=args.seed,
                          controller=args.controller, vepl=args.vepl, duration=args.duration,
@@ -259,14 +259,10 @@ def finish(root: Path, *, no_report: bool = False, complete: bool = True,
     """Write junit.xml and the report of a campaign folder; the exit status of the campaign
     (``campaign_outcome``) on its mission verdicts against ``pass_rate`` (None: the rate the
     campaign's last session required). ``complete`` False: the session was interrupted."""
-    from rei.runtime.campaign import CampaignStore  # noqa: PLC0415
-    from rei.runtime.campaign.stats import (  # noqa: PLC0415
-        campaign_outcome,
-        classify_pairs,
-        mission_verdicts,
-    )
-    from rei.runtime.campaign.store import required_pass_rate  # noqa: PLC0415
-    from rei.runtime.report import build_report  # noqa: PLC0415
+    from rei.runtime.campaigns import CampaignStore  # noqa: PLC0415
+    from rei.runtime.campaigns.stats import campaign_outcome, classify_pairs, mission_verdicts
+    from rei.runtime.campaigns.store import required_pass_rate  # noqa: PLC0415
+    from rei.runtime.presentation.campaign_report import build_report  # noqa: PLC0415
 
     outcome = build_report(root, html=not no_report)
     if not quiet:
@@ -281,7 +277,7 @@ def finish(root: Path, *, no_report: bool = False, complete: bool = True,
             print(f"  {verdict.verdict.upper():5}  {verdict.mission}: {verdict.reason}"
                   + (f"; {cause}" if cause and cause != "passes" else ""), file=sys.stderr)
     if verbose:
-        from rei.runtime.report.build import rerun_command  # noqa: PLC0415
+        from rei.runtime.presentation.campaign_report.build import rerun_command  # noqa: PLC0415
 
         for record in outcome.failed:
             print(f"    {record.spec.run_id}: {record.verdict}; rerun: "

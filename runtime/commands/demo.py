@@ -4,7 +4,7 @@ The README's first command: everything on the embedded defaults (catalogue, defa
 reference controller), a couple of minutes on two cores; ``--controller`` and ``--vepl`` put a
 user's own navigator and monitoring specification on the same suite, as `rei campaign` would.
 It uses `rei-gen rooms` when that generator is installed and the bundled examples otherwise.
-It exits as `rei campaign` does (one rule, rei.runtime.campaign.stats.campaign_outcome), so a
+It exits as `rei campaign` does (one rule, rei.runtime.campaigns.stats.campaign_outcome), so a
 CI job gating a navigator on `rei demo --controller X` fails when the navigator does: 0 every
 mission passes, 1 a mission fails or is inconclusive, 2 bad input, 3 a run errored, 130
 interrupted.
@@ -143,13 +143,8 @@ def generate_suite(out: Path, count: int, preset: str, seed: int) -> list[Path]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rei.runtime.campaign import (  # noqa: PLC0415
-        CampaignError,
-        LocalEngine,
-        plan_campaign,
-        run_campaign,
-    )
-    from rei.runtime.campaign.provenance import collect  # noqa: PLC0415
+    from rei.runtime.campaigns import CampaignError, LocalEngine, plan_campaign, run_campaign
+    from rei.runtime.campaigns.provenance import collect  # noqa: PLC0415
     from rei.runtime.commands.campaign import finish  # noqa: PLC0415
 
     out: Path = args.output

@@ -1,7 +1,7 @@
 """`rei monitor --bus URL -o DIR`: monitor and judge a run elsewhere, live, from the bus.
 
 Joins the bus as the monitor, reads the run's trace as `rei run --bus` publishes it
-(``rei.runtime.bus.monitor``), feeds it through the same generated automata and evaluator
+(``rei.runtime.bus.reception``), feeds it through the same generated automata and evaluator
 as `rei run` and `rei replay`, and writes DIR/trace.jsonl (the lines received: byte for
 byte the run's; a stream with a gap is kept as trace.jsonl.partial), events.csv,
 summary.json (with a ``bus`` measurement: samples received, missed — by sequence number —,
@@ -66,13 +66,13 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 def run(args: argparse.Namespace) -> int:
     from rei.generators.output import open_output  # noqa: PLC0415
     from rei.runtime.bus import BusError  # noqa: PLC0415
-    from rei.runtime.bus.monitor import TraceStream, ask_header  # noqa: PLC0415
+    from rei.runtime.bus.reception import TraceStream, ask_header  # noqa: PLC0415
     from rei.runtime.bus.schema import TRACE as TRACE_KEY  # noqa: PLC0415
     from rei.runtime.bus.schema import config_key  # noqa: PLC0415
     from rei.runtime.commands.replay import judge_stream  # noqa: PLC0415
-    from rei.runtime.monitor import generate_automata  # noqa: PLC0415
-    from rei.runtime.monitor.errors import MonitorError  # noqa: PLC0415
-    from rei.runtime.monitor.functions import load_functions  # noqa: PLC0415
+    from rei.runtime.observation.errors import MonitorError  # noqa: PLC0415
+    from rei.runtime.observation.monitor import generate_automata  # noqa: PLC0415
+    from rei.runtime.observation.monitor.functions import load_functions  # noqa: PLC0415
 
     if not (math.isfinite(args.silence) and args.silence > 0):
         print(f"rei monitor: error: --silence: expected a positive number of seconds, found "

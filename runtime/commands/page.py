@@ -39,8 +39,8 @@ def run_folders(folder: Path) -> list[Path]:
     """The run folders ``folder`` stands for: itself (a run folder), or the folders of the
     campaign's recorded runs that ran (crashed and hung runs have no summary to draw from).
     CampaignError when it is neither."""
-    from rei.runtime.campaign import CampaignError, CampaignStore  # noqa: PLC0415
-    from rei.runtime.campaign.store import RUNS  # noqa: PLC0415
+    from rei.runtime.campaigns import CampaignError, CampaignStore  # noqa: PLC0415
+    from rei.runtime.campaigns.store import RUNS  # noqa: PLC0415
 
     if (folder / "summary.json").is_file():
         return [folder]
@@ -57,7 +57,7 @@ def run_folders(folder: Path) -> list[Path]:
 
 def run(args: argparse.Namespace) -> int:
     from rei.lang.errors import ReiError  # noqa: PLC0415
-    from rei.runtime.report.run_page import page_is_full, write_run_page  # noqa: PLC0415
+    from rei.runtime.presentation.run_page.page import page_is_full, write_run_page  # noqa: PLC0415
 
     # every DIR checked before any page is drawn: a typo is exit 2, with nothing half done
     folders = [run_folder for folder in args.folders for run_folder in run_folders(folder)]

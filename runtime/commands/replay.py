@@ -15,7 +15,8 @@ a recorded interrupted run.
 
 `rei replay BAG --mission M.mission [--map MAP]` judges a ROS 2 recording REI did not make
 (a Gazebo run of the launch target's world, a real robot): an MCAP file or a rosbag2 folder,
-read through ``rei.runtime.recording.bag`` against the mission's room and goals; DIR also
+read through ``rei.runtime.observation.recordings.foreign`` against the mission's room and goals;
+DIR also
 gets the stream as REI's trace.jsonl (when its numbers are finite) and the generated world/.
 Data no verdict may rest on (gaps, stamps going backwards, non-finite values, bad scans)
 turns every verdict that would pass into inconclusive, naming the problem.
@@ -48,10 +49,10 @@ from rei.runtime.results import RESULTS_VERSION, Outcome, RunSummary
 
 # The messages only as type names: importing them (numpy) with every `rei` command line
 # would cost each command's process ~0.15 CPU s, and leave numpy's threads in `rei run`'s
-# supervising process, which then cannot fork its simulation (rei.runtime.warm).
+# supervising process, which then cannot fork its simulation (rei.runtime.platform.warm).
 if TYPE_CHECKING:
-    from rei.runtime.collector import TraceWriter
     from rei.runtime.messages import Sample, StreamHeader
+    from rei.runtime.trace import TraceWriter
 
 HELP_EXAMPLES = """\
 rei replay out/nav/trace.jsonl -o out/nav-strict --vepl examples/navigation/human_safety.vepl
@@ -111,9 +112,9 @@ def replay(trace: Path, vepl: Path | None, out_dir: Path,
            functions: str | None = None, parameters: ParameterValues = ()) -> RunSummary:
     """Monitor ``trace`` into ``out_dir`` (with ``parameters`` from `--param` in place of the
     specification's values); the summary (also written as summary.json)."""
-    from rei.runtime.monitor import generate_automata  # noqa: PLC0415
-    from rei.runtime.monitor.functions import load_functions  # noqa: PLC0415
-    from rei.runtime.recording import read_stream  # noqa: PLC0415
+    from rei.runtime.observation.monitor import generate_automata  # noqa: PLC0415
+    from rei.runtime.observation.monitor.functions import load_functions  # noqa: PLC0415
+    from rei.runtime.observation.recordings import read_stream  # noqa: PLC0415
 
     # The specification is checked and generated before the trace is opened: a bad .vepl
     # is reported without touching the trace.
@@ -142,10 +143,16 @@ def judge_stream(header: StreamHeader, samples: Iterator[Sample],
     data) has every verdict that would pass made inconclusive. ``parameters`` (`--param`)
     replace the specification's values; those other than the file's are in the summary."""
     from rei.lang.vepl.document import changed_parameters, load_vepl  # noqa: PLC0415
-    from rei.runtime.collector.needs import check_needs  # noqa: PLC0415
-    from rei.runtime.evaluator.summary import merge_summary, write_summary  # noqa: PLC0415
-    from rei.runtime.faults.stage import SampledTimeline, fault_measurements  # noqa: PLC0415
-    from rei.runtime.monitor import MonitorSink  # noqa: PLC0415
+    from rei.runtime.observation.evaluator.summary import (  # noqa: PLC0415
+        merge_summary,
+        write_summary,
+    )
+    from rei.runtime.observation.monitor import MonitorSink  # noqa: PLC0415
+    from rei.runtime.observation.monitor.needs import check_needs  # noqa: PLC0415
+    from rei.runtime.simulation.faults.stage import (  # noqa: PLC0415
+        SampledTimeline,
+        fault_measurements,
+    )
 
     try:
         # Never judge on data the recording does not carry (a false PASS): refuse first.
@@ -212,7 +219,7 @@ class _TraceCopy:
         self.writer = writer
 
     def _do(self, write: Callable[[TraceWriter], None]) -> None:
-        from rei.runtime.collector.trace import TraceError  # noqa: PLC0415
+        from rei.runtime.trace import TraceError  # noqa: PLC0415
 
         if self.writer is None:
             return
@@ -257,13 +264,18 @@ def replay_bag(bag: Path, mission_path: Path, vepl: Path | None, out_dir: Path,
     """Judge the ROS 2 recording ``bag`` (MCAP file or rosbag2 folder) as a run of
     ``mission_path`` into ``out_dir``; the summary (also written as summary.json)."""
     from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
-    from rei.runtime.collector import TraceWriter, load_monitor_config  # noqa: PLC0415
-    from rei.runtime.collector.needs import check_needs  # noqa: PLC0415
-    from rei.runtime.monitor import generate_automata  # noqa: PLC0415
-    from rei.runtime.monitor.functions import load_functions  # noqa: PLC0415
-    from rei.runtime.recording.bag import BagSamples, BagWorld, load_topic_map  # noqa: PLC0415
-    from rei.runtime.run import generate_world, stream_header  # noqa: PLC0415
-    from rei.runtime.world import load_manifest  # noqa: PLC0415
+    from rei.runtime.artifacts.monitor import load_monitor_config  # noqa: PLC0415
+    from rei.runtime.artifacts.world import load_manifest  # noqa: PLC0415
+    from rei.runtime.observation.monitor import generate_automata  # noqa: PLC0415
+    from rei.runtime.observation.monitor.functions import load_functions  # noqa: PLC0415
+    from rei.runtime.observation.monitor.needs import check_needs  # noqa: PLC0415
+    from rei.runtime.observation.recordings.foreign import (  # noqa: PLC0415
+        BagSamples,
+        BagWorld,
+        load_topic_map,
+    )
+    from rei.runtime.simulation.assembly import generate_world, stream_header  # noqa: PLC0415
+    from rei.runtime.trace import TraceWriter  # noqa: PLC0415
 
     out_dir = Path(out_dir)
     automata = generate_automata(vepl, out_dir / "automata", replace=True,
@@ -287,7 +299,7 @@ def replay_bag(bag: Path, mission_path: Path, vepl: Path | None, out_dir: Path,
 
 
 def run(args: argparse.Namespace) -> int:
-    from rei.runtime.monitor.errors import MonitorError  # noqa: PLC0415
+    from rei.runtime.observation.errors import MonitorError  # noqa: PLC0415
 
     if args.topic_map is not None and args.mission is None:
         print("rei replay: error: --map: expected --mission too (a mapping renames a ROS 2 "

@@ -1,7 +1,7 @@
 """`rei robot --bus URL --controller X`: the robot under test as a bus client.
 
 Joins the bus with the robot role's credentials and answers the robot contract's calls
-(``rei.runtime.bus.robot``) with a fresh controller per run, the same controller `rei run
+(``rei.runtime.bus.remote_robot``) with a fresh controller per run, the same controller `rei run
 --controller X` runs; the simulation (`rei run --bus`) advances in lock-step with it. Runs
 until Ctrl-C or SIGTERM (with --once: until its first run ends). The controller runs in this
 process: this process is the robot's side of the boundary. Exit status: 0 stopped as asked,
@@ -75,8 +75,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rei.runtime.bus.robot import serve_robot  # noqa: PLC0415
-    from rei.runtime.robot.select import load_controller  # noqa: PLC0415
+    from rei.runtime.bus.remote_robot import serve_robot  # noqa: PLC0415
+    from rei.runtime.robot.selection import load_controller  # noqa: PLC0415
 
     folder = os.getcwd()
     load_controller(args.controller, folder)  # a bad name is said before joining (exit 2)

@@ -8,7 +8,7 @@ stream), ``events.csv`` (one row per signal), ``summary.json`` (a RunSummary wit
 ``recording.mcap`` (MCAP with ROS 2 types and the exact trace, docs/recording.md). Every
 output is a function of the inputs, the seed and the REI version only: wall-clock time goes to the
 terminal, never into DIR. The simulation runs in a child process under
-``rei.runtime.supervisor`` (``run`` here validates the options, starts it and prints);
+``rei.runtime.runs.supervisor`` (``run`` here validates the options, starts it and prints);
 ``run_into`` is the same work in the caller's process, for the library and tests. Results
 (the outcome line, the requirements, the page, the final verdict line) go to stdout,
 progress and diagnostics to stderr; --quiet leaves the final verdict line alone. Exit status:
@@ -51,19 +51,19 @@ from rei.lang.vepl_parameters import (
     parameter_text,
     parameter_values,
 )
-from rei.runtime.commands.run_config import apply_run_config, defer_defaults
 from rei.runtime.errors import RunError
 from rei.runtime.results import PAGE_POLICIES, RunSummary, judge
-from rei.runtime.supervisor import INTERNAL_ERROR_LOG
+from rei.runtime.runs.config import apply_run_config, defer_defaults
+from rei.runtime.runs.supervisor import INTERNAL_ERROR_LOG
 
 if TYPE_CHECKING:
-    from rei.runtime.collector import SampleSink
-    from rei.runtime.evaluator.signal_log import SignalRow
-    from rei.runtime.run import RunConfig, RunProbe, RunRecord
-    from rei.runtime.supervisor import RunRequest
+    from rei.runtime.messages.sink import SampleSink
+    from rei.runtime.observation.evaluator.signal_log import SignalRow
+    from rei.runtime.runs.supervisor import RunRequest
+    from rei.runtime.simulation.assembly import RunConfig, RunProbe, RunRecord
 
 # The simulator, the monitor and the generators are imported where they are used: `rei run`
-# itself only supervises the process that runs them (rei.runtime.supervisor), and pays for
+# itself only supervises the process that runs them (rei.runtime.runs.supervisor), and pays for
 # those imports once, in that process.
 
 PAGE = "report.html"
@@ -72,7 +72,7 @@ SUMMARY = "summary.json"
 LOG = "run.log"
 EVENTS = "events.csv"
 RECORDING = "recording.mcap"
-"""Written with --record (rei.runtime.recording.RECORDING)."""
+"""Written with --record (rei.runtime.observation.recordings.RECORDING)."""
 
 
 CONTROLLER_HELP = (
@@ -295,37 +295,44 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
     automata (the default specification unless ``vepl``; none when ``monitor`` is False),
     write outputs. Extra ``sinks`` see the same stream as the trace and the monitor; ``probe``
     hears the loop's progress; ``echo`` gets run.log's lines as they are written; ``recording``
-    also writes recording.mcap (``rei.runtime.recording``), with the monitor's signals.
+    also writes recording.mcap (``rei.runtime.observation.recordings``), with the monitor's signals.
     With ``bus`` (an endpoint of `rei bus`) the robot under test is the one answering on the
     bus (`rei robot`, awaited at most ``bus_wait`` seconds, like a monitor with
     ``wait_monitor``) and the trace is published there as it is written
-    (``rei.runtime.bus.run``; closing the robot leaves the bus). ``parameters`` (`--param`)
+    (``rei.runtime.bus.distributed_run``; closing the robot leaves the bus). ``parameters``
+    (`--param`)
     replace the specification's values; those other than the file's are in the summary.
 
     The controller runs in this process: a controller that ends or stalls the process ends
-    the caller too. `rei run` supervises it instead (``rei.runtime.supervisor.supervise``).
+    the caller too. `rei run` supervises it instead (``rei.runtime.runs.supervisor.supervise``).
     """
     from rei.generators.output import open_output  # noqa: PLC0415
     from rei.lang.vepl.document import changed_parameters, load_vepl  # noqa: PLC0415
-    from rei.runtime.cache import ArtifactCache  # noqa: PLC0415
-    from rei.runtime.collector import TraceWriter, load_monitor_config  # noqa: PLC0415
-    from rei.runtime.collector.needs import check_needs  # noqa: PLC0415
-    from rei.runtime.evaluator import merge_summary, write_summary  # noqa: PLC0415
-    from rei.runtime.faults.plan import fault_stage  # noqa: PLC0415
-    from rei.runtime.faults.setup import run_faults  # noqa: PLC0415
-    from rei.runtime.monitor import MonitorSink, generate_automata  # noqa: PLC0415
-    from rei.runtime.monitor.functions import load_functions  # noqa: PLC0415
+    from rei.runtime.artifacts.monitor import load_monitor_config  # noqa: PLC0415
+    from rei.runtime.artifacts.world import load_manifest  # noqa: PLC0415
+    from rei.runtime.observation.evaluator import merge_summary, write_summary  # noqa: PLC0415
+    from rei.runtime.observation.monitor import MonitorSink, generate_automata  # noqa: PLC0415
+    from rei.runtime.observation.monitor.functions import load_functions  # noqa: PLC0415
+    from rei.runtime.observation.monitor.needs import check_needs  # noqa: PLC0415
     from rei.runtime.robot import make_controller  # noqa: PLC0415
-    from rei.runtime.run import RunConfig, generate_world, run_mission, summary_of  # noqa: PLC0415
-    from rei.runtime.world import load_manifest  # noqa: PLC0415
-    from rei.runtime.world.start_jitter import START_JITTER  # noqa: PLC0415
+    from rei.runtime.runs.cache import ArtifactCache  # noqa: PLC0415
+    from rei.runtime.simulation.assembly import (  # noqa: PLC0415
+        RunConfig,
+        generate_world,
+        run_mission,
+        summary_of,
+    )
+    from rei.runtime.simulation.faults.composition import fault_stage  # noqa: PLC0415
+    from rei.runtime.simulation.faults.configuration import run_faults  # noqa: PLC0415
+    from rei.runtime.simulation.world.start_jitter import START_JITTER  # noqa: PLC0415
+    from rei.runtime.trace import TraceWriter  # noqa: PLC0415
 
     check_options(mission_path, duration, watchdog, physics_rate, odom_drift, laser_noise, seed)
     _make_folder(out_dir)
     # The specification is checked and generated first: a bad .vepl is reported (exit 2)
     # before any world is built.
     # With $REI_CACHE_DIR (rei campaign sets it) generation is reused from earlier runs of the
-    # same files (rei.runtime.cache): the same bytes, without parsing or rendering again.
+    # same files (rei.runtime.runs.cache): the same bytes, without parsing or rendering again.
     cache = ArtifactCache.from_environment()
     automata = None
     if monitor:
@@ -368,7 +375,7 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
     if bus is None:
         robot: Any = make_controller(controller)
     else:
-        from rei.runtime.bus.run import open_run_bus  # noqa: PLC0415
+        from rei.runtime.bus.distributed_run import open_run_bus  # noqa: PLC0415
 
         robot = open_run_bus(bus, bus_credentials, watchdog, bus_wait, wait_monitor, world_dir)
         controller = f"bus:{robot.name}"
@@ -379,7 +386,7 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
         bus_sinks.append(robot.publisher(trace_writer))
     recorder: list[SampleSink] = []
     if recording:
-        from rei.runtime.recording import McapRecorder  # noqa: PLC0415
+        from rei.runtime.observation.recordings import McapRecorder  # noqa: PLC0415
 
         def fired() -> Sequence[SignalRow]:
             host = monitor_sink.host if monitor_sink is not None else None
@@ -455,7 +462,7 @@ def execute_request(request: RunRequest, probe: RunProbe) -> tuple[int, dict[str
 
 
 def run(args: argparse.Namespace) -> int:
-    from rei.runtime.supervisor import RunRequest, supervise  # noqa: PLC0415
+    from rei.runtime.runs.supervisor import RunRequest, supervise  # noqa: PLC0415
 
     args = apply_run_config(args)
     out: Path = args.output
@@ -528,7 +535,7 @@ def write_page(out_dir: Path, trace: Path | None = None, policy: str = "all") ->
     written is reported (on stderr), never allowed to change the run's verdict or exit
     status."""
     from rei.lang.errors import ReiError  # noqa: PLC0415
-    from rei.runtime.report.run_page import write_run_page  # noqa: PLC0415
+    from rei.runtime.presentation.run_page.page import write_run_page  # noqa: PLC0415
 
     try:
         return write_run_page(out_dir, trace, policy=policy)
@@ -618,7 +625,7 @@ def _fault_periods(config: RunConfig, sample_rate: float, scan_rate: float
     period) in seconds, as ``run_faults`` checks fault windows against them. Samples and
     ticks fall on physics steps: from a sample the next tick is gcd(steps per sample, steps
     per tick) steps away at the least (a whole tick when every sample is on a tick)."""
-    from rei.runtime.loop.scheduler import every  # noqa: PLC0415
+    from rei.runtime.simulation.loop.scheduler import every  # noqa: PLC0415
 
     steps = config.physics_rate
     # the scheduler's own step counts (and its check that each rate divides the physics rate)

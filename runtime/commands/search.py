@@ -3,7 +3,7 @@
 Candidates are rows of the room generator (factor levels, LOW:HIGH ranges of the numeric
 factors, the layout seed), written as checked .room/.mission pairs and run as a campaign in
 DIR, a batch at a time; the strategy minimises the chosen requirement's robustness margin.
-Exit status by the campaign's one rule (rei.runtime.campaign.stats.campaign_outcome): 0 every
+Exit status by the campaign's one rule (rei.runtime.campaigns.stats.campaign_outcome): 0 every
 candidate's run passed (nothing found), 1 a run failed (a failing scenario was found: a fail
 verdict on the navigator) or was inconclusive, 2 bad input, 3 a run errored, 130 interrupted
 (run the same command again: it resumes and ends as an uninterrupted search would).
@@ -21,7 +21,7 @@ from rei.lang.cli_support import EXIT_INTERRUPTED
 from rei.lang.vepl_parameters import add_parameter_option, parameter_values
 
 if TYPE_CHECKING:
-    from rei.runtime.search import SearchConfig
+    from rei.runtime.campaigns.search import SearchConfig
 
 HELP_EXAMPLES = """\
 rei search -o out/search --controller my_nav:Navigator --budget 200 --workers 2
@@ -50,13 +50,9 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         object_room,
     )
     from rei.lang.commands.rooms import OVERRIDES  # noqa: PLC0415
+    from rei.runtime.campaigns.search.strategies import DEFAULT_MEASURES, MEASURE_RANGES, STRATEGIES
     from rei.runtime.commands.campaign import _seconds, add_engine_arguments  # noqa: PLC0415
     from rei.runtime.commands.run import CONTROLLER_HELP  # noqa: PLC0415
-    from rei.runtime.search.strategies import (  # noqa: PLC0415
-        DEFAULT_MEASURES,
-        MEASURE_RANGES,
-        STRATEGIES,
-    )
 
     parser = sub.add_parser(
         "search",
@@ -163,7 +159,7 @@ def config_of(args: argparse.Namespace) -> SearchConfig:
     from rei.generators.rooms.space import ParameterError  # noqa: PLC0415
     from rei.lang import __version__  # noqa: PLC0415
     from rei.lang.commands.rooms import OVERRIDES  # noqa: PLC0415
-    from rei.runtime.search import SearchConfig, SearchError  # noqa: PLC0415
+    from rei.runtime.campaigns.search import SearchConfig, SearchError  # noqa: PLC0415
 
     levels: list[tuple[str, str]] = []
     for name, _ in OVERRIDES:
@@ -208,16 +204,16 @@ def config_of(args: argparse.Namespace) -> SearchConfig:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rei.runtime.campaign import CampaignError  # noqa: PLC0415
-    from rei.runtime.campaign.engines import kept_workers  # noqa: PLC0415
-    from rei.runtime.campaign.provenance import collect  # noqa: PLC0415
+    from rei.runtime.campaigns import CampaignError  # noqa: PLC0415
+    from rei.runtime.campaigns.engines import kept_workers  # noqa: PLC0415
+    from rei.runtime.campaigns.provenance import collect  # noqa: PLC0415
+    from rei.runtime.campaigns.search import run_search  # noqa: PLC0415
+    from rei.runtime.campaigns.search.driver import check_config, fail_line  # noqa: PLC0415
     from rei.runtime.commands.campaign import (  # noqa: PLC0415
         _terminate_as_interrupt,
         engine_of,
         finish,
     )
-    from rei.runtime.search import run_search  # noqa: PLC0415
-    from rei.runtime.search.run import check_config, fail_line  # noqa: PLC0415
 
     config = config_of(args)
     check_config(config)  # bad options stop here, before the folder or an engine exists

@@ -2,7 +2,8 @@
 
 Delta debugging over the case's humans, objects, goals, trajectory vertices and grid floors,
 then rounding its numbers; each step is kept only when the shrunk case checks clean and the
-same requirement fails on every one of K seeds (rei.runtime.shrink). Exit status (the one pass
+same requirement fails on every one of K seeds (rei.runtime.campaigns.shrink). Exit status (the one
+pass
 rule applied to the case): 1 the case fails (the smallest failing case is written; also when
 the requirement fails on some seeds only: flaky, nothing shrunk), 0 the case passes on every
 seed (nothing to shrink, said so; no case written), 2 bad input, 3 a run of the original case
@@ -36,9 +37,9 @@ rei shrink case.mission -o out/min07 --requirement REACTION_TIME --param react_z
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    from rei.runtime.campaigns.shrink.shrinker import STAGES  # noqa: PLC0415
     from rei.runtime.commands.campaign import positive_int  # noqa: PLC0415
     from rei.runtime.commands.run import CONTROLLER_HELP  # noqa: PLC0415
-    from rei.runtime.shrink.shrinker import STAGES  # noqa: PLC0415
 
     parser = sub.add_parser(
         "shrink", help="delta-debug a failing case down to the smallest one that still fails",
@@ -121,8 +122,8 @@ def _check(args: argparse.Namespace) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rei.runtime.shrink.oracle import RunSettings  # noqa: PLC0415
-    from rei.runtime.shrink.session import shrink_into  # noqa: PLC0415
+    from rei.runtime.campaigns.shrink.oracle import RunSettings  # noqa: PLC0415
+    from rei.runtime.campaigns.shrink.workflow import shrink_into  # noqa: PLC0415
 
     _check(args)
     if args.functions is not None and Path(args.functions).is_file():
@@ -152,7 +153,7 @@ def run(args: argparse.Namespace) -> int:
 def _print(report: object, out: Path, quiet: bool) -> int:
     import json  # noqa: PLC0415
 
-    from rei.runtime.shrink.shrinker import SUMMARY, ShrinkReport  # noqa: PLC0415
+    from rei.runtime.campaigns.shrink.shrinker import SUMMARY, ShrinkReport  # noqa: PLC0415
 
     assert isinstance(report, ShrinkReport)
     summary = json.loads((out / SUMMARY).read_text(encoding="utf-8"))
@@ -182,7 +183,7 @@ def _print(report: object, out: Path, quiet: bool) -> int:
         return EXIT_FAILED
     before, after = summary["sizes"]["before"], summary["sizes"]["after"]
     if not quiet:
-        from rei.runtime.shrink.case import ELEMENT_KINDS  # noqa: PLC0415
+        from rei.runtime.campaigns.shrink.case import ELEMENT_KINDS  # noqa: PLC0415
 
         kinds = ", ".join(f"{k.replace('_', ' ')} {before[k]} -> {after[k]}"
                           for k in ELEMENT_KINDS if before[k])

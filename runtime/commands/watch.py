@@ -2,7 +2,7 @@
 
 `rei watch --replay TRACE` plays a recorded run (trace.jsonl or recording.mcap) at
 ``--speed`` times real time through the same automata and evaluator as `rei replay`, and
-shows it (rei.runtime.views): full-screen on a terminal, one line per signal into a pipe
+shows it (rei.runtime.presentation.live): full-screen on a terminal, one line per signal into a pipe
 (or with --plain), and with --foxglove PORT on a Foxglove WebSocket server. `rei watch --bus
 ENDPOINT` does the same with the run a simulation publishes on the bus, live. It only reads:
 it never sends anything to a run. Exit status:
@@ -125,8 +125,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rei.runtime.monitor.errors import MonitorError  # noqa: PLC0415
-    from rei.runtime.views.frames import WatchError  # noqa: PLC0415
+    from rei.runtime.observation.errors import MonitorError  # noqa: PLC0415
+    from rei.runtime.presentation.live.frames import WatchError  # noqa: PLC0415
 
     if (args.replay is None) == (args.bus is None):
         print("rei watch: error: expected a stream to watch: --replay TRACE or --bus URL "
@@ -149,12 +149,12 @@ def run(args: argparse.Namespace) -> int:
 
 def _watch(args: argparse.Namespace) -> int:
     from rei.runtime.commands.run import exit_code, verdict_lines  # noqa: PLC0415
-    from rei.runtime.monitor.functions import load_functions  # noqa: PLC0415
+    from rei.runtime.observation.monitor.functions import load_functions  # noqa: PLC0415
+    from rei.runtime.presentation.live.foxglove import FoxgloveView  # noqa: PLC0415
+    from rei.runtime.presentation.live.frames import StreamSource, View, Watcher  # noqa: PLC0415
+    from rei.runtime.presentation.live.sources import BusSource, RecordedSource  # noqa: PLC0415
+    from rei.runtime.presentation.live.terminal import Keys, LineView, TerminalView  # noqa: PLC0415
     from rei.runtime.results import judge  # noqa: PLC0415
-    from rei.runtime.views.foxglove import FoxgloveView  # noqa: PLC0415
-    from rei.runtime.views.frames import StreamSource, View, Watcher  # noqa: PLC0415
-    from rei.runtime.views.sources import BusSource, RecordedSource  # noqa: PLC0415
-    from rei.runtime.views.terminal import Keys, LineView, TerminalView  # noqa: PLC0415
 
     if args.replay is not None and not args.replay.is_file():
         print(f"rei watch: error: {args.replay}: expected a trace.jsonl or recording.mcap "

@@ -1,8 +1,7 @@
 """The robot under test: controller protocol, built-in controllers, conformance checker."""
 
 from rei.runtime.robot.conformance import check_controller
-from rei.runtime.robot.host import HostedController
-from rei.runtime.robot.protocol import (
+from rei.runtime.robot.contract import (
     Controller,
     ControllerContext,
     GoalFeedback,
@@ -12,7 +11,8 @@ from rei.runtime.robot.protocol import (
     Observation,
     VelocityCommand,
 )
-from rei.runtime.robot.select import BUILT_IN, load_controller, make_controller
+from rei.runtime.robot.host import HostedController
+from rei.runtime.robot.selection import BUILT_IN, load_controller, make_controller
 
 __all__ = ["BUILT_IN", "Controller", "ControllerContext", "GoalFeedback", "GoalTracker",
            "HostedController", "MapObstacle", "NavGoal", "Observation", "VelocityCommand",

@@ -14,7 +14,7 @@ import numpy as np
 
 from rei.catalogue import DriveSpec, LaserSpec
 from rei.runtime.messages import LaserScan, NavState
-from rei.runtime.robot.protocol import (
+from rei.runtime.robot.contract import (
     TERMINAL,
     ContractViolation,
     Controller,

@@ -4,7 +4,7 @@ A controller is a user's program, called every control tick. Inside the simulati
 it could falsify its own test: patch REI's evaluator in memory, register an ``atexit`` hook
 that rewrites summary.json, write a fake exit status into the supervisor's pipe. So
 ``HostedController`` runs it in a child process (``python -m rei.runtime.robot.host``,
-started with ``rei.runtime.processes.start_child``: its own process group, dead with the
+started with ``rei.runtime.platform.processes.start_child``: its own process group, dead with the
 thread that started it, no file descriptor but its two pipe ends and stderr, its working
 folder a fresh temporary one) and talks to it only through messages:
 
@@ -57,8 +57,8 @@ from typing import IO, Any, BinaryIO, TypeVar
 
 from rei.runtime.errors import RunError
 from rei.runtime.messages import LaserScan, NavState
-from rei.runtime.processes import Child, start_child, stop_child
-from rei.runtime.robot.protocol import (
+from rei.runtime.platform.processes import Child, start_child, stop_child
+from rei.runtime.robot.contract import (
     ContractViolation,
     ControllerContext,
     GoalFeedback,
@@ -158,7 +158,7 @@ class RemoteController:
     the feedback follows, ``FEEDBACK_AFTER``), every answer checked by the same rules
     (``decode_answer``, the keys each request may answer, ``checked_command``,
     ``checked_feedback``). A subclass carries the bytes: ``HostedController`` over the pipes
-    of a child process, ``rei.runtime.bus.robot.BusController`` over the bus. Calls wait at
+    of a child process, ``rei.runtime.bus.remote_robot.BusController`` over the bus. Calls wait at
     most ``timeout`` wall seconds (None: as long as it takes); every failure is a
     ``ControllerFault`` with the reason a run reports, and stops the controller for good.
     """
@@ -557,7 +557,7 @@ def _line(answer: dict[str, Any]) -> bytes:
 def serve(requests: BinaryIO, answers: BinaryIO) -> None:
     """The host's loop: load the controller, then answer each request until the end of
     the requests (the simulation closed the pipe or was killed)."""
-    from rei.runtime.robot.select import load_controller  # noqa: PLC0415
+    from rei.runtime.robot.selection import load_controller  # noqa: PLC0415
 
     host = HostSide(load_controller)
     while True:

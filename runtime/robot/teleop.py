@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from rei.runtime.robot.protocol import (
+from rei.runtime.robot.contract import (
     STOP,
     ControllerContext,
     GoalFeedback,

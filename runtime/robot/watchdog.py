@@ -28,7 +28,7 @@ call is dropped, unless it has not returned within the watchdog by then (a fault
 What this in-process thread cannot catch is a call that never gives the interpreter back (a
 loop in C holding the GIL) or that ends the process (``os._exit``, a signal): the main thread
 is then stopped too, so those are caught one level up, by the process that supervises the
-run (``rei.runtime.supervisor``). This module must never import pybullet.
+run (``rei.runtime.runs.supervisor``). This module must never import pybullet.
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
-from rei.runtime.robot.protocol import (
+from rei.runtime.robot.contract import (
     ContractViolation,
     Controller,
     ControllerContext,

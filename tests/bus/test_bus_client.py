@@ -173,10 +173,10 @@ def test_the_bus_folder_is_private(router: Router) -> None:
 
 def test_a_late_monitor_gets_the_trace_header_from_the_simulation(  # type: ignore[no-untyped-def]
         join, tmp_path: Path) -> None:
-    from rei.runtime.bus.monitor import ask_header
-    from rei.runtime.bus.run import TracePublisher
+    from rei.runtime.bus.distributed_run import TracePublisher
+    from rei.runtime.bus.reception import ask_header
     from rei.runtime.bus.schema import TRACE, config_key
-    from rei.runtime.collector.trace import TraceDecoder, TraceWriter
+    from rei.runtime.trace import TraceDecoder, TraceWriter
     from tests.runtime.test_trace import _header
 
     sim, monitor = join("simulation"), join("monitor")

@@ -17,7 +17,7 @@ from tests.bus.conftest import SAFETY, Inbox
 
 
 def _start(*args: str) -> subprocess.Popen[str]:
-    return subprocess.Popen([sys.executable, "-m", "rei.runtime.cli", "bus", *args],
+    return subprocess.Popen([sys.executable, "-m", "rei.runtime.commands", "bus", *args],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
@@ -53,7 +53,7 @@ def test_rei_bus_refuses_a_port_in_use(tmp_path: Path) -> None:
     try:
         assert first.stdout is not None
         assert first.stdout.readline().startswith("endpoint")
-        second = subprocess.run([sys.executable, "-m", "rei.runtime.cli", "bus", "--dir",
+        second = subprocess.run([sys.executable, "-m", "rei.runtime.commands", "bus", "--dir",
                                  str(tmp_path / "b"), "--port", str(port)],
                                 capture_output=True, text=True, timeout=SAFETY)
         assert second.returncode == 3
@@ -66,11 +66,11 @@ def test_rei_bus_refuses_a_port_in_use(tmp_path: Path) -> None:
 
 
 def test_rei_bus_refuses_bad_options(tmp_path: Path) -> None:
-    bad = subprocess.run([sys.executable, "-m", "rei.runtime.cli", "bus", "--port", "70000"],
+    bad = subprocess.run([sys.executable, "-m", "rei.runtime.commands", "bus", "--port", "70000"],
                          capture_output=True, text=True, timeout=SAFETY)
     assert (bad.returncode, bad.stderr.strip()) == (
         2, "rei bus: error: --port: a port 1..65535 expected, found 70000")
-    tls = subprocess.run([sys.executable, "-m", "rei.runtime.cli", "bus", "--dir",
+    tls = subprocess.run([sys.executable, "-m", "rei.runtime.commands", "bus", "--dir",
                           str(tmp_path), "--tls-cert", str(tmp_path / "no.pem")],
                          capture_output=True, text=True, timeout=SAFETY)
     assert tls.returncode == 2
@@ -87,7 +87,7 @@ def test_components_say_a_refusal_in_one_line(tmp_path: Path) -> None:
         forged.chmod(0o600)
         for command in (["robot", "--controller", "reference"], ["monitor", "-o",
                                                                   str(tmp_path / "m")]):
-            done = subprocess.run([sys.executable, "-m", "rei.runtime.cli", *command, "--bus",
+            done = subprocess.run([sys.executable, "-m", "rei.runtime.commands", *command, "--bus",
                                    router.bus.endpoint, "--credentials", str(forged)],
                                   capture_output=True, text=True, timeout=SAFETY)
             role = command[0]

@@ -29,7 +29,7 @@ goals, humans, contacts and faults, and a cut run is judged like any other)."""
 
 
 def _rei(*args: str, env: dict[str, str]) -> subprocess.Popen[str]:
-    return subprocess.Popen([sys.executable, "-m", "rei.runtime.cli", *args], cwd=REPO,
+    return subprocess.Popen([sys.executable, "-m", "rei.runtime.commands", *args], cwd=REPO,
                             env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
@@ -61,7 +61,7 @@ def test_distributed_run_equals_in_process(bus: tuple[Router, dict[str, str]],
                    "-q", env=env)
     try:
         run = subprocess.run(
-            [sys.executable, "-m", "rei.runtime.cli", "run", str(mission), "-o",
+            [sys.executable, "-m", "rei.runtime.commands", "run", str(mission), "-o",
              str(tmp_path / "dist"), "--duration", DURATION, "--bus", router.bus.endpoint,
              "--wait-for-monitor", "--bus-wait", str(SAFETY), "-q"],
             cwd=REPO, env=env, capture_output=True, text=True, timeout=600)
@@ -94,7 +94,7 @@ def test_a_silent_robot_is_a_run_error_naming_it(tmp_path: Path) -> None:
                      "tests.runtime.faulty:Hanging", env=env)
         try:
             run = subprocess.run(
-                [sys.executable, "-m", "rei.runtime.cli", "run",
+                [sys.executable, "-m", "rei.runtime.commands", "run",
                  str(EXAMPLES / "simple_wall" / "simple_wall.mission"), "-o",
                  str(tmp_path / "out"), "--bus", router.bus.endpoint, "--watchdog", "1",
                  "--bus-wait", str(SAFETY)],
@@ -112,7 +112,7 @@ def test_a_silent_robot_is_a_run_error_naming_it(tmp_path: Path) -> None:
 def test_no_robot_on_the_bus_is_said_in_one_line(router: Router, tmp_path: Path) -> None:
     env = {**os.environ, "REI_BUS_CREDENTIALS": str(router.bus.path)}
     run = subprocess.run(
-        [sys.executable, "-m", "rei.runtime.cli", "run",
+        [sys.executable, "-m", "rei.runtime.commands", "run",
          str(EXAMPLES / "simple_wall" / "simple_wall.mission"), "-o", str(tmp_path / "out"),
          "--bus", router.bus.endpoint, "--bus-wait", "0.5"],
         cwd=REPO, env=env, capture_output=True, text=True, timeout=600)

@@ -12,12 +12,12 @@ from typing import Any
 
 import pytest
 
-from rei.runtime.bus.monitor import TraceStream, ranges
-from rei.runtime.bus.run import KEYFRAME, keyframe
-from rei.runtime.collector.trace import read_trace, read_trace_end
+from rei.runtime.bus.distributed_run import KEYFRAME, keyframe
+from rei.runtime.bus.reception import TraceStream, ranges
 from rei.runtime.commands.replay import judge_stream
 from rei.runtime.commands.run import run_into
-from rei.runtime.monitor import generate_automata
+from rei.runtime.observation.monitor import generate_automata
+from rei.runtime.trace import read_trace, read_trace_end
 from tests.conftest import EXAMPLES
 
 MISSION = EXAMPLES / "simple_wall" / "simple_wall.mission"

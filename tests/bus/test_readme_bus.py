@@ -39,7 +39,7 @@ def test_the_readme_block_runs(tmp_path: Path) -> None:
 
     def rei(line: str) -> list[str]:
         argv = shlex.split(line)
-        return [sys.executable, "-m", "rei.runtime.cli", *[a for a in argv[1:] if a != "&"]]
+        return [sys.executable, "-m", "rei.runtime.commands", *[a for a in argv[1:] if a != "&"]]
 
     started: list[subprocess.Popen[str]] = []
     try:

@@ -23,7 +23,7 @@ MISSION = EXAMPLES / "medium_sparse" / "medium_sparse.mission"
 
 
 def _bus(port: int, folder: Path) -> subprocess.Popen[str]:
-    process = subprocess.Popen([sys.executable, "-m", "rei.runtime.cli", "bus", "--port",
+    process = subprocess.Popen([sys.executable, "-m", "rei.runtime.commands", "bus", "--port",
                                 str(port), "--dir", str(folder)], cwd=REPO, text=True,
                                stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
     assert process.stdout is not None
@@ -40,11 +40,11 @@ def test_a_router_restart_is_survived(tmp_path: Path) -> None:
     started = [_bus(port, folder)]
     try:
         started.append(subprocess.Popen(
-            [sys.executable, "-m", "rei.runtime.cli", "robot", "--bus", endpoint, "--once"],
+            [sys.executable, "-m", "rei.runtime.commands", "robot", "--bus", endpoint, "--once"],
             cwd=REPO, env=env, text=True, stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL))
         run = subprocess.Popen(
-            [sys.executable, "-m", "rei.runtime.cli", "run", str(MISSION), "-o",
+            [sys.executable, "-m", "rei.runtime.commands", "run", str(MISSION), "-o",
              str(tmp_path / "dist"), "--bus", endpoint, "--no-monitor", "--bus-wait",
              str(SAFETY)], cwd=REPO, env=env, text=True, stdout=subprocess.PIPE,
             stderr=subprocess.PIPE)

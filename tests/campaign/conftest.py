@@ -18,7 +18,7 @@ def require_rei_run() -> None:
 @pytest.fixture(scope="module")
 def dask_scheduler() -> Iterator[str]:
     pytest.importorskip("distributed", reason="pip install 'dask[distributed]'")
-    from rei.runtime.campaign.cluster import loopback_cluster  # noqa: PLC0415
+    from rei.runtime.campaigns.dask_cluster import loopback_cluster  # noqa: PLC0415
 
     with loopback_cluster(workers=2, threads=1) as address:
         yield address

@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import replace
 from pathlib import Path
 
-from rei.runtime.campaign import CampaignPlan, CampaignStore, RunResult, plan_campaign
+from rei.runtime.campaigns import CampaignPlan, CampaignStore, RunResult, plan_campaign
 from rei.runtime.results import RunSummary, Verdict
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"

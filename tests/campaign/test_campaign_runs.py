@@ -16,7 +16,7 @@ import pyarrow.parquet as pq
 import pytest
 from lxml import etree
 
-from rei.runtime.campaign import CampaignStore, plan_campaign
+from rei.runtime.campaigns import CampaignStore, plan_campaign
 from rei.runtime.results import judge
 
 from .conftest import require_rei_run
@@ -28,7 +28,7 @@ SAFETY_LIMIT = 600.0
 
 
 def campaign_argv(out: Path, *extra: str, repeat: int = 25) -> list[str]:
-    return [sys.executable, "-m", "rei.runtime.cli", "campaign", *map(str, MISSIONS),
+    return [sys.executable, "-m", "rei.runtime.commands", "campaign", *map(str, MISSIONS),
             "-o", str(out), "--repeat", str(repeat), "--seed", "5", "--duration", "2", *extra]
 
 
@@ -130,7 +130,7 @@ import os
 import signal
 import time
 
-from rei.runtime.robot.reference import ReferenceNavigator
+from rei.runtime.robot.navigator.reference import ReferenceNavigator
 
 
 class Segfaulting(ReferenceNavigator):
@@ -153,7 +153,7 @@ class Crawling(ReferenceNavigator):
 def _campaign(tmp_path: Path, out: Path, *args: str) -> subprocess.CompletedProcess[str]:
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(
         [str(tmp_path / "plugins"), os.environ.get("PYTHONPATH", "")])}
-    return subprocess.run([sys.executable, "-m", "rei.runtime.cli", "campaign", *args,
+    return subprocess.run([sys.executable, "-m", "rei.runtime.commands", "campaign", *args,
                            "-o", str(out)], capture_output=True, text=True, env=env,
                           timeout=SAFETY_LIMIT)
 
@@ -223,7 +223,7 @@ def test_ctrl_c_stops_the_campaign_and_the_same_command_finishes_it(tmp_path: Pa
 @pytest.mark.slow
 def test_demo_generates_runs_and_reports(tmp_path: Path) -> None:
     require_rei_run()
-    done = subprocess.run([sys.executable, "-m", "rei.runtime.cli", "demo", "-o",
+    done = subprocess.run([sys.executable, "-m", "rei.runtime.commands", "demo", "-o",
                            str(tmp_path), "--count", "2", "--repeat", "1", "--workers", "2"],
                           capture_output=True, text=True, timeout=SAFETY_LIMIT)
     assert done.returncode == 0, done.stderr
@@ -236,7 +236,7 @@ def test_demo_generates_runs_and_reports(tmp_path: Path) -> None:
 @pytest.mark.slow
 def test_a_worker_without_the_campaign_folder_sends_the_run_files_back(tmp_path: Path) -> None:
     require_rei_run()
-    from rei.runtime.campaign.execute import execute_run_remote  # noqa: PLC0415
+    from rei.runtime.campaigns.execute import execute_run_remote  # noqa: PLC0415
 
     plan = plan_campaign([EXAMPLES / "simple_wall"], duration=2.0)
     (spec,) = plan.runs
@@ -257,7 +257,7 @@ def test_a_users_vepl_reaches_every_run_and_its_requirements_reach_junit(tmp_pat
     require_rei_run()
     vepl = EXAMPLES / "navigation" / "human_safety.vepl"
     out = tmp_path / "campaign"
-    done = subprocess.run([sys.executable, "-m", "rei.runtime.cli", "campaign",
+    done = subprocess.run([sys.executable, "-m", "rei.runtime.commands", "campaign",
                            str(EXAMPLES / "navigation"), "-o", str(out), "--vepl", str(vepl),
                            "--duration", "5", "--no-report"],
                           capture_output=True, text=True, timeout=SAFETY_LIMIT)
@@ -277,12 +277,12 @@ def test_demo_passes_a_users_controller_vepl_and_seed_to_every_run(tmp_path: Pat
     require_rei_run()
     (tmp_path / "plugins").mkdir()
     (tmp_path / "plugins" / "my_nav.py").write_text(
-        "from rei.runtime.robot.reference import ReferenceNavigator\n\n\n"
+        "from rei.runtime.robot.navigator.reference import ReferenceNavigator\n\n\n"
         "class MyNavigator(ReferenceNavigator):\n    name = 'my-navigator'\n")
     vepl = EXAMPLES / "navigation" / "human_safety.vepl"
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(
         [str(tmp_path / "plugins"), os.environ.get("PYTHONPATH", "")])}
-    done = subprocess.run([sys.executable, "-m", "rei.runtime.cli", "demo", "-o",
+    done = subprocess.run([sys.executable, "-m", "rei.runtime.commands", "demo", "-o",
                            str(tmp_path / "demo"), "--count", "1", "--repeat", "1",
                            "--workers", "1", "--seed", "4", "--controller", "my_nav:MyNavigator",
                            "--vepl", str(vepl)],
@@ -300,7 +300,7 @@ def test_demo_passes_a_users_controller_vepl_and_seed_to_every_run(tmp_path: Pat
     assert {v.requirement for v in record.summary.verdicts} == {"HUMAN_PERSONAL_SPACE",
                                                                "HUMAN_NO_COLLISION"}
     assert manifest["sessions"][0]["controller"] == "my_nav:MyNavigator"
-    bad = subprocess.run([sys.executable, "-m", "rei.runtime.cli", "demo", "-o",
+    bad = subprocess.run([sys.executable, "-m", "rei.runtime.commands", "demo", "-o",
                           str(tmp_path / "bad"), "--vepl", str(tmp_path / "missing.vepl")],
                          capture_output=True, text=True, timeout=SAFETY_LIMIT)
     assert bad.returncode == 2 and "missing.vepl' does not exist" in bad.stderr

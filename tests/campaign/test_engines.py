@@ -6,8 +6,8 @@ from collections.abc import Callable
 
 import pytest
 
-from rei.runtime.campaign import CampaignEngine, CampaignError, DaskEngine, LocalEngine
-from rei.runtime.campaign.engines import check_engine
+from rei.runtime.campaigns import CampaignEngine, CampaignError, DaskEngine, LocalEngine
+from rei.runtime.campaigns.engines import check_engine
 
 
 @pytest.mark.parametrize("engine", [LocalEngine(2), DaskEngine("tcp://127.0.0.1:8786")])

@@ -21,10 +21,10 @@ import pytest
 from lxml import etree
 
 from rei.lang.cli_support import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_RUN_ERROR
-from rei.runtime.campaign import CampaignStore, classify_pairs, mission_verdicts
-from rei.runtime.campaign.progress import Progress
-from rei.runtime.campaign.stats import campaign_outcome
-from rei.runtime.campaign.store import RunRecord
+from rei.runtime.campaigns import CampaignStore, classify_pairs, mission_verdicts
+from rei.runtime.campaigns.progress import Progress
+from rei.runtime.campaigns.stats import campaign_outcome
+from rei.runtime.campaigns.store import RunRecord
 
 from .conftest import require_rei_run
 from .records import EXAMPLES, example_plan, write_campaign
@@ -90,7 +90,7 @@ def test_the_progress_line_counts_inconclusive_and_error_runs_apart() -> None:
 
 
 def test_pair_labels_say_inconclusive_when_nothing_failed(tmp_path: Path) -> None:
-    from rei.runtime.campaign import plan_campaign  # noqa: PLC0415
+    from rei.runtime.campaigns import plan_campaign  # noqa: PLC0415
 
     plan = plan_campaign([EXAMPLES / "simple_wall"], repeat=2, seed=3,
                          static_dir=tmp_path / "static")
@@ -108,7 +108,7 @@ def test_pair_labels_say_inconclusive_when_nothing_failed(tmp_path: Path) -> Non
 
 GIVES_UP = """\
 from rei.runtime.messages import NavState
-from rei.runtime.robot.reference import ReferenceNavigator
+from rei.runtime.robot.navigator.reference import ReferenceNavigator
 
 
 class GivesUp(ReferenceNavigator):
@@ -130,7 +130,7 @@ def _rei(tmp_path: Path, *argv: str) -> subprocess.CompletedProcess[str]:
     (plugins / "gives_up.py").write_text(GIVES_UP)
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(
         [str(plugins), os.environ.get("PYTHONPATH", "")])}
-    return subprocess.run([sys.executable, "-m", "rei.runtime.cli", *argv],
+    return subprocess.run([sys.executable, "-m", "rei.runtime.commands", *argv],
                           capture_output=True, text=True, timeout=SAFETY_LIMIT, env=env)
 
 

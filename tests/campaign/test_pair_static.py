@@ -11,7 +11,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from rei.lang.workspace import load_mission
-from rei.runtime.campaign import (
+from rei.runtime.campaigns import (
     CampaignError,
     CampaignPlan,
     CampaignStore,
@@ -135,7 +135,7 @@ def test_paired_plan_interleaves_twins_with_the_same_seed_and_stable_ids(tmp_pat
 
 
 def _campaign(out: Path, missions: Path, *extra: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "rei.runtime.cli", "campaign", str(missions),
+    return subprocess.run([sys.executable, "-m", "rei.runtime.commands", "campaign", str(missions),
                            "-o", str(out), "--repeat", "2", "--workers", "2", "--no-report",
                            "--pair-static", *extra],
                           capture_output=True, text=True, timeout=SAFETY_LIMIT)

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from rei.runtime.campaign import CampaignError, derive_seed, plan_campaign
-from rei.runtime.campaign.plan import CampaignPlan
+from rei.runtime.campaigns import CampaignError, derive_seed, plan_campaign
+from rei.runtime.campaigns.plan import CampaignPlan
 
 from .records import EXAMPLES
 

@@ -22,11 +22,11 @@ from pathlib import Path
 import pytest
 
 from rei.lang.cli_support import EXIT_RUN_ERROR
-from rei.runtime.campaign import CampaignStore, LocalEngine, plan_campaign, run_campaign
-from rei.runtime.campaign.execute import RUN_TEMPORARY, execute_run
+from rei.runtime.campaigns import CampaignStore, LocalEngine, plan_campaign, run_campaign
+from rei.runtime.campaigns.execute import RUN_TEMPORARY, execute_run
 from rei.runtime.commands.campaign import finish
-from rei.runtime.processes import start_child
-from rei.runtime.warm.server import WarmWorkers
+from rei.runtime.platform.processes import start_child
+from rei.runtime.runs.fork_server import WarmWorkers
 from tests.conftest import REPO
 
 from .conftest import require_rei_run
@@ -57,8 +57,8 @@ def alive(pid: int, cmdline: bytes) -> bool:
     return state != "Z" and now == cmdline
 
 
-WARM_SERVER = b"rei.runtime.warm.server\0"
-"""In the command line of a campaign worker's fork server (rei.runtime.warm.server), which
+WARM_SERVER = b"rei.runtime.runs.fork_server\0"
+"""In the command line of a campaign worker's fork server (rei.runtime.runs.fork_server), which
 its forked `rei run` processes keep."""
 
 
@@ -79,7 +79,7 @@ def rei_runs(parent: int) -> dict[int, bytes]:
     servers = {pid for pid, (ppid, cmdline) in processes.items()
                if ppid == parent and WARM_SERVER in cmdline}
     return {pid: cmdline for pid, (ppid, cmdline) in processes.items()
-            if (ppid == parent and b"rei.runtime.cli\0run\0" in cmdline)
+            if (ppid == parent and b"rei.runtime.commands\0run\0" in cmdline)
             or (ppid in servers and WARM_SERVER in cmdline)}
 
 
@@ -226,7 +226,7 @@ def test_crashed_runs_complete_the_campaign_which_exits_3_not_130(tmp_path: Path
 SLOW_CONTROLLER = """
 import time
 
-from rei.runtime.robot.reference import ReferenceNavigator
+from rei.runtime.robot.navigator.reference import ReferenceNavigator
 
 
 class Dawdling(ReferenceNavigator):
@@ -246,7 +246,7 @@ def start_campaign(tmp_path: Path, duration: str) -> tuple[list[str], dict[str, 
     (plugins / "slow_controllers.py").write_text(SLOW_CONTROLLER)
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(
         [str(plugins), os.environ.get("PYTHONPATH", "")])}
-    argv = [sys.executable, "-m", "rei.runtime.cli", "campaign",
+    argv = [sys.executable, "-m", "rei.runtime.commands", "campaign",
             str(EXAMPLES / "simple_wall"), str(EXAMPLES / "small_dense"),
             "-o", str(tmp_path / "campaign"), "--workers", "2", "--duration", duration,
             "--controller", "slow_controllers:Dawdling", "--no-report"]

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import io
 
-from rei.runtime.campaign.progress import Progress
+from rei.runtime.campaigns.progress import Progress
 
 
 def test_progress_counts_resumed_runs_and_prints_sparsely_off_a_terminal() -> None:

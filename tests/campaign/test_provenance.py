@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from rei.runtime.campaign.provenance import collect, controller_revision, git_revision
+from rei.runtime.campaigns.provenance import collect, controller_revision, git_revision
 
 
 def test_session_provenance_names_versions_and_command() -> None:

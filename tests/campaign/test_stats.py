@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from rei.runtime.campaign import (
+from rei.runtime.campaigns import (
     CampaignStore,
     SuccessRate,
     campaign_passed,
@@ -18,9 +18,9 @@ from rei.runtime.campaign import (
     success_rates,
     wilson_interval,
 )
-from rei.runtime.campaign.stats import by_group, by_mission, judge_mission
-from rei.runtime.campaign.store import required_pass_rate
-from rei.runtime.cli import main
+from rei.runtime.campaigns.stats import by_group, by_mission, judge_mission
+from rei.runtime.campaigns.store import required_pass_rate
+from rei.runtime.commands.cli import main
 from tests.campaign.records import EXAMPLES, example_plan, write_campaign
 
 

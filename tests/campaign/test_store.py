@@ -10,14 +10,8 @@ from pathlib import Path
 import pyarrow.parquet as pq
 import pytest
 
-from rei.runtime.campaign import (
-    CampaignError,
-    CampaignStore,
-    RunRecord,
-    RunResult,
-    plan_campaign,
-)
-from rei.runtime.campaign.store import rows_table
+from rei.runtime.campaigns import CampaignError, CampaignStore, RunRecord, RunResult, plan_campaign
+from rei.runtime.campaigns.store import rows_table
 
 from .records import EXAMPLES, example_plan, result_for, write_campaign
 

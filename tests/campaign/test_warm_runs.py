@@ -1,4 +1,4 @@
-"""Campaign runs forked by their worker's fork server (rei.runtime.warm.server) are the runs a
+"""Campaign runs forked by their worker's fork server (rei.runtime.runs.fork_server) are the runs a
 fresh `rei run` process makes: the same bytes, the same isolation, never stale.
 
 Real runs of the bundled examples (pybullet, the reference navigator), real fork servers."""
@@ -17,12 +17,12 @@ from pathlib import Path
 
 import pytest
 
-import rei.runtime.warm as warm_package
-from rei.runtime.campaign import LocalEngine, RunResult, plan_campaign, run_campaign
-from rei.runtime.campaign.execute import execute_run, run_environment
-from rei.runtime.campaign.plan import RunSpec
-from rei.runtime.warm import WARM_VARIABLE
-from rei.runtime.warm.server import ForkServer, WarmWorkers
+import rei.runtime.platform.warm as warm_package
+from rei.runtime.campaigns import LocalEngine, RunResult, plan_campaign, run_campaign
+from rei.runtime.campaigns.execute import execute_run, run_environment
+from rei.runtime.campaigns.plan import RunSpec
+from rei.runtime.platform.warm import WARM_VARIABLE
+from rei.runtime.runs.fork_server import ForkServer, WarmWorkers
 
 from .conftest import require_rei_run
 from .records import EXAMPLES
@@ -36,7 +36,7 @@ OUTPUTS = ("trace.jsonl", "events.csv", "summary.json", "report.html", "run.log"
 HANGING_CONTROLLER = """
 import time
 
-from rei.runtime.robot.reference import ReferenceNavigator
+from rei.runtime.robot.navigator.reference import ReferenceNavigator
 
 
 class Hanging(ReferenceNavigator):

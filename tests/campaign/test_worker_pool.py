@@ -1,4 +1,4 @@
-"""One pool of workers for an engine's lifetime (rei.runtime.campaign.engines.WorkerPool,
+"""One pool of workers for an engine's lifetime (rei.runtime.campaigns.engines.WorkerPool,
 ``kept_workers``): every ``execute`` call of a search's batches or a shrink's candidates is
 served by the same fork servers, the runs are the bytes they would be otherwise, and closing
 the block (normally, on an error, on Ctrl-C) leaves no server and no run behind.
@@ -15,14 +15,14 @@ from pathlib import Path
 
 import pytest
 
-from rei.runtime.campaign import LocalEngine, RunResult, plan_campaign
-from rei.runtime.campaign.engines import WorkDirFactory, WorkerPool, kept_workers
-from rei.runtime.campaign.plan import RunSpec
-from rei.runtime.search import run_search
-from rei.runtime.search.run import SearchConfig
-from rei.runtime.shrink.case import load_case
-from rei.runtime.shrink.oracle import FailureOracle, RunSettings
-from rei.runtime.warm import WARM_VARIABLE
+from rei.runtime.campaigns import LocalEngine, RunResult, plan_campaign
+from rei.runtime.campaigns.engines import WorkDirFactory, WorkerPool, kept_workers
+from rei.runtime.campaigns.plan import RunSpec
+from rei.runtime.campaigns.search import run_search
+from rei.runtime.campaigns.search.driver import SearchConfig
+from rei.runtime.campaigns.shrink.case import load_case
+from rei.runtime.campaigns.shrink.oracle import FailureOracle, RunSettings
+from rei.runtime.platform.warm import WARM_VARIABLE
 
 from .records import EXAMPLES
 from .test_process_death import rei_runs

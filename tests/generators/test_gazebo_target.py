@@ -14,8 +14,8 @@ from rei.catalogue import Tile
 from rei.generators.errors import GenerationError
 from rei.generators.targets import GenerationRequest, check_target
 from rei.generators.targets.gazebo import TARGET
-from rei.runtime.animator import spline_of
-from rei.runtime.world.manifest import Trajectory
+from rei.runtime.artifacts.world import Trajectory
+from rei.runtime.simulation.animator import spline_of
 from tests.conftest import EXAMPLES, example_files, require_tool
 from tests.generators.conftest import RequestFor, Write
 

@@ -143,11 +143,12 @@ def test_bad_options_are_reported_by_name(
 
 def test_the_launch_file_records_exactly_what_rei_replay_reads(request_for: RequestFor,
                                                               tmp_path: Path) -> None:
-    """Issue 24.4: `ros2 bag record` (MCAP) of the topics rei.runtime.recording.bag reads,
+    """Issue 24.4: `ros2 bag record` (MCAP) of the topics
+    rei.runtime.observation.recordings.foreign reads,
     the ground truth bridged from Gazebo's poses, and the --map file that reads the bag."""
     from rei.generators.targets.launch import GROUND_TRUTH, RECORDED_TOPICS  # noqa: PLC0415
-    from rei.runtime.recording.bag import load_topic_map  # noqa: PLC0415
-    from rei.runtime.recording.ros import ROBOT_TOPICS  # noqa: PLC0415
+    from rei.runtime.messages.ros import ROBOT_TOPICS  # noqa: PLC0415
+    from rei.runtime.observation.recordings.foreign import load_topic_map  # noqa: PLC0415
 
     files = files_of(request_for(EXAMPLES / "navigation" / "navigation.mission"))
     launch = etree.fromstring(files["rei_test.launch.xml"])

@@ -12,8 +12,8 @@ from lxml import etree
 from rei.generators.concrete.build import load_concrete_mission
 from rei.generators.output import write_tree
 from rei.generators.targets import GenerationRequest, check_target, get_target
-from rei.runtime.world import load_manifest
-from rei.runtime.world.bullet import BulletWorld
+from rei.runtime.artifacts.world import load_manifest
+from rei.runtime.simulation.world.bullet import BulletWorld
 from tests.conftest import EXAMPLES, example_files
 
 MISSIONS = example_files(".mission")

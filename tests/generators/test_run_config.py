@@ -13,9 +13,9 @@ import pytest
 from rei.generators.pipeline import generate
 from rei.lang.cli_support import build_parser
 from rei.lang.vepl_parameters import parameter_values
-from rei.runtime.cli import DESCRIPTION, main
-from rei.runtime.commands.run_config import apply_run_config
+from rei.runtime.commands.cli import DESCRIPTION, main
 from rei.runtime.errors import RunError
+from rei.runtime.runs.config import apply_run_config
 from tests.conftest import EXAMPLES
 
 NAVIGATION = EXAMPLES / "navigation"

@@ -20,10 +20,10 @@ from rei.lang.room.model import FloorDecl, NameRef, PlacedObject, Room, Side
 from rei.lang.source import SourceText, read_bounded
 from rei.lang.vepl import analyse_vepl
 from rei.lang.workspace import Workspace
-from rei.runtime.animator.animator import spline_of
+from rei.runtime.artifacts.world import Trajectory
 from rei.runtime.errors import RunError
-from rei.runtime.monitor.automata import load_generated
-from rei.runtime.world.manifest import Trajectory
+from rei.runtime.observation.automata.records import load_generated
+from rei.runtime.simulation.animator.engine import spline_of
 
 GOALS = "  goal a at x timeout 1\n  goal b at y timeout 1\n}\n"
 VEPL = """specification s

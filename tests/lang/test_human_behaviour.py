@@ -12,7 +12,7 @@ from rei.generators.targets import GenerationRequest, get_target
 from rei.lang.lsp.completion import room_completions
 from rei.lang.room.model import BEHAVIOURS
 from rei.lang.workspace import Workspace, load_room
-from rei.runtime.world.manifest import load_manifest
+from rei.runtime.artifacts.world import load_manifest
 
 ROOM = """room walkers {
     grid g {

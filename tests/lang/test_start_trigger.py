@@ -19,7 +19,7 @@ from rei.generators.targets import GenerationRequest, get_target
 from rei.lang.lsp.completion import room_completions
 from rei.lang.printer import print_room
 from rei.lang.workspace import Workspace, load_room
-from rei.runtime.world.manifest import load_manifest
+from rei.runtime.artifacts.world import load_manifest
 from tests.generators.test_gazebo_target import ign_check
 
 ROOM = """room hall {

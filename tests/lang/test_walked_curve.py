@@ -11,8 +11,8 @@ from rei.lang.cli import main
 from rei.lang.room.document import analyse_room
 from rei.lang.room.spline import CatmullRom, vertex_times, walked_path
 from rei.lang.source import SourceText
-from rei.runtime.animator import spline_of
-from rei.runtime.world.manifest import Trajectory
+from rei.runtime.artifacts.world import Trajectory
+from rei.runtime.simulation.animator import spline_of
 
 L_CORRIDOR = """room l_corridor {
     grid g {

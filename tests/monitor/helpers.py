@@ -5,10 +5,10 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-from rei.runtime.evaluator.signal_log import SignalRow, read_csv
-from rei.runtime.evaluator.summary import MonitorResult
 from rei.runtime.messages import Sample, StreamHeader
-from rei.runtime.monitor import MonitorSink, generate_automata
+from rei.runtime.observation.evaluator.signal_log import SignalRow, read_csv
+from rei.runtime.observation.evaluator.summary import MonitorResult
+from rei.runtime.observation.monitor import MonitorSink, generate_automata
 
 
 def monitor(header: StreamHeader, samples: Sequence[Sample], out: Path,

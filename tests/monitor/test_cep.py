@@ -9,7 +9,7 @@ from reactivex.subject import Subject
 from rei.lang.source import SourceText
 from rei.lang.vepl import analyse_vepl
 from rei.lang.vepl import model as m
-from rei.runtime.monitor.cep import Occurrence, match_pattern
+from rei.runtime.observation.automata.patterns import Occurrence, match_pattern
 
 
 def pattern(text: str) -> tuple[m.Pattern, m.ContextKind]:

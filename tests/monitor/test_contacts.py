@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from rei.runtime.monitor.model import RuntimeModel, check_sample
+from rei.runtime.observation.model.runtime_model import RuntimeModel, check_sample
 from tests.monitor.helpers import default_automata, geom, monitor
 from tests.monitor.streams import drive, human, straight, wall
 

@@ -13,7 +13,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rei.runtime.evaluator.summary import MonitorResult
 from rei.runtime.messages import (
     SCHEMA_VERSION,
     GoalFacts,
@@ -25,6 +24,7 @@ from rei.runtime.messages import (
     Sample,
     StreamHeader,
 )
+from rei.runtime.observation.evaluator.summary import MonitorResult
 from rei.runtime.results import RESULTS_VERSION, RunSummary, Verdict, judge
 from tests.monitor.helpers import monitor
 from tests.monitor.streams import ROBOT, drive, human, wall

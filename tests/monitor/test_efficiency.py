@@ -35,15 +35,15 @@ from rei.runtime.messages import (
     Sample,
     StreamHeader,
 )
-from rei.runtime.monitor import efficiency
-from rei.runtime.monitor.efficiency import (
+from rei.runtime.observation.model import efficiency
+from rei.runtime.observation.model.efficiency import (
     FloorGraph,
     FreeSpace,
     TaskProgress,
     footprint_shapes,
     judge_task,
 )
-from rei.runtime.monitor.model import FloorMap, RuntimeModel
+from rei.runtime.observation.model.runtime_model import FloorMap, RuntimeModel
 from tests.monitor.helpers import monitor
 from tests.monitor.streams import ROBOT
 
@@ -491,8 +491,8 @@ NAVIGATORS = """
 import math
 
 from rei.runtime.messages import NavState
-from rei.runtime.robot.protocol import GoalFeedback, NavGoal, VelocityCommand
-from rei.runtime.robot.reference import ReferenceNavigator
+from rei.runtime.robot.contract import GoalFeedback, NavGoal, VelocityCommand
+from rei.runtime.robot.navigator.reference import ReferenceNavigator
 
 
 class Detour(ReferenceNavigator):
@@ -564,7 +564,7 @@ def _summary(tmp: Path, controller: str, mission: str = MISSION,
     (tmp / "across.mission").write_text(mission)
     (tmp / "navs.py").write_text(NAVIGATORS)
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(tmp), str(REPO)])}
-    done = subprocess.run([sys.executable, "-m", "rei.runtime.cli", "run",
+    done = subprocess.run([sys.executable, "-m", "rei.runtime.commands", "run",
                            str(tmp / "across.mission"), "-o", str(tmp / "out"), "--controller",
                            controller, "--no-variation", "-q", *extra],
                           capture_output=True, text=True, env=env, timeout=600, check=False)

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from rei.runtime.evaluator.summary import merge_summary, write_summary
 from rei.runtime.messages import MissionEvent
+from rei.runtime.observation.evaluator.summary import merge_summary, write_summary
 from rei.runtime.results import RESULTS_VERSION, RunSummary
 from tests.monitor.helpers import default_automata, monitor
 from tests.monitor.streams import drive, human, straight, wall
@@ -126,8 +126,8 @@ requirement NEVER_TIGHT { never SIG_TIGHT }
         return w.distance  # type: ignore[attr-defined]
 
     h, samples = drive([wall("w", 2.0, 0.0)], straight(0.0, 1.3, 14))
-    from rei.runtime.monitor import MonitorSink
-    from rei.runtime.monitor.errors import MonitorError
+    from rei.runtime.observation.errors import MonitorError
+    from rei.runtime.observation.monitor import MonitorSink
 
     with pytest.raises(MonitorError, match="clearance"):
         MonitorSink(spec, tmp_path / "missing").start(h)

@@ -13,10 +13,10 @@ from hypothesis import strategies as st
 
 from rei.catalogue import Box
 from rei.lang.vepl import model as vm
-from rei.runtime.evaluator.verdicts import RequirementChecker
 from rei.runtime.messages import SCHEMA_VERSION, MissionEvent, ObservedObject, StreamHeader
-from rei.runtime.monitor.automata import Matches, RequirementSpec, load_generated
-from rei.runtime.monitor.model import RuntimeModel, SampleProblems, crossings
+from rei.runtime.observation.automata.records import Matches, RequirementSpec, load_generated
+from rei.runtime.observation.evaluator.verdicts import RequirementChecker
+from rei.runtime.observation.model.runtime_model import RuntimeModel, SampleProblems, crossings
 from tests.monitor.helpers import default_automata
 
 ROBOT = ObservedObject("robot", "static", "turtlebot3_waffle", Box(0.281, 0.306), 0.2)

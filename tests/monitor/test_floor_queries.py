@@ -12,9 +12,9 @@ import pytest
 from rei.catalogue import Box
 from rei.lang.source import SourceText
 from rei.lang.vepl.document import analyse_vepl
-from rei.runtime.evaluator.signal_log import SignalRow
 from rei.runtime.messages import GoalFacts, MissionFacts, ObservedObject, Sample
-from rei.runtime.monitor.model import FloorMap
+from rei.runtime.observation.evaluator.signal_log import SignalRow
+from rei.runtime.observation.model.runtime_model import FloorMap
 from tests.monitor.helpers import monitor
 from tests.monitor.streams import header, human, sample
 

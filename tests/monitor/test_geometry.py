@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rei.catalogue import Box, Cylinder, Polygon
-from rei.runtime.monitor.geometry import FootprintSet, local_shape
+from rei.runtime.observation.model.geometry import FootprintSet, local_shape
 
 
 def _seg_point(p: tuple[float, float], a: tuple[float, float], b: tuple[float, float]) -> float:

@@ -11,8 +11,13 @@ import pytest
 
 from rei.catalogue import Box, Cylinder, Polygon
 from rei.runtime.messages import LaserScan, RobotBelief, Sample, StreamHeader
-from rei.runtime.monitor.laser import BeamEdges, beam_angles, beam_edges, clearance
-from rei.runtime.monitor.model import FAR_AWAY, RuntimeModel, check_sample
+from rei.runtime.observation.model.laser_clearance import (
+    BeamEdges,
+    beam_angles,
+    beam_edges,
+    clearance,
+)
+from rei.runtime.observation.model.runtime_model import FAR_AWAY, RuntimeModel, check_sample
 from tests.monitor.helpers import monitor
 from tests.monitor.streams import ROBOT, header, sample, wall
 

@@ -7,12 +7,12 @@ from pathlib import Path
 
 import pytest
 
-from rei.runtime.cli import main as rei
-from rei.runtime.collector.trace import read_trace
+from rei.runtime.commands.cli import main as rei
 from rei.runtime.commands.run import run_into
-from rei.runtime.evaluator.signal_log import read_csv
-from rei.runtime.monitor import MonitorSink
-from rei.runtime.monitor.geometry import FootprintSet
+from rei.runtime.observation.evaluator.signal_log import read_csv
+from rei.runtime.observation.model.geometry import FootprintSet
+from rei.runtime.observation.monitor import MonitorSink
+from rei.runtime.trace import read_trace
 from tests.conftest import EXAMPLES
 from tests.monitor.helpers import geom
 from tests.monitor.test_table2 import _PARAMETERS, table2

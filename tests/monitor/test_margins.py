@@ -10,9 +10,9 @@ from pathlib import Path
 import pytest
 
 from rei.lang.vepl.document import DEFAULT_VEPL
-from rei.runtime.evaluator.margins import RULES, smallest_margin
 from rei.runtime.messages import MissionEvent
-from rei.runtime.monitor import MonitorSink
+from rei.runtime.observation.evaluator.margins import RULES, smallest_margin
+from rei.runtime.observation.monitor import MonitorSink
 from rei.runtime.results import Verdict
 from tests.monitor.helpers import monitor
 from tests.monitor.streams import human, wall
@@ -157,9 +157,9 @@ def test_margins_reach_the_results_row_junit_and_summary_json() -> None:
 
     from lxml import etree  # noqa: PLC0415
 
-    from rei.runtime.campaign import plan_campaign  # noqa: PLC0415
-    from rei.runtime.campaign.store import RunRecord, record_row  # noqa: PLC0415
-    from rei.runtime.report.junit import junit_xml  # noqa: PLC0415
+    from rei.runtime.campaigns import plan_campaign  # noqa: PLC0415
+    from rei.runtime.campaigns.store import RunRecord, record_row  # noqa: PLC0415
+    from rei.runtime.presentation.junit import junit_xml  # noqa: PLC0415
     from rei.runtime.results import RESULTS_VERSION, RunSummary  # noqa: PLC0415
     from tests.conftest import EXAMPLES  # noqa: PLC0415
 

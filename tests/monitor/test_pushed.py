@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rei.runtime.monitor.model import PushTracker
+from rei.runtime.observation.model.runtime_model import PushTracker
 from tests.monitor.streams import human
 from tests.monitor.test_default_requirements import Tick, run
 from tests.runtime.test_humans import ROOM as HUMANS_ROOM
@@ -102,8 +102,8 @@ MISSION = """mission stand in "corridor.room" {
 }
 """
 CONTROLLERS = """
-from rei.runtime.robot.protocol import VelocityCommand
-from rei.runtime.robot.reference import ReferenceNavigator
+from rei.runtime.robot.contract import VelocityCommand
+from rei.runtime.robot.navigator.reference import ReferenceNavigator
 
 
 class Stands(ReferenceNavigator):
@@ -129,7 +129,7 @@ def _rei_run(folder: Path, person: str, controller: str) -> dict[str, object]:
     (folder / "stand.mission").write_text(MISSION)
     (folder / "pushers.py").write_text(CONTROLLERS)
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(folder), str(REPO)])}
-    done = subprocess.run([sys.executable, "-m", "rei.runtime.cli", "run",
+    done = subprocess.run([sys.executable, "-m", "rei.runtime.commands", "run",
                            str(folder / "stand.mission"), "-o", str(folder / "out"),
                            "--controller", f"pushers:{controller}", "--no-variation"],
                           capture_output=True, text=True, env=env, cwd=folder, timeout=600)

@@ -25,7 +25,7 @@ from rei.runtime.messages import (
     Sample,
     StreamHeader,
 )
-from rei.runtime.monitor.hazard import NONE_SEEN, HazardSensor
+from rei.runtime.observation.model.hazard import NONE_SEEN, HazardSensor
 from rei.runtime.results import Verdict
 from tests.monitor.helpers import monitor
 from tests.monitor.streams import ROBOT, human, wall

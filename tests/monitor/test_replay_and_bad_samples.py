@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rei.runtime.cli import main as rei
-from rei.runtime.collector.trace import write
+from rei.runtime.commands.cli import main as rei
 from rei.runtime.messages import MissionEvent
+from rei.runtime.trace import write
 from tests.monitor.helpers import default_automata, monitor
 from tests.monitor.streams import drive, human, straight, wall
 

@@ -88,8 +88,8 @@ def test_the_settle_period_is_declared_in_the_mission_with_a_default(tmp_path: P
 
 NEVER_STOPS = """
 from rei.runtime.messages import NavState
-from rei.runtime.robot.protocol import VelocityCommand
-from rei.runtime.robot.reference import ReferenceNavigator
+from rei.runtime.robot.contract import VelocityCommand
+from rei.runtime.robot.navigator.reference import ReferenceNavigator
 
 
 class NeverStops(ReferenceNavigator):
@@ -112,7 +112,7 @@ def _run(tmp: Path, controller: str) -> dict[str, object]:
     (tmp / "nav").mkdir(parents=True)
     (tmp / "nav" / "never_stops.py").write_text(NEVER_STOPS)
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(tmp / "nav"), str(REPO)])}
-    subprocess.run([sys.executable, "-m", "rei.runtime.cli", "run",
+    subprocess.run([sys.executable, "-m", "rei.runtime.commands", "run",
                     str(EXAMPLES / "simple_wall" / "simple_wall.mission"), "-o",
                     str(tmp / "out"), "--controller", controller, "-q"],
                    capture_output=True, text=True, env=env, timeout=600, check=False)

@@ -13,8 +13,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from rei.lang.vepl import load_vepl
-from rei.runtime.monitor.automata import load_generated
-from rei.runtime.monitor.geometry import FootprintSet
+from rei.runtime.observation.automata.records import load_generated
+from rei.runtime.observation.model.geometry import FootprintSet
 from tests.monitor.helpers import default_automata, geom, monitor
 from tests.monitor.streams import ROBOT, drive, header, human, sample, straight, wall
 

@@ -9,11 +9,11 @@ from pathlib import Path
 import pytest
 
 from rei.lang.errors import LanguageError
-from rei.runtime.campaign import plan_campaign
-from rei.runtime.cli import main as rei
-from rei.runtime.collector.trace import write
+from rei.runtime.campaigns import plan_campaign
+from rei.runtime.commands.cli import main as rei
 from rei.runtime.errors import RunError
-from rei.runtime.monitor.functions import load_functions
+from rei.runtime.observation.monitor.functions import load_functions
+from rei.runtime.trace import write
 from tests.conftest import EXAMPLES
 from tests.monitor.streams import drive, straight, wall
 

@@ -11,9 +11,9 @@ from pathlib import Path
 
 from lxml import etree
 
-from rei.runtime.campaign import CampaignStore, RunResult
-from rei.runtime.report import build_report
-from rei.runtime.report.build import rerun_command
+from rei.runtime.campaigns import CampaignStore, RunResult
+from rei.runtime.presentation.campaign_report import build_report
+from rei.runtime.presentation.campaign_report.build import rerun_command
 from rei.runtime.results import Verdict
 from tests.campaign.records import EXAMPLES, example_plan, summary_for
 

@@ -8,7 +8,7 @@ from collections.abc import Callable
 import pytest
 from matplotlib.figure import Figure
 
-from rei.runtime.report.figures import (
+from rei.runtime.presentation.figures import (
     TEXT_PT,
     inline_svg,
     label_axes,

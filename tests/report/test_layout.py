@@ -20,9 +20,9 @@ from typing import Any
 import pytest
 from lxml import etree
 
-from rei.runtime.campaign import CampaignStore, RunResult
-from rei.runtime.cli import main
-from rei.runtime.report import build_report
+from rei.runtime.campaigns import CampaignStore, RunResult
+from rei.runtime.commands.cli import main
+from rei.runtime.presentation.campaign_report import build_report
 from rei.runtime.results import Verdict
 from tests.campaign.records import events_csv, example_plan, outcome_of, summary_for
 from tests.conftest import chromium

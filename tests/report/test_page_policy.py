@@ -12,9 +12,9 @@ from pathlib import Path
 import pytest
 from lxml import etree
 
-from rei.runtime.campaign import CampaignError
-from rei.runtime.cli import main
-from rei.runtime.report.run_page import BRIEF_MARK, PAGE, page_is_full, write_run_page
+from rei.runtime.campaigns import CampaignError
+from rei.runtime.commands.cli import main
+from rei.runtime.presentation.run_page.page import BRIEF_MARK, PAGE, page_is_full, write_run_page
 from rei.runtime.results import RunSummary, judge
 from tests.conftest import chromium
 
@@ -133,7 +133,7 @@ def test_the_brief_page_renders_in_headless_chromium(runs: dict[str, Path],
 
 
 def test_campaign_error_names_the_option() -> None:
-    from rei.runtime.campaign import LocalEngine  # noqa: PLC0415
+    from rei.runtime.campaigns import LocalEngine  # noqa: PLC0415
 
     with pytest.raises(CampaignError, match="--pages: expected one of all, failed, none"):
         LocalEngine(1, pages="brief")

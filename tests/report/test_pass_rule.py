@@ -9,10 +9,10 @@ from pathlib import Path
 import pytest
 from lxml import etree
 
-from rei.runtime.campaign import CampaignStore, RunResult, plan_campaign
-from rei.runtime.campaign.store import RunRecord, record_row, verdict_reason
-from rei.runtime.report.build import build_report
-from rei.runtime.report.junit import junit_xml
+from rei.runtime.campaigns import CampaignStore, RunResult, plan_campaign
+from rei.runtime.campaigns.store import RunRecord, record_row, verdict_reason
+from rei.runtime.presentation.campaign_report.build import build_report
+from rei.runtime.presentation.junit import junit_xml
 from rei.runtime.results import RESULTS_VERSION, Outcome, RunSummary, Verdict, judge
 from tests.campaign.records import EXAMPLES
 

@@ -9,10 +9,14 @@ from pathlib import Path
 import pytest
 from lxml import etree
 
-from rei.runtime.campaign import CampaignStore
-from rei.runtime.cli import main
-from rei.runtime.report import build_report, execution_summary, signal_counts
-from rei.runtime.report.tables import group_success, group_success_table, mission_success
+from rei.runtime.campaigns import CampaignStore
+from rei.runtime.commands.cli import main
+from rei.runtime.presentation.campaign_report import build_report, execution_summary, signal_counts
+from rei.runtime.presentation.campaign_report.tables import (
+    group_success,
+    group_success_table,
+    mission_success,
+)
 from tests.campaign.records import write_campaign
 from tests.conftest import chromium
 
@@ -91,7 +95,7 @@ def test_report_command_rebuilds_everything_and_exits_3_on_a_run_error(campaign:
 
 
 def test_report_of_a_passing_campaign_exits_zero(tmp_path: Path) -> None:
-    from rei.runtime.campaign import plan_campaign  # noqa: PLC0415
+    from rei.runtime.campaigns import plan_campaign  # noqa: PLC0415
     from tests.campaign.records import EXAMPLES  # noqa: PLC0415
 
     write_campaign(tmp_path, plan_campaign([EXAMPLES / "simple_wall"], repeat=2))

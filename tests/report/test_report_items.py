@@ -11,14 +11,14 @@ from pathlib import Path
 import numpy as np
 from lxml import etree
 
-from rei.runtime.campaign import CampaignStore
-from rei.runtime.campaign.stats import SuccessRate, judge_mission
-from rei.runtime.report.data import load_campaign
-from rei.runtime.report.html import _setting
-from rei.runtime.report.plots import utility_over_time
-from rei.runtime.report.run_data import Series, Thresholds
-from rei.runtime.report.run_plots import DISTANCE_AXIS_MIN, distance_axis, distances
-from rei.runtime.report.tables import mission_success, success_table
+from rei.runtime.campaigns import CampaignStore
+from rei.runtime.campaigns.folder_reader import load_campaign
+from rei.runtime.campaigns.stats import SuccessRate, judge_mission
+from rei.runtime.presentation.campaign_report.campaign_plots import utility_over_time
+from rei.runtime.presentation.campaign_report.html import _setting
+from rei.runtime.presentation.campaign_report.tables import mission_success, success_table
+from rei.runtime.presentation.run_page.run_data import Series, Thresholds
+from rei.runtime.presentation.run_page.run_plots import DISTANCE_AXIS_MIN, distance_axis, distances
 from tests.campaign.records import write_campaign
 
 

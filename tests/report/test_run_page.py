@@ -15,11 +15,11 @@ import numpy as np
 import pytest
 from lxml import etree
 
-from rei.runtime.campaign import CampaignStore
-from rei.runtime.cli import main
-from rei.runtime.report import build_report
-from rei.runtime.report.run_data import thin_extremes
-from rei.runtime.report.run_page import run_page_link, write_run_page
+from rei.runtime.campaigns import CampaignStore
+from rei.runtime.commands.cli import main
+from rei.runtime.presentation.campaign_report import build_report
+from rei.runtime.presentation.run_page.page import run_page_link, write_run_page
+from rei.runtime.presentation.run_page.run_data import thin_extremes
 from tests.campaign.records import write_campaign
 from tests.conftest import chromium
 
@@ -190,9 +190,15 @@ def test_the_map_draws_the_goals_when_the_trace_carries_the_mission_facts(run_di
     from dataclasses import replace  # noqa: PLC0415
 
     from rei.runtime.messages import GoalFacts, MissionFacts  # noqa: PLC0415
-    from rei.runtime.report import run_plots  # noqa: PLC0415
-    from rei.runtime.report.maps import mission_from_facts, world_from_manifest  # noqa: PLC0415
-    from rei.runtime.report.run_data import read_manifest, read_series  # noqa: PLC0415
+    from rei.runtime.presentation.maps import (  # noqa: PLC0415
+        mission_from_facts,
+        world_from_manifest,
+    )
+    from rei.runtime.presentation.run_page import run_plots  # noqa: PLC0415
+    from rei.runtime.presentation.run_page.run_data import (  # noqa: PLC0415
+        read_manifest,
+        read_series,
+    )
 
     manifest = read_manifest(run_dir, None)
     assert manifest is not None

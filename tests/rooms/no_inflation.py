@@ -12,8 +12,8 @@ from __future__ import annotations
 from dataclasses import replace
 
 from bench.defects.planning import FootprintTooSmall
-from rei.runtime.robot.protocol import ControllerContext
-from rei.runtime.robot.reference import ReferenceNavigator
+from rei.runtime.robot.contract import ControllerContext
+from rei.runtime.robot.navigator.reference import ReferenceNavigator
 
 POINT = 0.04
 """m: the side of the footprint it believes it has."""

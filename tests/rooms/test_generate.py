@@ -228,7 +228,7 @@ def test_generated_missions_generate_every_target(tmp_path: Path, preset: str,
 @pytest.mark.slow
 @pytest.mark.parametrize("preset", ["small", "medium"])
 def test_generated_mission_runs_with_rei_run(tmp_path: Path, preset: str) -> None:
-    runtime_cli = pytest.importorskip("rei.runtime.cli")
+    runtime_cli = pytest.importorskip("rei.runtime.commands.cli")
     suite = generate(SuiteRequest(preset_space(preset), "random", 1, 4), tmp_path)
     write_suite(suite, tmp_path, coverage_report(suite))
     out = tmp_path / "run"

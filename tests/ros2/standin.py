@@ -4,7 +4,7 @@ It follows rmw_zenoh's published format (ros2/rmw_zenoh docs/design.md @ 99a6a2b
 expressions ``<domain>/<name>/<pkg>::<kind>::dds_::<Type>_/<hash>``, liveliness tokens
 ``@ros2_lv/...``, the attachment as Zenoh's own serializer writes it (``z_serialize`` of
 int64, int64 and a sequence of 16 uint8), services as complete queryables answered with
-the request's sequence number and client GID. It imports nothing from ``rei.runtime.ros2``:
+the request's sequence number and client GID. It imports nothing from ``rei.runtime.bus.ros2``:
 a mistake there cannot cancel out here.
 
 Like a small Nav2 it subscribes ``/odom``, ``/scan`` and ``/clock``, publishes ``/cmd_vel``
@@ -70,7 +70,7 @@ def humble_store(jazzy: bool = False) -> Any:
 
 
 # REP 2011's RIHS01, written here from the REP and type_description_interfaces'
-# FieldType.msg (not with rosbags' hash_rihs01, nor rei.runtime.ros2's): SHA-256 of the JSON
+# FieldType.msg (not with rosbags' hash_rihs01, nor rei.runtime.bus.ros2's): SHA-256 of the JSON
 # of the type's description and its referenced descriptions sorted by name; a field is
 # {name, type: {type_id, capacity, string_capacity, nested_type_name}}; arrays add 48,
 # bounded sequences 96, unbounded 144 to the element's id; a .msg char is uint8 (rosidl).

@@ -18,10 +18,10 @@ from typing import Any
 import zenoh
 
 from rei.runtime.bus.access import DEFAULT_ACCESS
+from rei.runtime.bus.ros2.adapter import Ros2Controller, parse_options
+from rei.runtime.bus.ros2.names import Distro
+from rei.runtime.bus.ros2.profile import access_rules, endpoints, with_ros2
 from rei.runtime.bus.router import start
-from rei.runtime.ros2.adapter import Ros2Controller, parse_options
-from rei.runtime.ros2.names import Distro
-from rei.runtime.ros2.profile import access_rules, endpoints, with_ros2
 from tests.ros2.standin import StandInNav2, attachment, wait_for
 from tests.ros2.test_nav2_over_router import CONTEXT, observation
 

@@ -1,7 +1,7 @@
 """A ROS 2 navigation stack over a real Zenoh router as REI's robot under test.
 
 The stack is ``standin.StandInNav2``: written on Zenoh and rosbags alone from rmw_zenoh's
-published format, it shares no code with ``rei.runtime.ros2``. The tests prove that what
+published format, it shares no code with ``rei.runtime.bus.ros2``. The tests prove that what
 REI puts on the wire is what such a node reads (topics, attachments, liveliness tokens,
 the action's services), that a mission driven through it reaches its goals with REI's own
 verdict, and that a missing stack or a wrong option ends as a located error, not a hang.
@@ -25,10 +25,10 @@ import zenoh
 from rosbags.typesys import Stores, get_typestore
 
 from rei.catalogue import DriveSpec, LaserSpec
+from rei.runtime.bus.ros2.adapter import Ros2Controller, parse_options
+from rei.runtime.bus.ros2.errors import Ros2Error
 from rei.runtime.messages import LaserScan, NavState
-from rei.runtime.robot.protocol import ControllerContext, NavGoal, Observation
-from rei.runtime.ros2.adapter import Ros2Controller, parse_options
-from rei.runtime.ros2.errors import Ros2Error
+from rei.runtime.robot.contract import ControllerContext, NavGoal, Observation
 from tests.ros2.standin import StandInNav2, wait_for
 
 REPO = Path(__file__).resolve().parents[2]
@@ -89,7 +89,7 @@ def tokens(router: str) -> list[str]:
 def run_mission(router: str, out: Path, distro: str = "humble"
                 ) -> tuple[subprocess.CompletedProcess[str], dict]:
     spec = f"ros2:router={router},distro={distro},cmd-wait=10,server-wait=20"
-    run = subprocess.run([sys.executable, "-m", "rei.runtime.cli", "run",
+    run = subprocess.run([sys.executable, "-m", "rei.runtime.commands", "run",
                           str(REPO / "examples/simple_wall/simple_wall.mission"), "-o", str(out),
                           "--controller", spec, "--no-variation", "--watchdog", "60"],
                          capture_output=True, text=True, timeout=600)
@@ -145,7 +145,7 @@ def test_the_adapter_announces_itself_in_the_ros_graph(
 
 
 def test_jazzy_key_expressions_carry_rihs01_hashes(zenoh_router: str) -> None:
-    # the stand-in computes its hashes with rosbags directly, not with rei.runtime.ros2
+    # the stand-in computes its hashes with rosbags directly, not with rei.runtime.bus.ros2
     store = get_typestore(Stores.ROS2_JAZZY)
     hashes = {f"{t.replace('/msg/', '::msg::dds_::')}_": store.hash_rihs01(t)
               for t in ("geometry_msgs/msg/Twist", "nav_msgs/msg/Odometry",
@@ -226,7 +226,7 @@ def test_ros_domain_id_of_the_environment_is_the_default() -> None:
 
 
 def test_rei_run_names_a_bad_option_and_exits_2(tmp_path: Path) -> None:
-    run = subprocess.run([sys.executable, "-m", "rei.runtime.cli", "run",
+    run = subprocess.run([sys.executable, "-m", "rei.runtime.commands", "run",
                           str(REPO / "examples/simple_wall/simple_wall.mission"), "-o",
                           str(tmp_path / "out"), "--controller", "ros2:distro=iron"],
                          capture_output=True, text=True, timeout=300)
@@ -237,7 +237,7 @@ def test_rei_run_names_a_bad_option_and_exits_2(tmp_path: Path) -> None:
 def test_an_unreachable_router_is_a_run_error_with_the_address(tmp_path: Path) -> None:
     from rei.runtime.bus.router import free_port
     port = free_port("127.0.0.1")
-    run = subprocess.run([sys.executable, "-m", "rei.runtime.cli", "run",
+    run = subprocess.run([sys.executable, "-m", "rei.runtime.commands", "run",
                           str(REPO / "examples/simple_wall/simple_wall.mission"), "-o",
                           str(tmp_path / "out"), "--controller",
                           f"ros2:router=tcp/127.0.0.1:{port}"],
@@ -381,7 +381,7 @@ def test_a_jazzy_stack_with_independently_computed_hashes_drives_the_mission(
 def test_the_action_client_reads_goal_status_codes_through_the_shared_mapping() -> None:
     # accepted counts as active for the mission (the server has the goal); STATUS_UNKNOWN
     # ("not properly set") and codes action_msgs does not define report nothing
-    from rei.runtime.ros2.nav2 import _state  # noqa: PLC0415
+    from rei.runtime.bus.ros2.nav2 import _state  # noqa: PLC0415
 
     status = get_typestore(Stores.ROS2_HUMBLE).types["action_msgs/msg/GoalStatus"]
     assert [_state(c) for c in range(8)] == [

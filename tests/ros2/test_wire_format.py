@@ -14,9 +14,9 @@ import struct
 
 import pytest
 
-from rei.runtime.ros2 import attachment as wire
-from rei.runtime.ros2.errors import Ros2Error
-from rei.runtime.ros2.names import (
+from rei.runtime.bus.ros2 import attachment as wire
+from rei.runtime.bus.ros2.errors import Ros2Error
+from rei.runtime.bus.ros2.names import (
     Distro,
     EntityKind,
     EntityToken,
@@ -27,7 +27,7 @@ from rei.runtime.ros2.names import (
     qualified,
     topic_keyexpr,
 )
-from rei.runtime.ros2.types import register_service, type_hash, typestore
+from rei.runtime.bus.ros2.types import register_service, type_hash, typestore
 
 # ros2/rmw_zenoh docs/design.md @ 99a6a2bd10b949052f4f12c5854825dc005e95a5
 STRING_HASH = "RIHS01_df668c740482bbd48fb39d76a70dfd4bd59db1288021743503259e948f6b1a18"
@@ -77,7 +77,7 @@ def test_humble_writes_type_hash_not_supported() -> None:
 
 
 def test_every_profile_type_has_a_distinct_rihs01_hash() -> None:
-    from rei.runtime.ros2.profile import endpoints
+    from rei.runtime.bus.ros2.profile import endpoints
     hashes = {e.msgtype: type_hash(e.msgtype, Distro.JAZZY)
               for e in endpoints(distro=Distro.JAZZY).values()}
     assert all(h.startswith("RIHS01_") and len(h) == 7 + 64 for h in hashes.values())
@@ -113,7 +113,7 @@ def test_qos_compact_form_follows_qos_to_keyexpr() -> None:
     # qos.cpp (reliable, volatile, keep last 42): only what differs is written.
     assert QosProfile(depth=42).keyexpr() == "::,:,:,:,,"
     assert QosProfile(reliability=Reliability.BEST_EFFORT, depth=5).keyexpr() == "2::,5:,:,:,,"
-    from rei.runtime.ros2.names import LATCHED_QOS
+    from rei.runtime.bus.ros2.names import LATCHED_QOS
     assert LATCHED_QOS.keyexpr() == ":1:,1:,:,:,,"
 
 
@@ -190,8 +190,8 @@ def test_action_hashes_agree_with_an_independent_implementation() -> None:
     # Not ROS 2's own publication, a corroboration: values locked in an independent
     # rmw_zenoh-compatible implementation's tests ("Locked RIHS01 values for the Jazzy IDL")
     # for the ROS 2 tutorial action Fibonacci and for CancelGoal. They agree with what the
-    # derivation here (rosidl's Action and Service, see rei.runtime.ros2.types) gives.
-    from rei.runtime.ros2.types import register_action
+    # derivation here (rosidl's Action and Service, see rei.runtime.bus.ros2.types) gives.
+    from rei.runtime.bus.ros2.types import register_action
     action = "action_tutorials_interfaces/action/Fibonacci"
     register_action(Distro.JAZZY, action, "int32 order\n", "int32[] sequence\n",
                     "int32[] partial_sequence\n")

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from rei.runtime.robot import VelocityCommand
-from rei.runtime.robot.reference import ReferenceNavigator
+from rei.runtime.robot.navigator.reference import ReferenceNavigator
 
 
 class ArcsAround(ReferenceNavigator):

@@ -16,7 +16,7 @@ import numpy as np
 
 from rei.runtime.messages import LaserScan
 from rei.runtime.robot import ControllerContext, GoalFeedback, NavGoal, Observation, VelocityCommand
-from rei.runtime.robot.protocol import GoalTracker
+from rei.runtime.robot.contract import GoalTracker
 
 
 class _Base:
@@ -419,7 +419,7 @@ class PatchesTheEvaluator(WallDriver):
 
     def reset(self, context: ControllerContext) -> None:
         super().reset(context)
-        import rei.runtime.evaluator.summary as summary  # noqa: PLC0415
+        import rei.runtime.observation.evaluator.summary as summary  # noqa: PLC0415
         import rei.runtime.results as results  # noqa: PLC0415
 
         original = summary.summary_text

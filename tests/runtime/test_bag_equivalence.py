@@ -16,7 +16,7 @@ from typing import Any
 
 import pytest
 
-from rei.runtime.cli import main as rei
+from rei.runtime.commands.cli import main as rei
 from rei.runtime.commands.replay import replay_bag
 from rei.runtime.commands.run import run_into
 from tests.conftest import EXAMPLES

@@ -1,4 +1,5 @@
-"""The cache of generated worlds and automata (rei.runtime.cache): a hit gives the bytes and the
+"""The cache of generated worlds and automata (rei.runtime.runs.cache): a hit gives the bytes and
+the
 model generation gives; a changed input, a changed REI, a half-written or corrupt entry and
 concurrent writers never serve a stale artifact; runs with the cache write the same outputs."""
 
@@ -12,11 +13,11 @@ from pathlib import Path
 import pytest
 
 from rei.lang.errors import LanguageError
-from rei.runtime import cache as cache_module
-from rei.runtime.cache import CACHE_VARIABLE, ArtifactCache
 from rei.runtime.commands.run import run_into
-from rei.runtime.monitor import generate_automata
-from rei.runtime.run import generate_world
+from rei.runtime.observation.monitor import generate_automata
+from rei.runtime.runs import cache as cache_module
+from rei.runtime.runs.cache import CACHE_VARIABLE, ArtifactCache
+from rei.runtime.simulation.assembly import generate_world
 
 from ..conftest import EXAMPLES
 
@@ -235,7 +236,7 @@ def test_runs_with_the_cache_write_the_same_bytes(tmp_path: Path,
 
 def test_the_environment_names_the_cache_or_turns_it_off(
         monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
-    from rei.runtime.campaign.execute import run_environment
+    from rei.runtime.campaigns.execute import run_environment
 
     monkeypatch.delenv(CACHE_VARIABLE, raising=False)
     assert ArtifactCache.from_environment() is None
@@ -252,7 +253,7 @@ def test_a_campaign_generates_once_for_all_its_runs(tmp_path: Path,
                                                     monkeypatch: pytest.MonkeyPatch) -> None:
     import io
 
-    from rei.runtime.campaign import LocalEngine, plan_campaign, run_campaign
+    from rei.runtime.campaigns import LocalEngine, plan_campaign, run_campaign
 
     monkeypatch.delenv(CACHE_VARIABLE, raising=False)
     plan = plan_campaign([EXAMPLES / "simple_wall"], repeat=3, seed=4, duration=1.0)

@@ -21,7 +21,7 @@ SAFETY_LIMIT = 600.0
 
 
 def rei(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "rei.runtime.cli", *args], cwd=REPO,
+    return subprocess.run([sys.executable, "-m", "rei.runtime.commands", *args], cwd=REPO,
                           capture_output=True, text=True, timeout=SAFETY_LIMIT, check=False)
 
 

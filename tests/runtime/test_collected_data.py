@@ -18,13 +18,13 @@ from rei.lang.mission.model import COLLECTED_DATA
 from rei.lang.printer import print_mission
 from rei.lang.vepl.document import load_vepl
 from rei.lang.workspace import Workspace
-from rei.runtime.collector import load_monitor_config, read_trace
-from rei.runtime.collector.needs import needed_data
-from rei.runtime.collector.trace import TraceError, read_trace_end
+from rei.runtime.artifacts.monitor import load_monitor_config
 from rei.runtime.commands.replay import replay
 from rei.runtime.commands.run import run_into
 from rei.runtime.errors import RunError
-from rei.runtime.monitor import MonitorSink
+from rei.runtime.observation.monitor import MonitorSink
+from rei.runtime.observation.monitor.needs import needed_data
+from rei.runtime.trace import TraceError, read_trace, read_trace_end
 from tests.runtime.test_cli_streams import rei
 
 EXAMPLE = Path(__file__).parents[2] / "examples" / "simple_wall"

@@ -19,13 +19,13 @@ import numpy as np
 import pytest
 
 import tests.runtime.faulty as faulty
-from rei.runtime.collector import load_monitor_config
+from rei.runtime.artifacts.monitor import load_monitor_config
+from rei.runtime.artifacts.world import load_manifest
 from rei.runtime.messages import LaserScan
 from rei.runtime.robot import GoalFeedback, NavGoal, Observation
 from rei.runtime.robot.host import HostedController
 from rei.runtime.robot.watchdog import ControllerFault, GuardedController
-from rei.runtime.run import RunConfig, generate_world, run_mission
-from rei.runtime.world import load_manifest
+from rei.runtime.simulation.assembly import RunConfig, generate_world, run_mission
 from tests.conftest import EXAMPLES, REPO
 
 GOAL = NavGoal("g", 1.0, 0.0, None, 0.3, 10.0)

@@ -7,7 +7,7 @@ import pytest
 from rei.runtime.errors import RunError
 from rei.runtime.messages import NavState
 from rei.runtime.robot import BUILT_IN, GoalTracker, NavGoal, check_controller, make_controller
-from rei.runtime.robot.protocol import IllegalTransition
+from rei.runtime.robot.contract import IllegalTransition
 
 
 @pytest.mark.parametrize("name", BUILT_IN)

@@ -52,7 +52,7 @@ from rei.runtime.robot import (
     make_controller,
 )
 from rei.runtime.robot.conformance import checker_context
-from rei.runtime.robot.reference import (
+from rei.runtime.robot.navigator.reference import (
     HORIZON,
     MARGIN,
     SLOW_ZONE_SPEED,

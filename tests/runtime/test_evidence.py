@@ -25,12 +25,12 @@ from mcap.reader import make_reader
 from mcap.writer import Writer
 from rosbags.typesys import Stores, get_typestore
 
-from rei.runtime.cli import main as rei
-from rei.runtime.collector import TraceError
+from rei.runtime.commands.cli import main as rei
 from rei.runtime.commands.replay import replay
 from rei.runtime.commands.run import run_into
-from rei.runtime.recording import TRACE_TOPIC
+from rei.runtime.observation.recordings import TRACE_TOPIC
 from rei.runtime.results import judge
+from rei.runtime.trace import TraceError
 from tests.conftest import EXAMPLES
 
 STORE = get_typestore(Stores.ROS2_HUMBLE)

@@ -8,8 +8,8 @@ import pytest
 
 from rei.generators.concrete import ConcreteGoal
 from rei.runtime.messages import NavState
-from rei.runtime.mission import MissionExecutor
 from rei.runtime.robot import GoalFeedback, GoalTracker, NavGoal
+from rei.runtime.simulation.mission import MissionExecutor
 
 
 class ScriptedClient:

@@ -28,8 +28,13 @@ import pytest
 
 from rei.lang.room.model import WALKING_SPEEDS
 from rei.lang.room.spline import CatmullRom
-from rei.runtime.animator.animator import Animated, Animator, Reactions
-from rei.runtime.animator.reactive import (
+from rei.runtime.artifacts.monitor import load_monitor_config
+from rei.runtime.artifacts.world import load_manifest
+from rei.runtime.commands.run import run_into
+from rei.runtime.messages.sink import SampleList
+from rei.runtime.robot import Observation, VelocityCommand
+from rei.runtime.simulation.animator.engine import Animated, Animator, Reactions
+from rei.runtime.simulation.animator.reactive import (
     Agent,
     SocialForce,
     fits_past,
@@ -39,11 +44,7 @@ from rei.runtime.animator.reactive import (
     pass_side,
     social_acceleration,
 )
-from rei.runtime.collector import SampleList, load_monitor_config
-from rei.runtime.commands.run import run_into
-from rei.runtime.robot import Observation, VelocityCommand
-from rei.runtime.run import RunConfig, RunRecord, generate_world, run_mission
-from rei.runtime.world.manifest import load_manifest
+from rei.runtime.simulation.assembly import RunConfig, RunRecord, generate_world, run_mission
 from tests.runtime.faulty import Idle as Idle  # re-exported: a controller by module:Class
 from tests.runtime.test_humans import ROOM as ROOM_TEMPLATE
 
@@ -71,7 +72,7 @@ MISSION = """mission meet in "hall.room" {
 def _run(folder: Path, controller: object, duration: float | None = None
          ) -> tuple[RunRecord, np.ndarray]:
     """The run's record and the walker's (x, y) at every sample."""
-    from rei.runtime.robot.select import make_controller  # noqa: PLC0415
+    from rei.runtime.robot.selection import make_controller  # noqa: PLC0415
 
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "hall.room").write_text(ROOM, encoding="utf-8")
@@ -229,8 +230,8 @@ def _held_back(folder: Path, monkeypatch: pytest.MonkeyPatch, social: SocialForc
     elsewhere) and ``social`` as the humans' model (the run's humans take Reactions'
     defaults: patched here, the run is otherwise untouched); ``blind_to_walls``: humans pass
     on their side whether they fit or not."""
-    from rei.runtime.animator import animator as paths  # noqa: PLC0415
-    from rei.runtime.robot.select import make_controller  # noqa: PLC0415
+    from rei.runtime.robot.selection import make_controller  # noqa: PLC0415
+    from rei.runtime.simulation.animator import engine as paths  # noqa: PLC0415
 
     monkeypatch.setattr(paths, "Reactions", lambda: Reactions(social=social))
     if blind_to_walls:

@@ -17,10 +17,10 @@ import pytest
 
 from rei.lang.errors import LanguageError
 from rei.lang.mission.faults import Activation, FaultDefinition, parse_fault_option
-from rei.runtime.collector import read_trace
-from rei.runtime.faults import active_at
-from rei.runtime.faults.plan import fault_stage
-from rei.runtime.faults.setup import run_faults
+from rei.runtime.simulation.faults import active_at
+from rei.runtime.simulation.faults.composition import fault_stage
+from rei.runtime.simulation.faults.configuration import run_faults
+from rei.runtime.trace import read_trace
 from tests.conftest import EXAMPLES, REPO
 
 SIMPLE_WALL = EXAMPLES / "simple_wall" / "simple_wall.mission"
@@ -31,7 +31,7 @@ PULSED = "laser_poisson rate 4 gain 0.2 period 2 width 0.25"
 
 
 def rei(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "rei.runtime.cli", *args], cwd=REPO,
+    return subprocess.run([sys.executable, "-m", "rei.runtime.commands", *args], cwd=REPO,
                           capture_output=True, text=True, timeout=SAFETY_LIMIT, check=False)
 
 

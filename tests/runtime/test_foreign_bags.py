@@ -16,7 +16,7 @@ from typing import Any
 import pytest
 from rosbags.rosbag2 import StoragePlugin
 
-from rei.runtime.cli import main as rei
+from rei.runtime.commands.cli import main as rei
 from tests.conftest import EXAMPLES
 from tests.runtime.foreign_bags import Drive, variant, write_bag
 

@@ -27,7 +27,7 @@ def rei_run(out: str | Path, controller: str, cwd: Path = REPO,
             env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
     environment = {**os.environ, "PYTHONPATH": str(REPO), **(env or {})}
     return subprocess.run(
-        [sys.executable, "-m", "rei.runtime.cli", "run", str(SIMPLE_WALL), "-o", str(out),
+        [sys.executable, "-m", "rei.runtime.commands", "run", str(SIMPLE_WALL), "-o", str(out),
          "--duration", "4", "--controller", f"tests.runtime.forgers:{controller}"],
         cwd=cwd, env=environment, capture_output=True, text=True, timeout=SAFETY_LIMIT,
         check=False)

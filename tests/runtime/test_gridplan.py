@@ -1,7 +1,8 @@
 """The navigator's grid A* returns the very path networkx's A* returned on the same graph.
 
 The oracle is the graph the `reference` navigator built with networkx before
-``rei.runtime.robot.gridplan`` replaced it (same nodes, edges, weights and insertion order),
+``rei.runtime.robot.navigator.gridplan`` replaced it (same nodes, edges, weights and insertion
+order),
 searched with ``networkx.astar_path`` and a view hiding the blocked cells; ties between equally
 cheap paths must break the same way, or the navigator's runs would change.
 """
@@ -14,7 +15,7 @@ import networkx as nx
 import numpy as np
 import pytest
 
-from rei.runtime.robot.gridplan import GridGraph
+from rei.runtime.robot.navigator.gridplan import GridGraph
 
 
 def networkx_graph(free: np.ndarray, cost: np.ndarray) -> nx.Graph:

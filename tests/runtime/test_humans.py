@@ -14,8 +14,11 @@ import numpy as np
 import pytest
 
 from rei.lang.room.model import WALKING_SPEEDS
-from rei.runtime.animator import HumanVariation, draw_variations
-from rei.runtime.animator.reactive import (
+from rei.runtime.artifacts.monitor import load_monitor_config
+from rei.runtime.artifacts.world import load_manifest
+from rei.runtime.messages.sink import SampleList
+from rei.runtime.simulation.animator import HumanVariation, draw_variations
+from rei.runtime.simulation.animator.reactive import (
     Agent,
     SocialForce,
     YieldRule,
@@ -23,10 +26,8 @@ from rei.runtime.animator.reactive import (
     social_acceleration,
     yield_factor,
 )
-from rei.runtime.animator.variation import mean_speed
-from rei.runtime.collector import SampleList, load_monitor_config
-from rei.runtime.run import RunConfig, RunRecord, generate_world, run_mission
-from rei.runtime.world.manifest import load_manifest
+from rei.runtime.simulation.animator.variation import mean_speed
+from rei.runtime.simulation.assembly import RunConfig, RunRecord, generate_world, run_mission
 from tests.runtime.faulty import Idle
 
 ROOM = """room corridor {
@@ -106,7 +107,7 @@ def test_the_same_seed_walks_the_same_humans_bit_for_bit(tmp_path: Path) -> None
 
 
 def test_variations_are_seeded_in_range_and_keep_walking_speeds(tmp_path: Path) -> None:
-    from rei.runtime.animator import CatmullRom  # noqa: PLC0415
+    from rei.runtime.simulation.animator import CatmullRom  # noqa: PLC0415
 
     slow = CatmullRom(np.array([0.0, 10.0]), np.array([[0.0, 0.0], [5.0, 0.0]]), False)
     fast = CatmullRom(np.array([0.0, 4.0, 8.0]), np.array([[0.0, 0.0], [5.5, 0.0], [11, 0]]),
@@ -151,7 +152,7 @@ SCENES = Path(__file__).parent / "scenes"
 
 
 def _reference_run(folder: Path, room_text: str) -> RunRecord:
-    from rei.runtime.robot.select import make_controller  # noqa: PLC0415
+    from rei.runtime.robot.selection import make_controller  # noqa: PLC0415
 
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "crossing.room").write_text(room_text, encoding="utf-8")

@@ -31,8 +31,11 @@ import numpy as np
 import pytest
 
 from rei.lang.room.spline import CatmullRom
-from rei.runtime.animator.animator import Animated, Animator, Reactions
-from rei.runtime.animator.reactive import (
+from rei.runtime.artifacts.monitor import load_monitor_config
+from rei.runtime.artifacts.world import load_manifest
+from rei.runtime.messages.sink import SampleList
+from rei.runtime.simulation.animator.engine import Animated, Animator, Reactions
+from rei.runtime.simulation.animator.reactive import (
     Agent,
     Dodge,
     SocialForce,
@@ -43,9 +46,7 @@ from rei.runtime.animator.reactive import (
     social_acceleration,
     way_aside,
 )
-from rei.runtime.collector import SampleList, load_monitor_config
-from rei.runtime.run import RunConfig, RunRecord, generate_world, run_mission
-from rei.runtime.world.manifest import load_manifest
+from rei.runtime.simulation.assembly import RunConfig, RunRecord, generate_world, run_mission
 
 REPO = Path(__file__).resolve().parents[2]
 SCENES = Path(__file__).parent / "scenes"
@@ -72,8 +73,8 @@ def _scene(name: str, seed: int, folder: Path, monkeypatch: pytest.MonkeyPatch,
            reactions: Reactions) -> tuple[RunRecord, np.ndarray, np.ndarray, np.ndarray]:
     """The scene's whole mission with the reference, the search's run seed and ``reactions``
     as the humans' model; the record, the times, the walker's and the robot's (x, y)."""
-    from rei.runtime.animator import animator as paths  # noqa: PLC0415
-    from rei.runtime.robot.select import make_controller  # noqa: PLC0415
+    from rei.runtime.robot.selection import make_controller  # noqa: PLC0415
+    from rei.runtime.simulation.animator import engine as paths  # noqa: PLC0415
 
     monkeypatch.setattr(paths, "Reactions", lambda: reactions)
     mission = generate_world(SCENES / f"{name}.mission", folder / "world")
@@ -116,7 +117,7 @@ def test_a_yielding_human_that_stepped_into_the_wall_now_lets_the_robot_by(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """The search's scene where a yielding walker giving way stepped into the wall beside
     the waiting robot, came back and did it again until goal_2 aborted (MAP-Elites cand0028).
-    Since humans are kept upright (runtime/world/bullet.py), the model before no longer
+    Since humans are kept upright (runtime/simulation/world/bullet.py), the model before no longer
     deadlocks in this run either, so the before side of how a yielding human picks its way
     out is shown by ``test_room_aside_and_way_aside``; this run keeps the scene's own
     promise: every goal reached, no contact, no long standoff."""
@@ -376,8 +377,8 @@ def test_a_human_on_the_line_of_a_crawling_robot_keeps_to_one_side(
     requirement holds. The robot is the reference without its side hold near people
     (``Creeping``), with which the search found this run: the hold alone hides the human's
     dithering here. The reference itself passes too."""
-    from rei.runtime.animator import animator as paths  # noqa: PLC0415
     from rei.runtime.commands.run import run_into  # noqa: PLC0415
+    from rei.runtime.simulation.animator import engine as paths  # noqa: PLC0415
 
     monkeypatch.chdir(REPO)  # `tests.runtime.test_turn_commitment:Creeping` is imported here
     scene, seed, creeping = (SCENES / "dithers.mission", 752588739,

@@ -16,8 +16,8 @@ from pathlib import Path
 
 import pytest
 
-from rei.runtime import supervisor
-from rei.runtime.supervisor import INTERNAL_ERROR_LOG, RunRequest, child_main
+from rei.runtime.runs import supervisor
+from rei.runtime.runs.supervisor import INTERNAL_ERROR_LOG, RunRequest, child_main
 from tests.conftest import EXAMPLES, REPO
 
 SIMPLE_WALL = EXAMPLES / "simple_wall" / "simple_wall.mission"
@@ -29,7 +29,7 @@ SAFETY_LIMIT = 600.0
 def test_a_seed_numpy_cannot_take_is_refused_before_anything_runs(tmp_path: Path,
                                                                    seed: str) -> None:
     out = tmp_path / "out"
-    done = subprocess.run([sys.executable, "-m", "rei.runtime.cli", "run", str(SIMPLE_WALL),
+    done = subprocess.run([sys.executable, "-m", "rei.runtime.commands", "run", str(SIMPLE_WALL),
                            "-o", str(out), "--duration", "1", "--seed", seed], cwd=REPO,
                           capture_output=True, text=True, timeout=SAFETY_LIMIT, check=False)
     assert done.returncode == 2, done.stderr

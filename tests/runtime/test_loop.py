@@ -12,10 +12,9 @@ from typing import Any
 import numpy as np
 import pytest
 
-from rei.runtime.collector import SampleList, TraceWriter, load_monitor_config
+from rei.runtime.artifacts.monitor import load_monitor_config
+from rei.runtime.artifacts.world import load_manifest
 from rei.runtime.errors import RunError
-from rei.runtime.faults.stage import NO_FAULTS, Command, Pose, Twist
-from rei.runtime.loop import Clock, Scheduler, Stage, every
 from rei.runtime.messages import (
     LOOP_MESSAGES,
     BodyStates,
@@ -35,10 +34,13 @@ from rei.runtime.messages import (
     message_from_json,
     message_to_json,
 )
-from rei.runtime.monitor import MonitorSink
+from rei.runtime.messages.sink import SampleList
+from rei.runtime.observation.monitor import MonitorSink
 from rei.runtime.robot import Observation, VelocityCommand
-from rei.runtime.run import RunConfig, generate_world, run_mission
-from rei.runtime.world import load_manifest
+from rei.runtime.simulation.assembly import RunConfig, generate_world, run_mission
+from rei.runtime.simulation.faults.stage import NO_FAULTS, Command, Pose, Twist
+from rei.runtime.simulation.loop import Clock, Scheduler, Stage, every
+from rei.runtime.trace import TraceWriter
 from tests.conftest import EXAMPLES
 from tests.runtime.faulty import _Base
 

@@ -1,4 +1,5 @@
-"""Ray casting against the static map (runtime/robot/mapcast.py), checked against a march."""
+"""Ray casting against the static map (runtime/robot/navigator/mapcast.py), checked against
+a march."""
 
 from __future__ import annotations
 
@@ -7,9 +8,9 @@ import math
 import numpy as np
 import pytest
 
-from rei.runtime.robot.mapcast import MapCaster
-from rei.runtime.robot.protocol import MapObstacle
-from rei.runtime.sensors.laser import RayCaster, ShapeSet
+from rei.runtime.robot.contract import MapObstacle
+from rei.runtime.robot.navigator.mapcast import MapCaster
+from rei.runtime.simulation.sensors.laser import RayCaster, ShapeSet
 
 MAP = (
     MapObstacle("table", "static", 1.0, 0.5, 0.6, "box", 0.8, 0.6),

@@ -18,15 +18,14 @@ from pathlib import Path
 
 import pytest
 
-from rei.runtime.collector import read_trace
-from rei.runtime.collector.trace import read_trace_end
-from rei.runtime.robot.protocol import (
+from rei.runtime.robot.contract import (
     ContractViolation,
     GoalFeedback,
     VelocityCommand,
     checked_command,
     checked_feedback,
 )
+from rei.runtime.trace import read_trace, read_trace_end
 from tests.conftest import EXAMPLES, REPO
 
 NAVIGATION = EXAMPLES / "navigation" / "navigation.mission"
@@ -36,7 +35,7 @@ SAFETY_LIMIT = 600.0
 
 def rei_run(out: Path, controller: str, *extra: str) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [sys.executable, "-m", "rei.runtime.cli", "run", str(NAVIGATION), "-o", str(out),
+        [sys.executable, "-m", "rei.runtime.commands", "run", str(NAVIGATION), "-o", str(out),
          "--duration", "5", "--controller", f"tests.runtime.faulty:{controller}", *extra],
         cwd=REPO, capture_output=True, text=True, timeout=SAFETY_LIMIT, check=False)
 
@@ -181,7 +180,7 @@ def _start(out: Path, controller: str, temporary: Path | None = None
     its temporary files in ``temporary`` when given."""
     env = None if temporary is None else {**os.environ, "TMPDIR": str(temporary)}
     process = subprocess.Popen(
-        [sys.executable, "-m", "rei.runtime.cli", "run", str(NAVIGATION), "-o", str(out),
+        [sys.executable, "-m", "rei.runtime.commands", "run", str(NAVIGATION), "-o", str(out),
          "--controller", f"tests.runtime.faulty:{controller}", "--quiet"],
         cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
     partial = out / "trace.jsonl.partial"
@@ -239,7 +238,7 @@ def test_a_second_ctrl_c_stops_a_simulation_that_cannot_end_cleanly(tmp_path: Pa
     """The first Ctrl-C is passed on; a simulation stopped by its controller cannot hear it,
     so the second one kills the simulation and the run ends interrupted all the same."""
     process = subprocess.Popen(
-        [sys.executable, "-m", "rei.runtime.cli", "run", str(NAVIGATION), "-o", str(tmp_path),
+        [sys.executable, "-m", "rei.runtime.commands", "run", str(NAVIGATION), "-o", str(tmp_path),
          "--controller", "tests.runtime.faulty:StopsTheSimulation", "--watchdog", "60",
          "--quiet"],
         cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
@@ -265,7 +264,7 @@ WALL = EXAMPLES / "simple_wall" / "simple_wall.mission"
 def rei_run_wall(out: Path, controller: str) -> subprocess.CompletedProcess[str]:
     """`rei run` of the wall example, with $REI_TEST_ATTACK_OUT naming the output folder."""
     return subprocess.run(
-        [sys.executable, "-m", "rei.runtime.cli", "run", str(WALL), "-o", str(out),
+        [sys.executable, "-m", "rei.runtime.commands", "run", str(WALL), "-o", str(out),
          "--duration", "20", "--controller", f"tests.runtime.faulty:{controller}", "--quiet"],
         cwd=REPO, capture_output=True, text=True, timeout=SAFETY_LIMIT, check=False,
         env={**os.environ, "REI_TEST_ATTACK_OUT": str(out)})
@@ -358,7 +357,8 @@ def test_the_simulation_process_is_not_dumpable() -> None:
     # descriptors through /proc/PID/fd: the supervisor's pipe stays out of reach.
     if not sys.platform.startswith("linux"):
         pytest.skip("PR_SET_DUMPABLE is Linux's")
-    code = ("import ctypes; from rei.runtime.processes import keep_private; keep_private(); "
+    code = ("import ctypes; from rei.runtime.platform.processes import keep_private; "
+            "keep_private(); "
             "print(ctypes.CDLL(None).prctl(3, 0, 0, 0, 0))")  # PR_GET_DUMPABLE
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           timeout=SAFETY_LIMIT, check=True)
@@ -375,7 +375,7 @@ def test_a_simulation_killed_with_sigkill_leaves_no_temporary_folder(warm: str,
     temporary.mkdir()
     out = tmp_path / "out"
     done = subprocess.run(
-        [sys.executable, "-m", "rei.runtime.cli", "run", str(NAVIGATION), "-o", str(out),
+        [sys.executable, "-m", "rei.runtime.commands", "run", str(NAVIGATION), "-o", str(out),
          "--duration", "5", "--controller", "tests.runtime.faulty:KillsTheSimulation",
          "--quiet"],
         cwd=REPO, capture_output=True, text=True, timeout=SAFETY_LIMIT, check=False,

@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 
 from rei.generators.output import OutputTree, open_output, write_atomic, write_tree
-from rei.runtime.campaign import CampaignError, CampaignStore
+from rei.runtime.campaigns import CampaignError, CampaignStore
 from tests.campaign.records import example_plan, write_campaign
 from tests.conftest import EXAMPLES
 
@@ -54,7 +54,7 @@ class Victims:
             assert (folder / "keep.txt").read_bytes() == PRECIOUS
 
 
-def rei(*argv: str, program: str = "rei.runtime.cli") -> subprocess.CompletedProcess[str]:
+def rei(*argv: str, program: str = "rei.runtime.commands.cli") -> subprocess.CompletedProcess[str]:
     return subprocess.run([sys.executable, "-m", program, *argv], capture_output=True,
                           text=True, timeout=SAFETY_LIMIT, stdin=subprocess.DEVNULL)
 

@@ -16,9 +16,6 @@ import pytest
 from mcap.reader import make_reader
 from rosbags.typesys import Stores, get_typestore
 
-from rei.runtime.collector import TraceError, read_trace, write
-from rei.runtime.collector.trace import TraceEncoder
-from rei.runtime.evaluator.signal_log import SignalRow
 from rei.runtime.messages import (
     SCHEMA_VERSION,
     LaserScan,
@@ -29,15 +26,17 @@ from rei.runtime.messages import (
     Sample,
     StreamHeader,
 )
-from rei.runtime.recording import (
+from rei.runtime.messages.ros import TOPICS
+from rei.runtime.observation.evaluator.signal_log import SignalRow
+from rei.runtime.observation.recordings import (
     TRACE_TOPIC,
     McapRecorder,
     RecordingError,
     read_recording,
     read_stream,
 )
-from rei.runtime.recording.ros import TOPICS
-from rei.runtime.recording.writer import CHUNK_BYTES
+from rei.runtime.observation.recordings.writer import CHUNK_BYTES
+from rei.runtime.trace import TraceEncoder, TraceError, read_trace, write
 from tests.runtime.test_trace import _header, _samples
 
 STORE = get_typestore(Stores.ROS2_HUMBLE)
@@ -300,7 +299,7 @@ def test_recorder_killed_mid_run_leaves_a_readable_file(tmp_path: Path) -> None:
     # a process that records 120 samples and dies without finishing (as a crash does)
     script = ("import os, sys\n"
               "from tests.runtime.test_recording import _long_samples\n"
-              "from rei.runtime.recording import McapRecorder\n"
+              "from rei.runtime.observation.recordings import McapRecorder\n"
               "header, samples = _long_samples(120)\n"
               "recorder = McapRecorder(sys.argv[1], chunk_bytes=30_000)\n"
               "recorder.start(header)\n"

@@ -15,10 +15,10 @@ import pytest
 from mcap.reader import make_reader
 from rosbags.typesys import Stores, get_typestore
 
-from rei.runtime.campaign import plan_campaign
-from rei.runtime.collector import read_trace
-from rei.runtime.recording import TRACE_TOPIC, read_recording
-from rei.runtime.recording.ros import TOPICS
+from rei.runtime.campaigns import plan_campaign
+from rei.runtime.messages.ros import TOPICS
+from rei.runtime.observation.recordings import TRACE_TOPIC, read_recording
+from rei.runtime.trace import read_trace
 from tests.conftest import EXAMPLES, REPO
 
 SIMPLE_WALL = EXAMPLES / "simple_wall" / "simple_wall.mission"
@@ -29,7 +29,7 @@ STORE = get_typestore(Stores.ROS2_HUMBLE)
 
 
 def rei(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "rei.runtime.cli", *args], cwd=REPO,
+    return subprocess.run([sys.executable, "-m", "rei.runtime.commands", *args], cwd=REPO,
                           capture_output=True, text=True, timeout=SAFETY_LIMIT, check=False)
 
 

@@ -11,7 +11,7 @@ import numpy as np
 
 from rei.runtime.messages import NavState
 from rei.runtime.robot import NavGoal
-from rei.runtime.robot.reference import ALIGN_FIRST
+from rei.runtime.robot.navigator.reference import ALIGN_FIRST
 from tests.runtime.arcs_around import ArcsAround
 from tests.runtime.test_reference_recovery import DRIVE, DT, Box, Drive, drive
 

@@ -17,9 +17,9 @@ import pytest
 from rei.catalogue import DriveSpec, LaserSpec
 from rei.runtime.messages import LaserScan, NavState
 from rei.runtime.robot import NavGoal, Observation, VelocityCommand
-from rei.runtime.robot.protocol import ControllerContext, MapObstacle
-from rei.runtime.robot.recovery import footprint_gaps, motion_is_safe
-from rei.runtime.robot.reference import ABORT_GRACE, BLOCKED_AFTER, ReferenceNavigator
+from rei.runtime.robot.contract import ControllerContext, MapObstacle
+from rei.runtime.robot.navigator.recovery import footprint_gaps, motion_is_safe
+from rei.runtime.robot.navigator.reference import ABORT_GRACE, BLOCKED_AFTER, ReferenceNavigator
 
 DT = 0.1
 HALF = (0.1405, 0.153)  # turtlebot3_waffle footprint 0.281 x 0.306

@@ -14,7 +14,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 from rosbags.typesys import Stores, get_typestore
 
-from rei.runtime.recording.ros import (
+from rei.runtime.messages.ros import (
     NAV2_STATUS,
     ODOMETRY,
     SCAN,

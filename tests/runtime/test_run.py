@@ -13,10 +13,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rei.runtime.cli import main
-from rei.runtime.collector import SampleList, read_trace
-from rei.runtime.collector.trace import read_trace_end
+from rei.runtime.commands.cli import main
 from rei.runtime.commands.run import run_into
+from rei.runtime.messages.sink import SampleList
+from rei.runtime.trace import read_trace, read_trace_end
 from tests.conftest import EXAMPLES, REPO
 
 NAVIGATION = EXAMPLES / "navigation" / "navigation.mission"
@@ -59,7 +59,7 @@ def test_a_short_run_writes_trace_summary_and_log(tmp_path: Path) -> None:
 
 def _run_fresh(out: Path, hashseed: str) -> None:
     env = dict(os.environ, PYTHONHASHSEED=hashseed)
-    subprocess.run([sys.executable, "-m", "rei.runtime.cli", "run", str(NAVIGATION), "-o",
+    subprocess.run([sys.executable, "-m", "rei.runtime.commands", "run", str(NAVIGATION), "-o",
                     str(out), "--duration", "25", "--seed", "4", "--odom-drift", "0.01",
                     "--quiet"], cwd=REPO, env=env, check=False, capture_output=True)
 
@@ -128,7 +128,7 @@ def test_a_controller_raising_keyboardinterrupt_is_a_run_error_not_a_ctrl_c(
 
 @pytest.mark.slow
 def test_ctrl_c_leaves_consistent_outputs_marked_incomplete(tmp_path: Path) -> None:
-    proc = subprocess.Popen([sys.executable, "-m", "rei.runtime.cli", "run", str(NAVIGATION),
+    proc = subprocess.Popen([sys.executable, "-m", "rei.runtime.commands", "run", str(NAVIGATION),
                              "-o", str(tmp_path), "--controller", "tests.runtime.faulty:Slow",
                              "--quiet"], cwd=REPO, stdout=subprocess.DEVNULL,
                             stderr=subprocess.DEVNULL)

@@ -2,7 +2,7 @@
 
 The supervisor removes its children's scratch folder however they end, but nothing of it runs
 when it is killed with SIGKILL itself. The folder's name says which process owns it
-(rei.runtime.scratch) and the next supervisor sweeps those whose owner is gone — never one
+(rei.runtime.platform.scratch) and the next supervisor sweeps those whose owner is gone — never one
 whose owner is alive, another user's, or anything that is not such a folder.
 """
 
@@ -17,8 +17,8 @@ from pathlib import Path
 
 import pytest
 
-from rei.runtime.scratch import make_scratch, pid_namespace, start_ticks, sweep_stale
-from rei.runtime.supervisor import SCRATCH_PREFIX
+from rei.runtime.platform.scratch import make_scratch, pid_namespace, start_ticks, sweep_stale
+from rei.runtime.runs.supervisor import SCRATCH_PREFIX
 from tests.conftest import EXAMPLES, REPO
 
 NAVIGATION = EXAMPLES / "navigation" / "navigation.mission"
@@ -121,7 +121,7 @@ def test_another_users_folder_is_never_swept(tmp_path: Path) -> None:
 
 def rei_run(out: Path, temporary: Path, duration: str) -> subprocess.Popen[bytes]:
     return subprocess.Popen(
-        [sys.executable, "-m", "rei.runtime.cli", "run", str(NAVIGATION), "-o", str(out),
+        [sys.executable, "-m", "rei.runtime.commands", "run", str(NAVIGATION), "-o", str(out),
          "--duration", duration, "--quiet"],
         cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
         env={**os.environ, "TMPDIR": str(temporary)})

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from rei.runtime.animator import Animated, Animator, CatmullRom
+from rei.runtime.simulation.animator import Animated, Animator, CatmullRom
 
 
 def test_spline_passes_through_every_vertex_at_its_time() -> None:

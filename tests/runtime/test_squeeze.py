@@ -20,8 +20,8 @@ import numpy as np
 import pytest
 
 from rei.runtime.robot import NavGoal
-from rei.runtime.robot.protocol import Observation, VelocityCommand
-from rei.runtime.robot.reference import SIDE_MEMORY, SQUEEZE_GAP, ReferenceNavigator
+from rei.runtime.robot.contract import Observation, VelocityCommand
+from rei.runtime.robot.navigator.reference import SIDE_MEMORY, SQUEEZE_GAP, ReferenceNavigator
 from tests.runtime.test_reference_recovery import DT, context_of, corridor_walls, scan_of
 
 REPO = Path(__file__).resolve().parents[2]

@@ -16,9 +16,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rei.runtime.collector import SampleList, load_monitor_config
-from rei.runtime.run import RunConfig, RunRecord, generate_world, run_mission
-from rei.runtime.world.manifest import load_manifest
+from rei.runtime.artifacts.monitor import load_monitor_config
+from rei.runtime.artifacts.world import load_manifest
+from rei.runtime.messages.sink import SampleList
+from rei.runtime.simulation.assembly import RunConfig, RunRecord, generate_world, run_mission
 from tests.runtime.scripted import Ram
 
 ROOM = """room hall {

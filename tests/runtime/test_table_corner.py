@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 
 from rei.runtime.robot import NavGoal
-from rei.runtime.robot.recovery import arc_poses, footprint_gaps
-from rei.runtime.robot.reference import (
+from rei.runtime.robot.navigator.recovery import arc_poses, footprint_gaps
+from rei.runtime.robot.navigator.reference import (
     EXACT_ALLOWANCE,
     HORIZON,
     MARGIN,

@@ -12,8 +12,6 @@ import numpy as np
 import pytest
 
 from rei.catalogue import Box, Cylinder
-from rei.runtime.collector import TraceError, read_trace, write
-from rei.runtime.collector.trace import read_trace_end
 from rei.runtime.messages import (
     SCHEMA_VERSION,
     GoalFacts,
@@ -26,6 +24,7 @@ from rei.runtime.messages import (
     Sample,
     StreamHeader,
 )
+from rei.runtime.trace import TraceError, read_trace, read_trace_end, write
 
 FACTS = MissionFacts((GoalFacts("start", 0.0, 0.0, None, 0.25, 0.2617993877991494, 30.0),
                       GoalFacts("elevator", 1.0, -2.5, -np.pi / 2, 0.3, 0.1, 300.0)),

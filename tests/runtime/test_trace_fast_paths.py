@@ -1,7 +1,7 @@
 """The trace rules' fast paths for the common field (a float in range, a list of floats) take
 and refuse exactly what the full checks do, with the same values and the same messages.
 
-The writer checks every line it writes by the reader's rules (runtime/collector/trace.py), so
+The writer checks every line it writes by the reader's rules (runtime/trace/__init__.py), so
 these checks run for every sample of every run: ``_Fields.number`` and ``_Fields.numbers``
 answer the common case before the field's path is spelt out. A fast path that let through a
 bool, a NaN, an infinity, an int too large for a float or a value out of its bounds, or that
@@ -17,8 +17,7 @@ from typing import Any
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-from rei.runtime.collector import TraceError
-from rei.runtime.collector.trace import _Fields, _number, _numbers
+from rei.runtime.trace import TraceError, _Fields, _number, _numbers
 
 WHERE, PREFIX, KEY = "trace.jsonl:7", "belief", "odom"
 

@@ -23,9 +23,7 @@ from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
 from rei.catalogue import Box, Cylinder, Polygon
-from rei.runtime.cli import main as rei
-from rei.runtime.collector import TraceError, TraceWriter, read_trace, write
-from rei.runtime.collector.trace import read_trace_end
+from rei.runtime.commands.cli import main as rei
 from rei.runtime.commands.replay import replay
 from rei.runtime.commands.run import run_into
 from rei.runtime.messages import (
@@ -39,6 +37,7 @@ from rei.runtime.messages import (
     StreamHeader,
 )
 from rei.runtime.results import judge
+from rei.runtime.trace import TraceError, TraceWriter, read_trace, read_trace_end, write
 from tests.conftest import EXAMPLES
 
 MISSION = EXAMPLES / "simple_wall" / "simple_wall.mission"

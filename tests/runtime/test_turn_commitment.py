@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 
 from rei.runtime.robot import NavGoal
-from rei.runtime.robot.protocol import Observation, VelocityCommand
-from rei.runtime.robot.reference import TURN_COMMITMENT, ReferenceNavigator
+from rei.runtime.robot.contract import Observation, VelocityCommand
+from rei.runtime.robot.navigator.reference import TURN_COMMITMENT, ReferenceNavigator
 from tests.runtime.test_reference_recovery import (
     DT,
     Circle,

@@ -19,8 +19,8 @@ from rei.catalogue import Box
 from rei.generators.concrete.build import load_concrete_mission
 from rei.generators.output import write_tree
 from rei.generators.targets import GenerationRequest, get_target
-from rei.runtime.world import bullet, load_manifest
-from rei.runtime.world.manifest import BodySpec, WorldManifest
+from rei.runtime.artifacts.world import BodySpec, WorldManifest, load_manifest
+from rei.runtime.simulation.world import bullet
 from tests.conftest import EXAMPLES
 
 SPEED = 0.3

@@ -10,7 +10,7 @@ from pathlib import Path
 
 from lxml import etree
 
-from rei.runtime.cli import main
+from rei.runtime.commands.cli import main
 from rei.runtime.results import RunSummary, judge
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"

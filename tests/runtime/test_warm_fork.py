@@ -1,4 +1,4 @@
-"""A forked child (rei.runtime.warm.fork) is set up as an executed child would be.
+"""A forked child (rei.runtime.platform.fork) is set up as an executed child would be.
 
 Each test forks from a fresh single-threaded interpreter (a test runner's process may hold
 threads — xdist's channel, numpy's — and then forking is rightly refused): the test's code
@@ -18,7 +18,7 @@ from typing import Any
 
 import pytest
 
-from rei.runtime.warm import WARM_VARIABLE
+from rei.runtime.platform.warm import WARM_VARIABLE
 
 SAFETY_LIMIT = 600.0
 """Seconds after which a stuck test fails instead of hanging CI (not a performance limit)."""
@@ -28,8 +28,8 @@ pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="Li
 PRELUDE = """
 import atexit, json, os, signal, subprocess, sys, threading, time
 from pathlib import Path
-from rei.runtime.processes import child_status, start_child, stop_child
-from rei.runtime.warm.fork import ForkedChild, can_fork
+from rei.runtime.platform.processes import child_status, start_child, stop_child
+from rei.runtime.platform.fork import ForkedChild, can_fork
 assert can_fork() or os.environ.get("REI_WARM") == "off", "a fresh interpreter may fork"
 result = {}
 """
@@ -187,7 +187,7 @@ def test_a_child_stopped_at_once_after_the_fork_is_killed_not_waited_for(tmp_pat
 
 
 def test_stderr_pipe_is_refused_rather_than_broken() -> None:
-    from rei.runtime.warm.fork import fork_child
+    from rei.runtime.platform.fork import fork_child
 
     with pytest.raises(ValueError, match="stderr=PIPE"):
         fork_child(lambda: 0, stderr=subprocess.PIPE)

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from rei.runtime.campaign import CampaignError, CampaignStore
-from rei.runtime.campaign.store import extend_plan
+from rei.runtime.campaigns import CampaignError, CampaignStore
+from rei.runtime.campaigns.store import extend_plan
 from tests.campaign.records import example_plan
 
 

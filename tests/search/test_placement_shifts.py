@@ -179,7 +179,7 @@ def test_a_real_search_with_the_shifts_runs_the_moved_scenario(tmp_path: Path) -
     from tests.search.test_search_runs import SAFETY_LIMIT, outputs, table  # noqa: PLC0415
 
     out = tmp_path / "out"
-    argv = [sys.executable, "-m", "rei.runtime.cli", "search", "-o", str(out), "--layout", "5",
+    argv = [sys.executable, "-m", "rei.runtime.commands", "search", "-o", str(out), "--layout", "5",
             *(a for k, v in ONE_HUMAN for a in (f"--{k.replace('_', '-')}", v)),
             "--object-shift", "0.1:0.3", "--goal-shift", "0:0.25", "--path-shift=-0.2:0.2",
             "--budget", "2", "--batch", "2", "--workers", "1", "--strategy", "random",

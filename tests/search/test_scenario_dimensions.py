@@ -19,8 +19,8 @@ from rei.generators.rooms.design import decode_point
 from rei.generators.rooms.writer import read_metadata
 from rei.lang.room.spline import CatmullRom
 from rei.lang.workspace import Workspace
-from rei.runtime.search.candidates import Candidate, build_candidate, write_candidates
-from rei.runtime.search.run import SearchConfig, check_config, search_table
+from rei.runtime.campaigns.search.candidates import Candidate, build_candidate, write_candidates
+from rei.runtime.campaigns.search.driver import SearchConfig, check_config, search_table
 
 ONE_HUMAN = (("shape", "rect"), ("size", "8x5"), ("objects", "2"), ("mix", "furniture"),
              ("humans", "1"), ("vertices", "3"), ("loop", "no"), ("crossing", "cross"),
@@ -171,7 +171,7 @@ def same_bytes_and_table_row(tmp_path: Path, scenario: Sequence[tuple[str, str]]
     config = SearchConfig(levels=ONE_HUMAN, scenario=tuple(scenario), layout=3)
     _, dims = config.dimensions()
     assert [d.name for d in dims] == [name for name, _ in scenario]
-    from rei.runtime.search.run import CandidateResult  # noqa: PLC0415
+    from rei.runtime.campaigns.search.driver import CandidateResult  # noqa: PLC0415
 
     built = candidate(tmp_path / "t", scenario, u)
     head, row = search_table([CandidateResult(built, None, 10.0)], dims).splitlines()
@@ -197,7 +197,7 @@ def test_a_real_search_runs_the_scenario_it_wrote_and_resumes_to_the_same_bytes(
     from tests.search.test_search_runs import SAFETY_LIMIT, outputs, table  # noqa: PLC0415
 
     out = tmp_path / "out"
-    argv = [sys.executable, "-m", "rei.runtime.cli", "search", "-o", str(out), "--layout", "5",
+    argv = [sys.executable, "-m", "rei.runtime.commands", "search", "-o", str(out), "--layout", "5",
             *(a for k, v in ONE_HUMAN for a in (f"--{k.replace('_', '-')}", v)),
             "--phase", "0:20", "--fault-range", "laser_noise.sigma=0.01:0.1", "--budget", "2",
             "--batch", "2", "--workers", "1", "--strategy", "random", "--no-report", "-q"]

@@ -10,8 +10,8 @@ from pathlib import Path
 import pytest
 
 from rei.lang.cli_support import EXIT_BAD_INPUT
-from rei.runtime.cli import main
-from rei.runtime.search import SearchConfig
+from rei.runtime.campaigns.search import SearchConfig
+from rei.runtime.commands.cli import main
 
 ONE_ROOM = ["--shape", "rect", "--size", "5x3", "--objects", "0", "--mix", "furniture",
             "--humans", "0", "--goals", "2", "--spacing", "2", "--cycles", "1",
@@ -155,6 +155,6 @@ def test_rei_campaign_refuses_the_same_engine_options(tmp_path: Path,
 def test_an_impossible_combination_of_good_levels_is_not_refused_up_front() -> None:
     # An L shape needs 4x4 tiles: 3x3 with L is a combination the generator refuses per
     # candidate ('not built'), while each level alone is good, so the search may start.
-    from rei.runtime.search.run import check_config  # noqa: PLC0415
+    from rei.runtime.campaigns.search.driver import check_config  # noqa: PLC0415
 
     check_config(SearchConfig(levels=(("shape", "rect,L"), ("size", "3x3,5x4"))))

@@ -26,7 +26,7 @@ from pathlib import Path
 import pytest
 
 from rei.lang.cli_support import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK
-from rei.runtime.campaign import CampaignStore
+from rei.runtime.campaigns import CampaignStore
 
 REPO = Path(__file__).resolve().parents[2]
 DEFECT = "bench.defects.control:ExceedsDriveLimit"
@@ -48,7 +48,7 @@ def _env() -> dict[str, str]:
 
 def search_argv(out: Path, seed: int, *extra: str, strategy: str = "tpe",
                 controller: str = DEFECT) -> list[str]:
-    return [sys.executable, "-m", "rei.runtime.cli", "search", "-o", str(out), *SPACE,
+    return [sys.executable, "-m", "rei.runtime.commands", "search", "-o", str(out), *SPACE,
             "--seed", str(seed), "--strategy", strategy, "--controller", controller, *extra]
 
 
@@ -130,7 +130,7 @@ def test_every_candidate_is_a_checked_pair_and_the_folder_is_a_campaign(
     plan, _, records = CampaignStore.read(out)
     assert len(plan.runs) == len(records) == 4
     # `rei report` reads the search folder as a campaign and judges it by the same rule.
-    report = subprocess.run([sys.executable, "-m", "rei.runtime.cli", "report", str(out),
+    report = subprocess.run([sys.executable, "-m", "rei.runtime.commands", "report", str(out),
                              "--no-html"], capture_output=True, text=True,
                             timeout=SAFETY_LIMIT)
     assert report.returncode == EXIT_FAILED, report.stderr
@@ -150,7 +150,7 @@ def test_the_correct_navigator_yields_no_failure_and_exits_0(tmp_path: Path) -> 
 @pytest.fixture(scope="module")
 def dask_scheduler() -> Iterator[str]:
     pytest.importorskip("distributed", reason="pip install 'dask[distributed]'")
-    from rei.runtime.campaign.cluster import loopback_cluster  # noqa: PLC0415
+    from rei.runtime.campaigns.dask_cluster import loopback_cluster  # noqa: PLC0415
 
     with pytest.MonkeyPatch.context() as patch:
         patch.setenv("PYTHONPATH", _env()["PYTHONPATH"])  # the workers import the defect

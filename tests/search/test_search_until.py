@@ -10,9 +10,9 @@ from pathlib import Path
 
 import pytest
 
-from rei.runtime.campaign import CampaignStore, LocalEngine
-from rei.runtime.search import SearchConfig, run_search
-from rei.runtime.search.run import CandidateResult
+from rei.runtime.campaigns import CampaignStore, LocalEngine
+from rei.runtime.campaigns.search import SearchConfig, run_search
+from rei.runtime.campaigns.search.driver import CandidateResult
 
 ROOM = (("shape", "rect"), ("size", "5x3"), ("objects", "0"), ("mix", "furniture"),
         ("humans", "0"), ("goals", "2"), ("spacing", "2"), ("cycles", "1"),

@@ -10,8 +10,14 @@ import pytest
 
 from rei.generators.rooms.design import LAYOUT, decode_point, search_dimensions
 from rei.generators.rooms.space import ParameterError, parse_interval, preset_space
-from rei.runtime.search import STRATEGIES, SearchError, Told, check_strategy, make_strategy
-from rei.runtime.search.strategies import MEASURE_RANGES
+from rei.runtime.campaigns.search import (
+    STRATEGIES,
+    SearchError,
+    Told,
+    check_strategy,
+    make_strategy,
+)
+from rei.runtime.campaigns.search.strategies import MEASURE_RANGES
 
 
 def _dims() -> tuple[object, ...]:
@@ -135,10 +141,13 @@ def test_cmaes_needs_two_dimensions() -> None:
 def test_the_objective_is_the_margin_and_never_hides_a_failure() -> None:
     from dataclasses import replace  # noqa: PLC0415
 
-    from rei.runtime.campaign import RunRecord, RunSpec  # noqa: PLC0415
+    from rei.runtime.campaigns import RunRecord, RunSpec  # noqa: PLC0415
+    from rei.runtime.campaigns.search import objective  # noqa: PLC0415
+    from rei.runtime.campaigns.search.driver import (  # noqa: PLC0415
+        FAILED_WITHOUT_MARGIN,
+        NO_EVIDENCE,
+    )
     from rei.runtime.results import Verdict  # noqa: PLC0415
-    from rei.runtime.search import objective  # noqa: PLC0415
-    from rei.runtime.search.run import FAILED_WITHOUT_MARGIN, NO_EVIDENCE  # noqa: PLC0415
     from tests.campaign.records import summary_for  # noqa: PLC0415
 
     spec = RunSpec("m.r00", "/m.mission", "x/m.mission", "x", 0, 1)
@@ -164,7 +173,7 @@ def test_the_objective_is_the_margin_and_never_hides_a_failure() -> None:
 def test_map_elites_keeps_unbuilt_candidates_out_of_the_archive() -> None:
     # An unbuilt candidate has no room, so its objective and descriptors (NO_EVIDENCE at
     # (0, 0)) describe nothing; told as an elite it would seed the emitter from an edge cell.
-    from rei.runtime.search.run import NO_EVIDENCE  # noqa: PLC0415
+    from rei.runtime.campaigns.search.driver import NO_EVIDENCE  # noqa: PLC0415
 
     def run(seed: int) -> tuple[object, list[list[float]]]:
         strategy = make_strategy("map-elites", _dims(), seed, 4)
@@ -185,9 +194,13 @@ def test_map_elites_keeps_unbuilt_candidates_out_of_the_archive() -> None:
 def test_a_fail_line_names_the_failed_requirements_and_labels_the_margin() -> None:
     from dataclasses import replace  # noqa: PLC0415
 
-    from rei.runtime.campaign import RunRecord, RunSpec  # noqa: PLC0415
+    from rei.runtime.campaigns import RunRecord, RunSpec  # noqa: PLC0415
+    from rei.runtime.campaigns.search.driver import (  # noqa: PLC0415
+        CandidateResult,
+        fail_line,
+        objective,
+    )
     from rei.runtime.results import Verdict  # noqa: PLC0415
-    from rei.runtime.search.run import CandidateResult, fail_line, objective  # noqa: PLC0415
     from tests.campaign.records import summary_for  # noqa: PLC0415
 
     spec = RunSpec("m.r00", "/m.mission", "x/m.mission", "x", 0, 1)

@@ -13,7 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rei.lang.errors import LanguageError
-from rei.runtime.shrink.case import (
+from rei.runtime.campaigns.shrink.case import (
     elements,
     load_case,
     number_sites,
@@ -22,15 +22,15 @@ from rei.runtime.shrink.case import (
     with_numbers,
     without,
 )
-from rei.runtime.shrink.ddmin import ddmin
-from rei.runtime.shrink.oracle import (
+from rei.runtime.campaigns.shrink.ddmin import ddmin
+from rei.runtime.campaigns.shrink.oracle import (
     FailureOracle,
     RunSettings,
     SeedOutcome,
     _outcome,
     fails_everywhere,
 )
-from rei.runtime.shrink.shrinker import Shrinker, choose_requirement, unknown_requirement
+from rei.runtime.campaigns.shrink.shrinker import Shrinker, choose_requirement, unknown_requirement
 from tests.campaign.records import summary_for
 
 CASES = Path(__file__).parent / "cases"

@@ -16,8 +16,8 @@ from pathlib import Path
 import pytest
 
 from rei.lang.cli import main as rei_gen
-from rei.runtime.cli import main
-from rei.runtime.shrink import RunSettings, load_case, size_reduction, sizes
+from rei.runtime.campaigns.shrink import RunSettings, load_case, size_reduction, sizes
+from rei.runtime.commands.cli import main
 
 REPO = Path(__file__).resolve().parents[2]
 CASES = Path(__file__).parent / "cases"
@@ -141,7 +141,7 @@ def test_bad_input_is_refused_in_one_line(tmp_path: Path,
 @pytest.mark.slow
 def test_an_interrupted_shrink_keeps_its_best_case_and_resumes(tmp_path: Path) -> None:
     out = tmp_path / "stopped"
-    argv = [sys.executable, "-m", "rei.runtime.cli", "shrink", str(CLUTTERED), "-o", str(out),
+    argv = [sys.executable, "-m", "rei.runtime.commands", "shrink", str(CLUTTERED), "-o", str(out),
             "--controller", SPEEDING, "--requirement", "SPEED_LIMIT", "--seeds", "2",
             "--duration", "3", "--keep", "floors", "--workers", "2", "-q"]
     process = subprocess.Popen(argv, cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE,

@@ -8,7 +8,7 @@ from rei.generators.targets import check_target, get_target
 from rei.generators.targets.rx import render_module
 from rei.lang.cli import main as rei_gen
 from rei.lang.vepl import DEFAULT_VEPL, load_vepl
-from rei.runtime.monitor.automata import load_generated
+from rei.runtime.observation.automata.records import load_generated
 
 
 def test_target_conforms_and_accepts_vepl() -> None:

@@ -25,15 +25,15 @@ from rei.lang.vepl_parameters import (
     parameter_values,
     parse_parameter,
 )
-from rei.runtime.cache import ArtifactCache
-from rei.runtime.campaign import CampaignError, CampaignStore, RunSpec
-from rei.runtime.campaign.plan import CampaignPlan, plan_campaign
-from rei.runtime.campaign.store import RunRecord
-from rei.runtime.report.junit import junit_xml
+from rei.runtime.campaigns import CampaignError, CampaignStore, RunSpec
+from rei.runtime.campaigns.plan import CampaignPlan, plan_campaign
+from rei.runtime.campaigns.search.driver import SearchConfig
+from rei.runtime.campaigns.shrink.oracle import RunSettings
+from rei.runtime.campaigns.store import RunRecord
+from rei.runtime.presentation.junit import junit_xml
 from rei.runtime.results import RunSummary, Verdict
-from rei.runtime.search.run import SearchConfig
-from rei.runtime.shrink.oracle import RunSettings
-from rei.runtime.supervisor import RunRequest
+from rei.runtime.runs.cache import ArtifactCache
+from rei.runtime.runs.supervisor import RunRequest
 
 from ..conftest import EXAMPLES
 
@@ -265,7 +265,7 @@ def test_summary_and_junit_show_the_values_other_than_the_files() -> None:
 def test_every_command_that_judges_refuses_an_undeclared_name_before_it_starts(
         tmp_path: Path, capfd: pytest.CaptureFixture[str]) -> None:
     """Each command has the option and checks it first: one line, exit 2, nothing made."""
-    from rei.runtime.cli import main as rei  # noqa: PLC0415
+    from rei.runtime.commands.cli import main as rei  # noqa: PLC0415
 
     mission = str(EXAMPLES / "simple_wall" / "simple_wall.mission")
     trace = tmp_path / "trace.jsonl"

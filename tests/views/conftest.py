@@ -28,7 +28,7 @@ RUNS = {
 
 
 def rei(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "rei.runtime.cli", *args], cwd=REPO,
+    return subprocess.run([sys.executable, "-m", "rei.runtime.commands", *args], cwd=REPO,
                           capture_output=True, text=True, timeout=SAFETY_LIMIT, check=False)
 
 
@@ -104,4 +104,4 @@ def terminal() -> Iterator[Callable[[str], Terminal]]:
 
 
 def rei_watch(*args: str) -> str:
-    return shlex.join([sys.executable, "-m", "rei.runtime.cli", "watch", *args])
+    return shlex.join([sys.executable, "-m", "rei.runtime.commands", "watch", *args])

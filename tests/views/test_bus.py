@@ -16,17 +16,17 @@ from pathlib import Path
 
 import pytest
 
-from rei.runtime.evaluator.signal_log import read_csv
+from rei.runtime.observation.evaluator.signal_log import read_csv
 from tests.conftest import EXAMPLES, REPO
 from tests.views.conftest import SAFETY_LIMIT, Terminal, rei_watch
 
 pytest.importorskip("zenoh", reason="the bus extra (eclipse-zenoh) is in the test extra")
 
 from rei.runtime.bus import connect  # noqa: E402
+from rei.runtime.bus.distributed_run import TracePublisher  # noqa: E402
 from rei.runtime.bus.router import Router, start  # noqa: E402
-from rei.runtime.bus.run import TracePublisher  # noqa: E402
 from rei.runtime.bus.schema import TRACE  # noqa: E402
-from rei.runtime.collector.trace import read_trace, read_trace_end  # noqa: E402
+from rei.runtime.trace import read_trace, read_trace_end  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -37,7 +37,7 @@ def router(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Router]:
 
 def watch_bus(router: Router, *args: str) -> subprocess.Popen[str]:
     return subprocess.Popen(
-        [sys.executable, "-m", "rei.runtime.cli", "watch", "--bus", router.bus.endpoint,
+        [sys.executable, "-m", "rei.runtime.commands", "watch", "--bus", router.bus.endpoint,
          "--plain", "--exit", *args],
         cwd=REPO, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
         text=True)
@@ -119,7 +119,7 @@ def test_a_live_distributed_run_watched_full_screen(
     env = {**os.environ, "REI_BUS_CREDENTIALS": str(router.bus.path)}
     endpoint = router.bus.endpoint
     robot = subprocess.Popen(
-        [sys.executable, "-m", "rei.runtime.cli", "robot", "--bus", endpoint,
+        [sys.executable, "-m", "rei.runtime.commands", "robot", "--bus", endpoint,
          "--controller", "reference", "--once"], cwd=REPO, env=env,
         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     try:
@@ -128,7 +128,7 @@ def test_a_live_distributed_run_watched_full_screen(
         term.wait_for(lambda s: "rei watch: waiting for a run on the bus" in s)
         mission = EXAMPLES / "simple_wall" / "simple_wall.mission"
         done = subprocess.run(
-            [sys.executable, "-m", "rei.runtime.cli", "run", str(mission), "-o",
+            [sys.executable, "-m", "rei.runtime.commands", "run", str(mission), "-o",
              str(tmp_path / "dist"), "--bus", endpoint, "--wait-for-monitor", "--duration",
              "20"], cwd=REPO, env=env, capture_output=True, text=True,
             timeout=SAFETY_LIMIT, check=False)

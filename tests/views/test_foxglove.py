@@ -21,10 +21,10 @@ from typing import IO, Any
 
 import pytest
 
-from rei.runtime.collector import read_trace
-from rei.runtime.evaluator.signal_log import read_csv
-from rei.runtime.recording.ros import TOPICS
-from rei.runtime.views.foxglove import LIVE_TOPICS
+from rei.runtime.messages.ros import TOPICS
+from rei.runtime.observation.evaluator.signal_log import read_csv
+from rei.runtime.presentation.live.foxglove import LIVE_TOPICS
+from rei.runtime.trace import read_trace
 from tests.conftest import REPO, require_tool
 from tests.views.conftest import SAFETY_LIMIT
 
@@ -45,7 +45,7 @@ def node_client() -> Path:
 def start_watch(path: Path, *args: str) -> tuple[subprocess.Popen[str], str]:
     """`rei watch --replay PATH --foxglove 0 --plain ARGS`, and its server's URL."""
     watch = subprocess.Popen(
-        [sys.executable, "-m", "rei.runtime.cli", "watch", "--replay", str(path),
+        [sys.executable, "-m", "rei.runtime.commands", "watch", "--replay", str(path),
          "--foxglove", "0", "--plain", *args],
         cwd=REPO, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
         text=True)

@@ -11,12 +11,12 @@ from pathlib import Path
 
 import pytest
 
-from rei.runtime.evaluator.signal_log import SignalRow, read_csv
 from rei.runtime.messages import Sample, StreamHeader
+from rei.runtime.observation.evaluator.signal_log import SignalRow, read_csv
+from rei.runtime.presentation.live import RecordedSource, Watcher, WatchFrame
+from rei.runtime.presentation.live.frames import FactorMeter
+from rei.runtime.presentation.live.sources import Pacer
 from rei.runtime.results import judge
-from rei.runtime.views import RecordedSource, Watcher, WatchFrame
-from rei.runtime.views.frames import FactorMeter
-from rei.runtime.views.sources import Pacer
 
 EPS_CLOSE, EPS_COLLISION = 0.25, 0.02
 """The default .vepl's thresholds (ε_close, ε_collision; hysteresis 0)."""
@@ -168,7 +168,7 @@ def test_the_map_draws_the_room_from_above_with_the_robot_where_it_is(
         recorded: dict[str, Path], tmp_path: Path) -> None:
     """simple_wall (thesis 7.2): three floors between walls; the robot drove from the start
     goal to the east wall and stands on the last floor, pressed against wall_e."""
-    from rei.runtime.views.terminal import draw_map
+    from rei.runtime.presentation.live.terminal import draw_map
 
     view, _ = watch(recorded["fail"] / "trace.jsonl", tmp_path)
     first, last = view.frames[0], view.frames[-1]
@@ -187,7 +187,7 @@ def test_a_specification_without_the_geometric_queries_shows_no_state(
         recorded: dict[str, Path], tmp_path: Path) -> None:
     """examples/navigation/human_safety.vepl judges people only: the objects have no
     FAR / CLOSE / COLLISION state to show (never a made-up FAR), its own signals still come."""
-    from rei.runtime.views.terminal import render
+    from rei.runtime.presentation.live.terminal import render
     from tests.conftest import EXAMPLES
 
     view = Collect()

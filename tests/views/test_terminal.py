@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from rei.runtime.evaluator.signal_log import read_csv
+from rei.runtime.observation.evaluator.signal_log import read_csv
 from tests.views.conftest import Terminal, rei_watch
 
 

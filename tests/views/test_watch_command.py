@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from rei.runtime.views.foxglove import INSTALL_HINT, FoxgloveView
-from rei.runtime.views.frames import WatchError
+from rei.runtime.presentation.live.foxglove import INSTALL_HINT, FoxgloveView
+from rei.runtime.presentation.live.frames import WatchError
 from tests.views.conftest import rei
 
 

@@ -31,7 +31,7 @@ from rei.lang.vepl.model import (  # noqa: F401  (the records the pattern data b
     Never,
     Whenever,
 )
-from rei.runtime.monitor.automata import (
+from rei.runtime.observation.automata.records import (
     Matches,
     QueryEventSpec,
     QueryInputs,
@@ -42,7 +42,7 @@ from rei.runtime.monitor.automata import (
     demultiplex,
     raise_signal,
 )
-from rei.runtime.monitor.cep import Occurrence, match_pattern
+from rei.runtime.observation.automata.patterns import Occurrence, match_pattern
 
 SPEC_NAME = 'human_safety'
 FORMAT_VERSION = 4

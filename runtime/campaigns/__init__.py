@@ -1,0 +1,39 @@
+"""Campaigns: many missions, many repeats, run in parallel, resumable, in one results store.
+
+Planning (``plan``) turns missions, folders and suite indexes into runs with derived seeds; an
+engine (``engines``: local worker processes, or a Dask cluster) executes each run in isolation
+with `rei run` under a watchdog (``execute``); the store (``store``) records every run exactly
+once, atomically, with its own folder; ``stats`` computes success rates with Wilson intervals,
+mission verdicts against a required pass rate and, for ``--pair-static`` campaigns (whose static
+twins ``static_pair`` writes), whether failures come from the people or the room.
+Reports on a campaign folder are ``rei.runtime.presentation.campaign_report``'s job. This package
+never imports
+pybullet: runs happen in other processes.
+"""
+
+from rei.runtime.campaigns.campaign import CampaignResult, run_campaign
+from rei.runtime.campaigns.engines import CampaignEngine, DaskEngine, LocalEngine, check_engine
+from rei.runtime.campaigns.errors import CampaignError
+from rei.runtime.campaigns.execute import RunResult, execute_run
+from rei.runtime.campaigns.plan import CampaignPlan, RunSpec, derive_seed, plan_campaign
+from rei.runtime.campaigns.static_pair import static_twin, write_static_twins
+from rei.runtime.campaigns.stats import (
+    MissionVerdict,
+    PairedMission,
+    SuccessRate,
+    campaign_passed,
+    classify_pairs,
+    mission_verdicts,
+    success_rates,
+    wilson_interval,
+)
+from rei.runtime.campaigns.store import CampaignStore, RunRecord, record_row, write_tables
+
+__all__ = [
+    "CampaignEngine", "CampaignError", "CampaignPlan", "CampaignResult", "CampaignStore",
+    "DaskEngine", "LocalEngine", "MissionVerdict", "PairedMission", "RunRecord", "RunResult",
+    "RunSpec", "SuccessRate", "campaign_passed", "check_engine", "classify_pairs",
+    "derive_seed", "execute_run", "mission_verdicts", "plan_campaign", "record_row",
+    "run_campaign", "static_twin", "success_rates", "wilson_interval", "write_static_twins",
+    "write_tables",
+]
