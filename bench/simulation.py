@@ -60,12 +60,13 @@ from typing import Any
 import rei.runtime.robot as robot_package
 from rei.runtime.artifacts.monitor import load_monitor_config
 from rei.runtime.artifacts.world import WorldManifest, load_manifest
-from rei.runtime.commands.run import run_into
+from rei.runtime.raycast import scene_shapes
 from rei.runtime.robot.contract import Controller, ControllerContext
 from rei.runtime.robot.host import HostedController
 from rei.runtime.robot.selection import load_controller
+from rei.runtime.runs.session import run_into
 from rei.runtime.simulation.assembly import RunConfig, RunRecord, generate_world, run_mission
-from rei.runtime.simulation.sensors.laser import Laser2D, scene_shapes
+from rei.runtime.simulation.sensors.laser import Laser2D
 from rei.runtime.simulation.world.bullet import BulletWorld
 from rei.runtime.trace import TraceWriter
 

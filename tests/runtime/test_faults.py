@@ -21,9 +21,10 @@ from rei.lang.mission.faults import Activation, FaultDefinition
 from rei.runtime.artifacts.world import load_manifest
 from rei.runtime.errors import RunError
 from rei.runtime.messages import LaserScan
+from rei.runtime.raycast import scene_shapes
 from rei.runtime.simulation.assembly import generate_world
 from rei.runtime.simulation.faults import NO_FAULTS, FaultPlan, FaultStage, fault_stage
-from rei.runtime.simulation.sensors.laser import Laser2D, scene_shapes
+from rei.runtime.simulation.sensors.laser import Laser2D
 from tests.conftest import EXAMPLES
 
 

@@ -9,8 +9,9 @@ import pytest
 
 from rei.generators.concrete.build import load_concrete_mission
 from rei.runtime.artifacts.world import load_manifest
+from rei.runtime.raycast import merge_wall_tiles, scene_shapes
 from rei.runtime.simulation.assembly import generate_world
-from rei.runtime.simulation.sensors.laser import Laser2D, merge_wall_tiles, scene_shapes
+from rei.runtime.simulation.sensors.laser import Laser2D
 from rei.runtime.simulation.world.bullet import BulletWorld
 from tests.conftest import EXAMPLES
 

@@ -8,9 +8,9 @@ import math
 import numpy as np
 import pytest
 
+from rei.runtime.raycast import RayCaster, ShapeSet
 from rei.runtime.robot.contract import MapObstacle
 from rei.runtime.robot.navigator.mapcast import MapCaster
-from rei.runtime.simulation.sensors.laser import RayCaster, ShapeSet
 
 MAP = (
     MapObstacle("table", "static", 1.0, 0.5, 0.6, "box", 0.8, 0.6),

@@ -5,8 +5,7 @@ object) by comparing each beam with the map. A point near a map obstacle looks e
 it, but a beam that ends well short of where the map says it should is stopped by something
 the map does not have: a person standing against a wall or a pillar, on the robot's side of
 it. ``MapCaster`` answers that comparison with the laser model's own ray casting
-(``rei.runtime.simulation.sensors.laser.RayCaster``, the very step each scan takes), over the boxes
-and
+(``rei.runtime.raycast.RayCaster``, the very step each scan takes), over the boxes and
 cylinders of the map the robot was given.
 This module must never import pybullet, and never read anything but that map.
 """
@@ -18,8 +17,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from rei.runtime.raycast import RayCaster, ShapeSet
 from rei.runtime.robot.contract import MapObstacle
-from rei.runtime.simulation.sensors.laser import RayCaster, ShapeSet
 
 
 class MapCaster:

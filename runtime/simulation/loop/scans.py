@@ -14,9 +14,10 @@ import numpy as np
 
 from rei.runtime.artifacts.world import WorldManifest
 from rei.runtime.messages import LaserScan, ScanReading
+from rei.runtime.raycast import scene_shapes, shapes_of
 from rei.runtime.simulation.loop.board import Board
 from rei.runtime.simulation.loop.scheduler import Clock
-from rei.runtime.simulation.sensors.laser import Laser2D, scene_shapes, shapes_of
+from rei.runtime.simulation.sensors.laser import Laser2D
 
 
 @dataclass(frozen=True)
