@@ -70,14 +70,24 @@ class ControllerFault(Exception):
     """The controller raised, hung or answered nonsense; ``str(fault)`` is the reason."""
 
 
+class SelfTimedController:
+    """A controller that waits for its own answers, at most ``timeout`` wall seconds each,
+    and reports every failure as a ``ControllerFault`` (the controller host's caller,
+    rei.runtime.robot.host.caller.RemoteController): the watchdog hands it its timeout and
+    calls it directly, with no worker thread of its own."""
+
+    timeout: float | None
+
+    def close(self) -> None:
+        """Stop the controller for good."""
+
+
 class GuardedController:
     def __init__(self, controller: Controller, timeout: float | None) -> None:
-        from rei.runtime.robot.host import RemoteController  # noqa: PLC0415  (it imports us)
-
         self.controller = controller
         self.timeout = timeout
-        self._hosted: RemoteController | None = None
-        if isinstance(controller, RemoteController):
+        self._hosted: SelfTimedController | None = None
+        if isinstance(controller, SelfTimedController):
             self._hosted = controller
             controller.timeout = timeout  # it waits for its own answers
         self._jobs: queue.SimpleQueue[_Job | None] = queue.SimpleQueue()

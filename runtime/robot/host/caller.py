@@ -1,62 +1,26 @@
-"""The controller host: the robot under test runs in its own process, behind messages.
-
-A controller is a user's program, called every control tick. Inside the simulation's process
-it could falsify its own test: patch REI's evaluator in memory, register an ``atexit`` hook
-that rewrites summary.json, write a fake exit status into the supervisor's pipe. So
-``HostedController`` runs it in a child process (``python -m rei.runtime.robot.host``,
-started with ``rei.runtime.platform.processes.start_child``: its own process group, dead with the
-thread that started it, no file descriptor but its two pipe ends and stderr, its working
-folder a fresh temporary one) and talks to it only through messages:
-
-* requests (simulation -> host) are pickles, length-prefixed: the simulation trusts its own
-  side; a step's scan is sent once (the laser is slower than the control loop): the host
-  keeps the controller's read-only copy for the next steps that carry the same scan;
-* answers (host -> simulation) are one JSON line each, never a pickle (unpickling would let
-  the controller run code in the simulation): plain numbers, strings and bools, decoded with
-  NaN and Infinity refused, at most ``MAX_ANSWER`` bytes, then checked again by
-  ``checked_command`` / ``checked_feedback`` as an in-process answer would be. The host's
-  ``print`` goes to stderr, so a chatty controller cannot break the framing.
-
-One round trip per control tick: the host answers ``step`` and ``send_goal`` (when they
-return normally), then calls the controller's ``feedback()`` itself and sends its answer as a
-second line (``FEEDBACK_AFTER``). ``feedback()`` on this side reads that line when it is
-asked for, and keeps the feedback until the next call that can change the controller's state
-(``reset``, ``send_goal``, ``cancel_goal``, ``step``); only when it holds none does it ask
-the host. This relies on the ``Controller`` contract that ``feedback()`` is a pure function of
-the controller's state. A feedback line nobody asked for before the next request is read and
-dropped: what it says is no fault (no feedback was asked for), but a host that does not
-finish it within the watchdog, dies or floods the pipe meanwhile is, named ``feedback()``.
-
-Each answer is awaited at most ``timeout`` wall seconds (select on the pipe): a hang, even in
-C holding the interpreter lock, stalls only the host, and the fault names the call. A host
-that dies (``os._exit``, a signal, ``sys.exit`` from a thread) is a ``ControllerFault``
-naming how it died. Every fault, and ``close``, kills the host's whole process group and
-reaps it, so nothing the controller started writes anything after the run. The host's side
-is ``serve``; it runs the same ``load_controller`` the in-process path runs. This module
-must never import pybullet.
+"""The caller's side of the controller host: ``RemoteController`` (the simulation's side of
+the robot contract, whatever carries it) and ``HostedController`` (over the pipes of a child
+process). This module must never import pybullet, nor unpickle what a controller sent.
 """
 
 from __future__ import annotations
 
 import contextlib
-import json
 import math
 import os
 import pickle
 import select
-import signal
-import struct
 import subprocess
 import sys
 import tempfile
 import time
 import weakref
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from dataclasses import replace
-from typing import IO, Any, BinaryIO, TypeVar
+from typing import IO, Any
 
 from rei.runtime.errors import RunError
-from rei.runtime.messages import LaserScan, NavState
+from rei.runtime.messages import LaserScan
 from rei.runtime.platform.processes import Child, start_child, stop_child
 from rei.runtime.robot.contract import (
     ContractViolation,
@@ -67,90 +31,26 @@ from rei.runtime.robot.contract import (
     VelocityCommand,
     checked_command,
     checked_feedback,
-    read_only_scan,
+)
+from rei.runtime.robot.host.answerer import main
+from rei.runtime.robot.host.wire import (
+    ANSWERS,
+    FEEDBACK_AFTER,
+    LENGTH,
+    MAX_ANSWER,
+    Answer,
+    command_of,
+    decode_answer,
+    describe_status,
+    feedback_of,
+    reason_text,
+    violation_reason,
 )
 from rei.runtime.robot.teleop import SCRIPTS
-from rei.runtime.robot.watchdog import ControllerFault, raised
-
-MAX_ANSWER = 1 << 20
-"""Bytes one answer of the host may take (a controller printing into the pipe is a fault)."""
-
-Answer = TypeVar("Answer")
-
-MAX_REASON = 2000
-"""Characters of a fault's reason the host may give (an exception's message may be long)."""
-
-_ANSWERS = {"load": ("ok", "error"), "step": ("ok", "violation"),
-            "feedback": ("ok", "violation")}
-"""The keys an answer to each request may have besides "raised" (other requests: "ok": null)."""
-
-FEEDBACK_AFTER = frozenset({"step", "send_goal"})
-"""Requests after whose normal answer the host sends the controller's feedback as well."""
-
-_LENGTH = struct.Struct("!I")
-"""The length prefix of a request."""
+from rei.runtime.robot.watchdog import ControllerFault, SelfTimedController
 
 
-def describe_status(status: int) -> str:
-    """How a process ended, from its exit status (negative: the signal that ended it)."""
-    if status < 0:
-        try:
-            name = f" ({signal.Signals(-status).name})"
-        except ValueError:
-            name = ""
-        return f"was killed by signal {-status}{name}"
-    return f"exited with status {status}"
-
-
-def _no_constant(token: str) -> Any:
-    raise ValueError(f"{token} is not a number an answer may hold")
-
-
-def decode_answer(line: bytes) -> dict[str, Any]:
-    """One answer line as a JSON object; ValueError saying why it is not one."""
-    try:
-        value = json.loads(line.decode("utf-8"), parse_constant=_no_constant)
-    except (UnicodeDecodeError, ValueError, RecursionError) as exc:
-        raise ValueError(f"not a JSON answer ({exc})") from None
-    if not isinstance(value, dict) or len(value) != 1:
-        raise ValueError("expected a JSON object with one key")
-    return value
-
-
-def _number(value: Any) -> Any:
-    """A JSON number as the controller sent it (its type is checked by the contract)."""
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ValueError(f"expected a number, found {type(value).__name__}")
-    return value
-
-
-def command_of(answer: Any) -> VelocityCommand:
-    """The command in a step() answer: a list of two JSON numbers."""
-    if not isinstance(answer, list) or len(answer) != 2:
-        raise ValueError("expected a list of two numbers")
-    return VelocityCommand(_number(answer[0]), _number(answer[1]))
-
-
-def feedback_of(answer: Any) -> GoalFeedback:
-    """The feedback in a feedback() answer: state, goal, distance ("inf" allowed), message."""
-    if not isinstance(answer, dict) or set(answer) != {"state", "goal", "distance", "message"}:
-        raise ValueError("expected an object with state, goal, distance and message")
-    try:
-        state = NavState(answer["state"])
-    except ValueError:
-        raise ValueError(f"unknown goal state {str(answer['state'])[:40]!r}") from None
-    distance = answer["distance"]
-    if distance == "inf":
-        distance = math.inf
-    elif distance is not None:
-        distance = _number(distance)
-    goal, message = answer["goal"], answer["message"]
-    if (goal is not None and not isinstance(goal, str)) or not isinstance(message, str):
-        raise ValueError("expected the goal and the message as strings")
-    return GoalFeedback(state, goal, distance, message)
-
-
-class RemoteController:
+class RemoteController(SelfTimedController):
     """The simulation's side of the robot contract, whatever carries it: the ``Controller``
     protocol, plus ``close``.
 
@@ -231,12 +131,12 @@ class RemoteController:
             non_finite = False
             if isinstance(reason, list) and len(reason) == 2:
                 reason, non_finite = reason
-            raise self._fault(_violated(what, _text(reason), non_finite is True))
+            raise self._fault(violation_reason(what, reason_text(reason), non_finite is True))
         try:
             value = decode(answer.get("ok"))
             return check(value)
         except ContractViolation as problem:
-            raise self._fault(_violated(what, str(problem), problem.non_finite)) from None
+            raise self._fault(violation_reason(what, str(problem), problem.non_finite)) from None
         except ValueError as exc:
             raise self._fault(f"controller {what}() answered nonsense: {exc}") from None
 
@@ -280,9 +180,9 @@ class RemoteController:
         except ValueError as exc:
             raise self._fault(f"controller {what}() answered nonsense: {exc}") from None
         if "raised" in answer:
-            raise self._fault(_text(answer["raised"]))
+            raise self._fault(reason_text(answer["raised"]))
         key = next(iter(answer))  # decode_answer: exactly one
-        allowed = _ANSWERS.get(op, ("ok",))
+        allowed = ANSWERS.get(op, ("ok",))
         if key not in allowed:
             raise self._fault(f"controller {what}() answered nonsense: expected one of "
                               f"{', '.join(allowed)}, found {key[:40]!r}")
@@ -320,7 +220,7 @@ class HostedController(RemoteController):
         """The scan of the last step sent: the host keeps its copy for the next steps."""
         self._home = tempfile.TemporaryDirectory(prefix="rei-controller-")
         self._process: Child = start_child(
-            [sys.executable, "-c", "from rei.runtime.robot.host import main; main()"],
+            [sys.executable, "-c", "from rei.runtime.robot.host.answerer import main; main()"],
             stdin=subprocess.PIPE, stdout=subprocess.PIPE, cwd=self._home.name, warm=main)
         assert self._process.stdin is not None and self._process.stdout is not None
         self._requests: IO[bytes] = self._process.stdin
@@ -354,8 +254,8 @@ class HostedController(RemoteController):
             raise RunError(f"--controller: '{spec}' could not be started: {fault}") from None
         if "error" in answer:
             self.close()
-            raise RunError(_text(answer["error"]))
-        self._name = _text(answer["ok"])
+            raise RunError(reason_text(answer["error"]))
+        self._name = reason_text(answer["ok"])
 
     @property
     def name(self) -> str:
@@ -381,8 +281,8 @@ class HostedController(RemoteController):
             self.load_wait = time.monotonic() - began
         if "error" in answer:
             raise self._fault(f"the controller's process could not load '{self.spec}': "
-                              f"{_text(answer['error'])}")
-        self._name = _text(answer["ok"])
+                              f"{reason_text(answer['error'])}")
+        self._name = reason_text(answer["ok"])
 
     @property
     def pid(self) -> int:
@@ -395,7 +295,7 @@ class HostedController(RemoteController):
 
     def _request(self, op: str, args: tuple[Any, ...]) -> bytes:
         request = pickle.dumps((op, args), protocol=pickle.HIGHEST_PROTOCOL)
-        return _LENGTH.pack(len(request)) + request
+        return LENGTH.pack(len(request)) + request
 
     def _send(self, data: bytes, deadline: float | None) -> bool:
         """Write the request; False when the host does not take it before the deadline."""
@@ -456,18 +356,6 @@ def built_in(spec: str) -> bool:
     return spec in ("reference", "teleop")
 
 
-def _text(value: Any) -> str:
-    """A reason the host gave, as the run reports it (at most ``MAX_REASON`` characters)."""
-    text = value if isinstance(value, str) else json.dumps(value)
-    return text if len(text) <= MAX_REASON else text[:MAX_REASON - 3] + "..."
-
-
-def _violated(what: str, reason: str, non_finite: bool) -> str:
-    kind = "a non-finite" if non_finite else "an invalid"
-    noun = "command" if what == "step" else "feedback"
-    return f"controller {what}() sent {kind} {noun}: {reason}"
-
-
 def _stop(process: Child, home: tempfile.TemporaryDirectory[str]) -> None:
     stop_child(process)
     for stream in (process.stdin, process.stdout):
@@ -476,116 +364,3 @@ def _stop(process: Child, home: tempfile.TemporaryDirectory[str]) -> None:
                 stream.close()
     with contextlib.suppress(OSError):
         home.cleanup()
-
-
-# -- the host's side ------------------------------------------------------------------------
-
-def _answer_of(what: str, controller: Any, args: tuple[Any, ...]) -> dict[str, Any]:
-    """Call the controller; its answer as a JSON-ready object (never raises)."""
-    try:
-        value = getattr(controller, what)(*args)
-    except BaseException as exc:  # noqa: BLE001  (KeyboardInterrupt and SystemExit too)
-        return {"raised": raised(what, exc)}
-    if what not in ("step", "feedback"):
-        return {"ok": None}
-    try:
-        if what == "step":
-            cmd = checked_command(value)
-            return {"ok": [cmd.linear, cmd.angular]}
-        fb = checked_feedback(value)
-    except ContractViolation as problem:
-        return {"violation": [str(problem), problem.non_finite]}
-    except Exception as exc:  # noqa: BLE001  (a user's subclass whose fields raise)
-        return {"raised": raised(what, exc) + " while its answer was read"}
-    distance = fb.distance_remaining
-    return {"ok": {"state": fb.state.value, "goal": fb.goal,
-                   "distance": "inf" if distance == math.inf else distance,
-                   "message": fb.message}}
-
-
-def _read_exactly(stream: BinaryIO, size: int) -> bytes | None:
-    data = b""
-    while len(data) < size:
-        chunk = stream.read(size - len(data))  # buffered: all of it unless the pipe closed
-        if not chunk:
-            return None
-        data += chunk
-    return data
-
-
-class HostSide:
-    """The host's side of the robot contract, whatever carries it: one request in, its
-    answer lines out (JSON, never a pickle), the controller called in this thread. The pipe
-    host (``serve``) and the bus's robot (`rei robot`) both answer with it, so a controller
-    answers the same bytes whichever way it is reached. ``load`` makes the controller for
-    a load request's arguments (RunError: the answer says why)."""
-
-    def __init__(self, load: Callable[..., Any]) -> None:
-        self._load = load
-        self.controller: Any = None
-        self._scan: LaserScan | None = None  # the controller's read-only copy of the last scan
-
-    def answers(self, op: str, args: tuple[Any, ...]) -> Iterator[bytes]:
-        """The answer lines (each without its newline) to the request ``op(*args)``, each
-        as soon as it is known (the feedback after a step's command is computed after the
-        command is sent: a hang there is the feedback's, not the step's)."""
-        if op == "load":
-            try:
-                self.controller = self._load(*args)
-                self._scan = None
-                answer: dict[str, Any] = {"ok": str(getattr(self.controller, "name",
-                                                           args[0] if args else "?"))}
-            except RunError as exc:
-                answer = {"error": str(exc)}
-            yield _line(answer)
-            return
-        if op == "step":  # (observation, whether its scan is the last step's)
-            observation, same = args
-            if not same:
-                self._scan = read_only_scan(observation.scan)
-            args = (replace(observation, scan=self._scan),)
-        answer = _answer_of(op, self.controller, args)
-        yield _line(answer)
-        if op in FEEDBACK_AFTER and "ok" in answer:  # what the next tick asks first
-            yield _line(_answer_of("feedback", self.controller, ()))
-
-
-def _line(answer: dict[str, Any]) -> bytes:
-    return json.dumps(answer, allow_nan=False).encode("ascii")
-
-
-def serve(requests: BinaryIO, answers: BinaryIO) -> None:
-    """The host's loop: load the controller, then answer each request until the end of
-    the requests (the simulation closed the pipe or was killed)."""
-    from rei.runtime.robot.selection import load_controller  # noqa: PLC0415
-
-    host = HostSide(load_controller)
-    while True:
-        head = _read_exactly(requests, _LENGTH.size)
-        if head is None:
-            return
-        body = _read_exactly(requests, _LENGTH.unpack(head)[0])
-        if body is None:
-            return
-        op, args = pickle.loads(body)  # noqa: S301  (written by the simulation: trusted)
-        for line in host.answers(op, args):
-            answers.write(line + b"\n")
-            answers.flush()
-
-
-def main() -> None:
-    # The pipes move to descriptors of their own; 0 reads nothing and 1 is stderr, so what
-    # the controller prints cannot be taken for an answer.
-    # Buffered: a request's length prefix and body usually arrive in one read of the pipe.
-    requests = os.fdopen(os.dup(0), "rb")
-    answers = os.fdopen(os.dup(1), "wb")
-    devnull = os.open(os.devnull, os.O_RDONLY)
-    os.dup2(devnull, 0)
-    os.close(devnull)
-    os.dup2(2, 1)
-    sys.stdout = sys.stderr
-    serve(requests, answers)
-
-
-if __name__ == "__main__":
-    main()
