@@ -42,8 +42,9 @@ from rei.lang.errors import ReiError
 from rei.runtime.bus import BusError, connect
 from rei.runtime.bus.router import free_port, start
 from rei.runtime.bus.schema import TRACE, encode_message
-from rei.runtime.commands.run import run_into, write_page
+from rei.runtime.commands.run import write_page
 from rei.runtime.messages import LaserScan, OdometryReading, ScanReading
+from rei.runtime.runs.session import run_into
 
 REPO = Path(__file__).resolve().parent.parent
 

@@ -67,7 +67,7 @@ def missions_of(suite: str, folder: Path) -> list[Path]:
 
 
 def run_one(job: tuple[str, str, Path, Path]) -> Outcome:
-    from rei.runtime.commands.run import run_into
+    from rei.runtime.runs.session import run_into
 
     suite, controller, mission, out = job
     summary, record = run_into(mission, out, controller, 0, watchdog=None, monitor=False)

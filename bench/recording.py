@@ -32,10 +32,10 @@ sys.path.insert(0, str(ROOT))
 
 from bench.monitor import scenario  # noqa: E402
 from rei.runtime.commands.replay import replay  # noqa: E402
-from rei.runtime.commands.run import run_into  # noqa: E402
 from rei.runtime.messages import Sample, StreamHeader  # noqa: E402
 from rei.runtime.observation import recordings as recording  # noqa: E402
 from rei.runtime.observation.recordings import McapRecorder  # noqa: E402
+from rei.runtime.runs.session import run_into  # noqa: E402
 from rei.runtime.trace import TraceWriter  # noqa: E402
 
 MISSION = ROOT / "examples" / "small_dense" / "small_dense.mission"

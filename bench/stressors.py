@@ -68,7 +68,7 @@ def closest_approach(trace: Path, name: str | None) -> float:
 
 
 def run_one(job: tuple[str, str, Path, int, Path, str | None]) -> Outcome:
-    from rei.runtime.commands.run import run_into
+    from rei.runtime.runs.session import run_into
 
     stressor, controller, mission, seed, out, mover = job
     summary, _ = run_into(mission, out, controller, seed, watchdog=None)

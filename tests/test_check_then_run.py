@@ -25,7 +25,7 @@ from hypothesis import strategies as st
 from rei.lang.cli import main as rei_gen
 from rei.lang.errors import ReiError
 from rei.lang.workspace import Workspace
-from rei.runtime.commands.run import run_into
+from rei.runtime.runs.session import run_into
 
 ROWS = 2
 COLS = 4

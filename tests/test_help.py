@@ -24,8 +24,9 @@ from rei.lang.cli import DESCRIPTION as GEN_DESCRIPTION
 from rei.lang.cli_support import build_parser
 from rei.lang.vepl_parameters import FUNCTIONS_HELP
 from rei.runtime.commands.cli import DESCRIPTION as RUN_DESCRIPTION
-from rei.runtime.commands.run import CONTROLLER_HELP, exit_code, final_line
+from rei.runtime.commands.run import CONTROLLER_HELP, final_line
 from rei.runtime.robot.teleop import SCRIPTS
+from rei.runtime.runs.session import exit_code
 from tests.campaign.records import summary_for
 
 PROGRAMS = {"rei": (RUN_DESCRIPTION, "rei.runtime.commands"),

@@ -60,7 +60,7 @@ def test_control_characters_from_the_input_are_shown_not_interpreted(tmp_path: P
 
 
 def test_a_recordings_texts_are_shown_not_interpreted(tmp_path: Path) -> None:
-    from rei.runtime.commands.run import run_into
+    from rei.runtime.runs.session import run_into
 
     run = tmp_path / "run"
     run_into(REPO / "examples/simple_wall/simple_wall.mission", run, controller="teleop",

@@ -22,14 +22,8 @@ from rei.lang.cli_support import EXIT_BAD_INPUT, EXIT_RUN_ERROR
 from rei.lang.errors import printable_lines
 from rei.lang.vepl_parameters import add_functions_option, add_parameter_option, parameter_values
 from rei.runtime.commands.robot import add_bus_options, join_bus
-from rei.runtime.commands.run import (
-    EVENTS,
-    REPLAY_VERBOSE_HELP,
-    TRACE,
-    add_verbosity,
-    print_results,
-    write_page,
-)
+from rei.runtime.commands.run import REPLAY_VERBOSE_HELP, add_verbosity, print_results, write_page
+from rei.runtime.runs.session import EVENTS, TRACE
 
 EXAMPLES = """\
 examples:
@@ -69,8 +63,8 @@ def run(args: argparse.Namespace) -> int:
     from rei.runtime.bus.reception import TraceStream, ask_header  # noqa: PLC0415
     from rei.runtime.bus.schema import TRACE as TRACE_KEY  # noqa: PLC0415
     from rei.runtime.bus.schema import config_key  # noqa: PLC0415
-    from rei.runtime.commands.replay import judge_stream  # noqa: PLC0415
     from rei.runtime.observation.errors import MonitorError  # noqa: PLC0415
+    from rei.runtime.observation.judgement import judge_stream  # noqa: PLC0415
     from rei.runtime.observation.monitor import generate_automata  # noqa: PLC0415
     from rei.runtime.observation.monitor.functions import load_functions  # noqa: PLC0415
 

@@ -96,8 +96,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 
 def _check(args: argparse.Namespace) -> None:
-    from rei.runtime.commands.run import MAX_SEED  # noqa: PLC0415
     from rei.runtime.errors import RunError  # noqa: PLC0415
+    from rei.runtime.runs.session import MAX_SEED  # noqa: PLC0415
 
     if args.mission.suffix != ".mission" or not args.mission.is_file():
         raise RunError(f"{args.mission}: expected a .mission file to shrink, found "

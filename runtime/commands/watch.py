@@ -148,13 +148,14 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _watch(args: argparse.Namespace) -> int:
-    from rei.runtime.commands.run import exit_code, verdict_lines  # noqa: PLC0415
+    from rei.runtime.commands.run import verdict_lines  # noqa: PLC0415
     from rei.runtime.observation.monitor.functions import load_functions  # noqa: PLC0415
     from rei.runtime.presentation.live.foxglove import FoxgloveView  # noqa: PLC0415
     from rei.runtime.presentation.live.frames import StreamSource, View, Watcher  # noqa: PLC0415
     from rei.runtime.presentation.live.sources import BusSource, RecordedSource  # noqa: PLC0415
     from rei.runtime.presentation.live.terminal import Keys, LineView, TerminalView  # noqa: PLC0415
     from rei.runtime.results import judge  # noqa: PLC0415
+    from rei.runtime.runs.session import exit_code  # noqa: PLC0415
 
     if args.replay is not None and not args.replay.is_file():
         print(f"rei watch: error: {args.replay}: expected a trace.jsonl or recording.mcap "

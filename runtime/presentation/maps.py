@@ -16,7 +16,7 @@ import numpy as np
 
 from rei.catalogue import ObjectType, Tile, default_catalogue
 from rei.catalogue.model import Kind
-from rei.runtime.campaigns.folder_reader import Paths, SignalEvent
+from rei.runtime.observation.run_folder import Paths, SignalEvent
 from rei.runtime.presentation.figures import TEXT_PT, new_figure
 
 if TYPE_CHECKING:

@@ -7,10 +7,10 @@ The server imports what a run needs (``PRELOAD``: numpy, pybullet, textX and REI
 the monitor, the navigator, matplotlib for the run page), then, for each request, forks a
 child that is exactly the process `python -m rei.runtime.commands run ...` would have been: own
 process group, death with the server (so with the campaign), the run's standard output and
-error, environment and working folder, and `rei.runtime.commands.cli.main` on the run's arguments. A
-run is one request at a time over a socket pair (``SOCK_SEQPACKET``: one message each, the
-output files' descriptors passed along): the server answers with the child's pid, kills its
-process group when asked ("kill"), and answers with its exit status once it has ended (the
+error, environment and working folder, running the program ``PROGRAM`` by name on the run's
+arguments. A run is one request at a time over a socket pair (``SOCK_SEQPACKET``: one message
+each, the output files' descriptors passed along): the server answers with the child's pid,
+kills its process group when asked ("kill"), and answers with its exit status once it has ended (the
 group swept first, as ``child_status`` does). So the campaign's watchdog, Ctrl-C and crash
 handling see the same process they saw before, only started warm.
 
@@ -34,6 +34,7 @@ import gc
 import importlib
 import json
 import os
+import runpy
 import select
 import socket
 import subprocess
@@ -311,16 +312,28 @@ def preload() -> None:
     gc.freeze()
 
 
-def _run(request: dict[str, Any]) -> int:
-    """The forked child: `rei` with the run's arguments, environment and folder."""
-    from rei.runtime.commands import cli  # noqa: PLC0415
+PROGRAM = "rei.runtime.commands"
+"""The program a run is: what `python -m PROGRAM ARGS` runs (the campaign's runner,
+rei.runtime.campaigns.execute.DEFAULT_RUNNER). The child runs it by name, as that process
+would: this wing never imports the command line."""
 
+
+def _run(request: dict[str, Any]) -> int:
+    """The forked child: `python -m rei.runtime.commands` (`rei`) with the run's arguments,
+    environment and folder."""
     os.environ.clear()
     os.environ.update(request["env"])
     tempfile.tempdir = None  # found again from the run's TMPDIR, not the server's
-    args = [str(a) for a in request["args"]]
-    sys.argv = [str(cli.__file__), *args]
-    return cli.main(args)
+    sys.argv = [PROGRAM, *(str(a) for a in request["args"])]
+    try:
+        runpy.run_module(PROGRAM, run_name="__main__", alter_sys=True)
+    except SystemExit as ended:
+        code = ended.code
+        if code is None or isinstance(code, int):
+            return code or 0
+        print(code, file=sys.stderr)
+        return 1
+    return 0
 
 
 def serve(sock: socket.socket, fingerprint: str) -> None:

@@ -53,6 +53,7 @@ import sys
 import tempfile
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from types import FrameType
@@ -201,28 +202,37 @@ def _signal_group(process: Child, number: int) -> None:
         pass
 
 
-def supervise(request: RunRequest) -> SupervisedRun:
-    """Run ``request`` in a child process and wait for it under the liveness limits; a child
-    that dies or hangs gets summary.json written here (outcome error)."""
+ChildWork = Callable[[RunRequest, Any], tuple[int, dict[str, Any]]]
+"""What the child does with the request and its channel to the supervisor (the run's probe):
+(exit status, what the supervisor reads back). `rei run` gives
+``rei.runtime.commands.run.child_work``: the supervisor knows nothing of what a run is."""
+
+
+def supervise(request: RunRequest, work: ChildWork, module: str) -> SupervisedRun:
+    """Run ``request`` in a child process doing ``work`` and wait for it under the liveness
+    limits; a child that dies or hangs gets summary.json written here (outcome error). The
+    child is forked when it can be; otherwise it is `python -m module`, whose main calls
+    ``child_main`` with the same ``work``."""
     # The folders of runs killed with SIGKILL (this process could not remove them) first.
     sweep_stale(SCRATCH_PREFIX)
     scratch = make_scratch(SCRATCH_PREFIX)
     try:
-        return _supervise(request, scratch)
+        return _supervise(request, scratch, work, module)
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
 
 
-def _supervise(request: RunRequest, scratch: str) -> SupervisedRun:
+def _supervise(request: RunRequest, scratch: str, work: ChildWork,
+               module: str) -> SupervisedRun:
     read_end, write_end = os.pipe()
     args = [str(write_end), request.to_json(), scratch]
-    argv = [sys.executable, "-m", "rei.runtime.runs.supervisor", *args]
+    argv = [sys.executable, "-m", module, *args]
     try:
         # The child's stdout is this process's stderr: stdout carries the results `rei run`
         # prints, never what a controller or a library prints while running. Forked when it
         # can be (rei.runtime.platform.warm): REI's imports are then those this process has made.
         process = start_child(argv, stdout=2, pass_fds=(write_end,),
-                              warm=lambda: child_main(args))
+                              warm=lambda: child_main(args, work))
     finally:
         os.close(write_end)
     watch = _Watch()
@@ -410,8 +420,9 @@ def _save_traceback(out_dir: Path, exc: BaseException) -> str:
     return f"please report it with {out_dir / INTERNAL_ERROR_LOG} and the command line"
 
 
-def child_main(argv: list[str]) -> int:
-    """The child: run the request, report to the supervisor, return the exit status.
+def child_main(argv: list[str], work: ChildWork) -> int:
+    """The child: do ``work`` on the request, report to the supervisor, return the exit
+    status.
     ``argv``: the pipe's descriptor, the request, and the folder for temporary files that
     the supervisor removes (optional)."""
     fd, text = int(argv[0]), argv[1]
@@ -423,12 +434,11 @@ def child_main(argv: list[str]) -> int:
     one_math_thread(os.environ)  # before numpy is imported; the campaign's runs have it too
     channel = _Channel(fd)
     from rei.lang.errors import LanguageError, ReiError, printable_lines  # noqa: PLC0415
-    from rei.runtime.commands.run import execute_request  # noqa: PLC0415
 
     request = RunRequest.from_json(text)
     result: dict[str, Any] = {}
     try:
-        status, result = execute_request(request, channel)
+        status, result = work(request, channel)
     except LanguageError as exc:
         for diagnostic in exc.diagnostics:
             print(diagnostic, file=sys.stderr)
@@ -454,7 +464,3 @@ def child_main(argv: list[str]) -> int:
     except KeyboardInterrupt:
         pass
     return status
-
-
-if __name__ == "__main__":
-    sys.exit(child_main(sys.argv[1:]))

@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 
 from rei.runtime.bus.router import Router, start
-from rei.runtime.commands.run import run_into
+from rei.runtime.runs.session import run_into
 from tests.bus.conftest import SAFETY
 from tests.conftest import EXAMPLES, REPO
 

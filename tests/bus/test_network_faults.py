@@ -14,9 +14,9 @@ import pytest
 
 from rei.runtime.bus.distributed_run import KEYFRAME, keyframe
 from rei.runtime.bus.reception import TraceStream, ranges
-from rei.runtime.commands.replay import judge_stream
-from rei.runtime.commands.run import run_into
+from rei.runtime.observation.judgement import judge_stream
 from rei.runtime.observation.monitor import generate_automata
+from rei.runtime.runs.session import run_into
 from rei.runtime.trace import read_trace, read_trace_end
 from tests.conftest import EXAMPLES
 

@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 from rei.runtime.bus.router import free_port
-from rei.runtime.commands.run import run_into
+from rei.runtime.runs.session import run_into
 from tests.bus.conftest import SAFETY, stop_all
 from tests.conftest import EXAMPLES, REPO
 

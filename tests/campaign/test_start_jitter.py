@@ -13,8 +13,8 @@ from hypothesis import strategies as st
 
 from rei.catalogue import Box, Cylinder
 from rei.runtime.artifacts.world import WorldManifest, load_manifest
-from rei.runtime.commands.run import run_into
 from rei.runtime.errors import RunError
+from rei.runtime.runs.session import run_into
 from rei.runtime.simulation.assembly import generate_world
 from rei.runtime.simulation.world.start_jitter import START_JITTER, StartJitter, jitter_start
 

@@ -8,10 +8,10 @@ from pathlib import Path
 import pytest
 
 from rei.runtime.commands.cli import main as rei
-from rei.runtime.commands.run import run_into
 from rei.runtime.observation.evaluator.signal_log import read_csv
 from rei.runtime.observation.model.geometry import FootprintSet
 from rei.runtime.observation.monitor import MonitorSink
+from rei.runtime.runs.session import run_into
 from rei.runtime.trace import read_trace
 from tests.conftest import EXAMPLES
 from tests.monitor.helpers import geom

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from rei.runtime.commands.run import run_into
 from rei.runtime.results import RunSummary
+from rei.runtime.runs.session import run_into
 from tests.conftest import EXAMPLES
 
 REPO = Path(__file__).resolve().parents[2]

@@ -19,9 +19,9 @@ import pytest
 from rei.runtime.commands.cli import main as rei
 from rei.runtime.commands.demo import generate_suite
 from rei.runtime.commands.replay import replay
-from rei.runtime.commands.run import run_into
 from rei.runtime.results import RunSummary, Verdict
 from rei.runtime.robot.navigator.reference import ReferenceNavigator
+from rei.runtime.runs.session import run_into
 
 REPO = Path(__file__).resolve().parents[2]
 SEED = 1

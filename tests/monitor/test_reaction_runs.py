@@ -15,8 +15,8 @@ import pytest
 from bench.defects.timing import ControlLatency
 from rei.runtime.commands.demo import generate_suite
 from rei.runtime.commands.replay import replay
-from rei.runtime.commands.run import run_into
 from rei.runtime.results import Verdict
+from rei.runtime.runs.session import run_into
 
 REPO = Path(__file__).resolve().parents[2]
 SEED = 1

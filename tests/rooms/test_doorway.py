@@ -89,7 +89,7 @@ def test_doorway_rooms_check_clean_and_are_a_pure_function_of_the_seed(tmp_path:
 
 
 def _run(mission: Path, out: Path, controller: str) -> dict[str, object]:
-    from rei.runtime.commands.run import run_into
+    from rei.runtime.runs.session import run_into
 
     run_into(mission, out, controller, 0, watchdog=None)
     summary: dict[str, object] = json.loads((out / "summary.json").read_text())

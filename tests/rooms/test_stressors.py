@@ -340,7 +340,7 @@ def _closest_approach(run: Path, name: str) -> float:
 
 
 def _run(mission: Path, out: Path, controller: str = "reference") -> dict[str, object]:
-    from rei.runtime.commands.run import run_into
+    from rei.runtime.runs.session import run_into
 
     run_into(mission, out, controller, 0, watchdog=None)
     summary: dict[str, object] = json.loads((out / "summary.json").read_text())

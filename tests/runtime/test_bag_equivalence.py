@@ -18,7 +18,7 @@ import pytest
 
 from rei.runtime.commands.cli import main as rei
 from rei.runtime.commands.replay import replay_bag
-from rei.runtime.commands.run import run_into
+from rei.runtime.runs.session import run_into
 from tests.conftest import EXAMPLES
 
 SCENES = Path(__file__).parent / "scenes"

@@ -13,10 +13,10 @@ from pathlib import Path
 import pytest
 
 from rei.lang.errors import LanguageError
-from rei.runtime.commands.run import run_into
 from rei.runtime.observation.monitor import generate_automata
 from rei.runtime.runs import cache as cache_module
 from rei.runtime.runs.cache import CACHE_VARIABLE, ArtifactCache
+from rei.runtime.runs.session import run_into
 from rei.runtime.simulation.assembly import generate_world
 
 from ..conftest import EXAMPLES

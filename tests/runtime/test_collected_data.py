@@ -20,10 +20,10 @@ from rei.lang.vepl.document import load_vepl
 from rei.lang.workspace import Workspace
 from rei.runtime.artifacts.monitor import load_monitor_config
 from rei.runtime.commands.replay import replay
-from rei.runtime.commands.run import run_into
 from rei.runtime.errors import RunError
 from rei.runtime.observation.monitor import MonitorSink
 from rei.runtime.observation.monitor.needs import needed_data
+from rei.runtime.runs.session import run_into
 from rei.runtime.trace import TraceError, read_trace, read_trace_end
 from tests.runtime.test_cli_streams import rei
 

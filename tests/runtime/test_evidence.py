@@ -27,9 +27,9 @@ from rosbags.typesys import Stores, get_typestore
 
 from rei.runtime.commands.cli import main as rei
 from rei.runtime.commands.replay import replay
-from rei.runtime.commands.run import run_into
 from rei.runtime.observation.recordings import TRACE_TOPIC
 from rei.runtime.results import judge
+from rei.runtime.runs.session import run_into
 from rei.runtime.trace import TraceError
 from tests.conftest import EXAMPLES
 

@@ -30,9 +30,9 @@ from rei.lang.room.model import WALKING_SPEEDS
 from rei.lang.room.spline import CatmullRom
 from rei.runtime.artifacts.monitor import load_monitor_config
 from rei.runtime.artifacts.world import load_manifest
-from rei.runtime.commands.run import run_into
 from rei.runtime.messages.sink import SampleList
 from rei.runtime.robot import Observation, VelocityCommand
+from rei.runtime.runs.session import run_into
 from rei.runtime.simulation.animator.engine import Animated, Animator, Reactions
 from rei.runtime.simulation.animator.reactive import (
     Agent,

@@ -377,7 +377,7 @@ def test_a_human_on_the_line_of_a_crawling_robot_keeps_to_one_side(
     requirement holds. The robot is the reference without its side hold near people
     (``Creeping``), with which the search found this run: the hold alone hides the human's
     dithering here. The reference itself passes too."""
-    from rei.runtime.commands.run import run_into  # noqa: PLC0415
+    from rei.runtime.runs.session import run_into  # noqa: PLC0415
     from rei.runtime.simulation.animator import engine as paths  # noqa: PLC0415
 
     monkeypatch.chdir(REPO)  # `tests.runtime.test_turn_commitment:Creeping` is imported here

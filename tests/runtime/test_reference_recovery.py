@@ -229,7 +229,7 @@ def test_a_generated_small_room_that_used_to_abort_now_completes(tmp_path: Path)
     import argparse
 
     from rei.lang.commands import rooms
-    from rei.runtime.commands.run import run_into
+    from rei.runtime.runs.session import run_into
 
     parser = argparse.ArgumentParser()
     rooms.register(parser.add_subparsers())

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from rei.runtime.commands.run import run_into
 from rei.runtime.results import RunSummary
+from rei.runtime.runs.session import run_into
 from tests.conftest import EXAMPLES
 
 SIMPLE_WALL = EXAMPLES / "simple_wall" / "simple_wall.mission"

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from rei.runtime.commands.cli import main
-from rei.runtime.commands.run import run_into
 from rei.runtime.messages.sink import SampleList
+from rei.runtime.runs.session import run_into
 from rei.runtime.trace import read_trace, read_trace_end
 from tests.conftest import EXAMPLES, REPO
 

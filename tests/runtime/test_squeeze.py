@@ -118,7 +118,7 @@ def test_the_squeeze_rule_is_deterministic() -> None:
 @pytest.mark.slow
 def test_the_reference_squeezes_between_the_tables_without_weaving(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    from rei.runtime.commands.run import run_into  # noqa: PLC0415
+    from rei.runtime.runs.session import run_into  # noqa: PLC0415
 
     monkeypatch.chdir(REPO)  # `tests.runtime.test_squeeze:Wobbly` is imported from here
 

@@ -12,11 +12,11 @@ import pytest
 
 from rei.runtime.artifacts.monitor import load_monitor_config
 from rei.runtime.artifacts.world import load_manifest
-from rei.runtime.commands.run import run_into
 from rei.runtime.messages.sink import SampleList
 from rei.runtime.observation.model.geometry import FootprintSet
 from rei.runtime.observation.model.runtime_model import RuntimeModel
 from rei.runtime.robot import Controller
+from rei.runtime.runs.session import run_into
 from rei.runtime.simulation.assembly import RunConfig, RunRecord, generate_world, run_mission
 from rei.runtime.trace import read_trace
 from tests.runtime.scripted import Ram

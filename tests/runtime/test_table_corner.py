@@ -137,7 +137,7 @@ def test_the_measured_clearances_are_deterministic() -> None:
 @pytest.mark.slow
 def test_the_reference_gets_past_the_table_corner_the_rounded_one_does_not(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    from rei.runtime.commands.run import run_into  # noqa: PLC0415
+    from rei.runtime.runs.session import run_into  # noqa: PLC0415
 
     monkeypatch.chdir(REPO)  # `tests.runtime...:RoundedClearance` is imported from here
     old, _ = run_into(SCENE, tmp_path / "old", "tests.runtime.test_table_corner:RoundedClearance",

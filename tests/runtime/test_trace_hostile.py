@@ -25,7 +25,6 @@ from hypothesis import strategies as st
 from rei.catalogue import Box, Cylinder, Polygon
 from rei.runtime.commands.cli import main as rei
 from rei.runtime.commands.replay import replay
-from rei.runtime.commands.run import run_into
 from rei.runtime.messages import (
     SCHEMA_VERSION,
     LaserScan,
@@ -37,6 +36,7 @@ from rei.runtime.messages import (
     StreamHeader,
 )
 from rei.runtime.results import judge
+from rei.runtime.runs.session import run_into
 from rei.runtime.trace import TraceError, TraceWriter, read_trace, read_trace_end, write
 from tests.conftest import EXAMPLES
 

@@ -125,7 +125,7 @@ def test_creeping_round_a_person_the_robot_does_not_weave(
     commitment a cost only, single ticks of the other side got through: left, right, left
     while driving, SMOOTH_MOTION failed. Held, it passes every requirement, the same bytes
     for the same seed."""
-    from rei.runtime.commands.run import run_into  # noqa: PLC0415
+    from rei.runtime.runs.session import run_into  # noqa: PLC0415
 
     monkeypatch.chdir(REPO)  # `tests.runtime.test_turn_commitment:Creeping` is imported here
     scene, seed = SCENES / "creeps.mission", 1199988182

@@ -14,10 +14,10 @@ from typing import Literal
 
 import numpy as np
 
-from rei.runtime.campaigns.folder_reader import CampaignData, SignalEvent, read_events, read_paths
+from rei.runtime.campaigns.folder_reader import CampaignData
 from rei.runtime.campaigns.stats import by_mission, wilson_interval
 from rei.runtime.campaigns.store import RunRecord
-from rei.runtime.presentation.campaign_report.tables import SIGNAL_ORDER
+from rei.runtime.observation.run_folder import SignalEvent, read_events, read_paths
 from rei.runtime.presentation.figures import (
     PLOT_WIDTH,
     TEXT_PT,
@@ -28,6 +28,7 @@ from rei.runtime.presentation.figures import (
     png_data_uri,
 )
 from rei.runtime.presentation.maps import draw_paths, map_figure
+from rei.runtime.presentation.signals import SIGNAL_ORDER
 
 MAX_LEGEND = 12
 

@@ -15,16 +15,18 @@ write files.
 from __future__ import annotations
 
 import math
+import os
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
+from urllib.parse import quote
 
 import jinja2
 
 from rei.runtime.campaigns.failure_clusters import Cluster, clusters, failures
-from rei.runtime.campaigns.folder_reader import CampaignData, read_events
+from rei.runtime.campaigns.folder_reader import CampaignData
 from rei.runtime.campaigns.stats import (
     by_mission,
     campaign_outcome,
@@ -33,6 +35,7 @@ from rei.runtime.campaigns.stats import (
     mission_verdicts,
 )
 from rei.runtime.campaigns.store import RUNS, RunRecord, required_pass_rate, verdict_reason
+from rei.runtime.observation.run_folder import read_events
 from rei.runtime.presentation.campaign_report import campaign_plots as plots
 from rei.runtime.presentation.campaign_report.overview import requirement_matrix
 from rei.runtime.presentation.campaign_report.tables import (
@@ -42,12 +45,21 @@ from rei.runtime.presentation.campaign_report.tables import (
     signal_counts,
     success_table,
 )
-from rei.runtime.presentation.run_page.page import page_is_full, run_page_link
+from rei.runtime.presentation.run_page.page import PAGE, page_is_full
 from rei.runtime.presentation.templating import environment
 
 MAX_MAPS = 40
 """Failed runs drawn from above (each ~40 kB of PNG); the rest are listed without a map."""
 
+
+
+def run_page_link(root: Path, record: RunRecord) -> str | None:
+    """The href of a recorded run's page relative to the campaign folder's report.html, or
+    None when the run folder has none (the run crashed, or ran with --no-monitor)."""
+    page = Path(root) / RUNS / record.spec.run_id / PAGE
+    if not page.is_file():
+        return None
+    return quote(Path(os.path.relpath(page, root)).as_posix())
 
 def _number(value: object) -> str:
     if value is None:

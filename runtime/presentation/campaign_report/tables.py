@@ -14,12 +14,7 @@ from dataclasses import dataclass
 
 from rei.runtime.campaigns.stats import SuccessRate, by_group, by_mission, success_rates
 from rei.runtime.campaigns.store import RunRecord
-
-SIGNAL_ORDER = ("SIG_MISSION_BEGIN", "SIG_MISSION_END", "SIG_MISSION_TASK_START",
-                "SIG_MISSION_TASK_SUCCESS", "SIG_MISSION_TASK_FAIL",
-                "SIG_GEOM_FAR_TRANSIT_CLOSE", "SIG_GEOM_CLOSE_TRANSIT_FAR",
-                "SIG_GEOM_CLOSE_TRANSIT_COLLISION", "SIG_GEOM_COLLISION_TRANSIT_CLOSE",
-                "SIG_LASER_CLOSE_TRANSIT_COLLISION", "SIG_LASER_COLLISION_TRANSIT_CLOSE")
+from rei.runtime.presentation.signals import SIGNAL_ORDER
 
 
 @dataclass(frozen=True)

@@ -201,7 +201,7 @@ class Watcher:
         """Watch ``source`` to its end (or until ``stop()`` says so after a sample: the
         summary then says 'interrupted'); every view is closed on the way out. The stream is
         judged by ``judge_stream``, `rei replay`'s and `rei monitor`'s own."""
-        from rei.runtime.commands.replay import judge_stream  # noqa: PLC0415
+        from rei.runtime.observation.judgement import judge_stream  # noqa: PLC0415
 
         judging: list[Any] = []  # the monitor's sink, once it judged a sample
         seen = 0

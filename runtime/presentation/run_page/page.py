@@ -5,22 +5,20 @@ events.csv, the trace, world/world.json and the automata's thresholds — and wr
 self-contained HTML page: the run's verdict, the requirement verdicts, the mission's events
 and signals over time, distances against the CLOSE and COLLISION thresholds, the speed
 against the limit, and the map with the path coloured by time. Same folder, same bytes.
-``run_page_link`` gives a campaign report the relative link to a run's page. This module
-must never run a mission or change any file but report.html.
+A campaign report links to these pages (rei.runtime.presentation.campaign_report.html).
+This module must never run a mission or change any file but report.html.
 """
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
-from urllib.parse import quote
 
 import jinja2
 
+from rei.generators.output import write_atomic
 from rei.runtime.artifacts.world import WorldManifest
-from rei.runtime.campaigns.store import RUNS, RunRecord, write_atomic
 from rei.runtime.messages import MissionEvent
 from rei.runtime.observation.evaluator.signal_log import SignalRow
 from rei.runtime.presentation.run_page.run_data import (
@@ -248,14 +246,5 @@ def page_is_full(out_dir: Path) -> bool:
     return BRIEF_MARK.encode() not in head
 
 
-def run_page_link(root: Path, record: RunRecord) -> str | None:
-    """The href of a recorded run's page relative to the campaign folder's report.html, or
-    None when the run folder has none (the run crashed, or ran with --no-monitor)."""
-    page = Path(root) / RUNS / record.spec.run_id / PAGE
-    if not page.is_file():
-        return None
-    return quote(Path(os.path.relpath(page, root)).as_posix())
-
-
 __all__ = ["BRIEF_MARK", "PAGE", "PAGE_POLICIES", "page_is_full", "render_brief_page",
-           "render_run_page", "run_page_link", "write_run_page"]
+           "render_run_page", "write_run_page"]

@@ -18,10 +18,9 @@ import numpy as np
 from matplotlib.collections import LineCollection
 from matplotlib.lines import Line2D
 
-from rei.runtime.campaigns.folder_reader import Paths
 from rei.runtime.messages import MissionEvent
 from rei.runtime.observation.evaluator.signal_log import SignalRow
-from rei.runtime.presentation.campaign_report.tables import SIGNAL_ORDER
+from rei.runtime.observation.run_folder import Paths
 from rei.runtime.presentation.figures import (
     PLOT_WIDTH,
     TEXT_PT,
@@ -32,6 +31,7 @@ from rei.runtime.presentation.figures import (
 )
 from rei.runtime.presentation.maps import draw_human_paths, map_figure
 from rei.runtime.presentation.run_page.run_data import FailureMark, Series, Thresholds, TraceSeries
+from rei.runtime.presentation.signals import SIGNAL_ORDER
 
 if TYPE_CHECKING:
     from matplotlib.artist import Artist
