@@ -26,11 +26,11 @@ from rei.lang.vepl.document import load_vepl
 from rei.lang.vepl.linker import NAMED_STATES
 
 OUTPUT = "automata.py"
-FORMAT_VERSION = 4
+FORMAT_VERSION = 5
 """Must equal rei.runtime.observation.automata.records.FORMAT_VERSION (3: commands, approach,
-failure
-causes, scenario facts, requirement premises; 4: queries with several parameters, the floors
-of objects and goals)."""
+failure causes, scenario facts, requirement premises; 4: queries with several parameters, the
+floors of objects and goals; 5: the runtime's records and patterns imported from
+rei.runtime.observation.automata, issue 34)."""
 INTERPOLATED = {"laser_min", "laser_clearance", "speed", "time", "odom_error", "turn_rate",
                 "yaw_rate", "own_speed", "own_turn_rate", "own_yaw_rate", "settle_travel"}
 """Measures that change continuously between samples (crossings are replayed in order)."""

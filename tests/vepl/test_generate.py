@@ -43,3 +43,31 @@ def test_hysteresis_generates_relaxed_thresholds(tmp_path: Path) -> None:
     text = render_module(load_vepl(path), "h.vepl")
     assert "< 0.5 + HYSTERESIS" in text
     assert "DISTANCE_CUTOFF = 0.6" in text
+
+
+def test_automata_of_an_older_rei_are_refused_by_name(tmp_path: Path) -> None:
+    """Automata generated before the runtime's regrouping import rei.runtime.monitor.*: loading
+    them (a saved run folder's automata/) says what they are and what to do, never a
+    traceback; a run's page falls back to the default thresholds and says so."""
+    import pytest
+
+    from rei.runtime.observation.errors import MonitorError
+    from rei.runtime.presentation.run_page.run_data import read_thresholds
+
+    assert rei_gen(["generate", str(DEFAULT_VEPL), "--target", "rx", "-o", str(tmp_path)]) == 0
+    path = tmp_path / "automata.py"
+    text = path.read_text(encoding="utf-8")
+    old = text.replace("rei.runtime.observation.automata.records", "rei.runtime.monitor.automata")
+    old = old.replace("FORMAT_VERSION = 5", "FORMAT_VERSION = 4")
+    assert old != text
+    folder = tmp_path / "run"
+    (folder / "automata").mkdir(parents=True)
+    (folder / "automata" / "automata.py").write_text(old, encoding="utf-8")
+    with pytest.raises(MonitorError) as refused:
+        load_generated(folder / "automata" / "automata.py")
+    message = str(refused.value)
+    assert "expected automata of format 5, found automata of an older REI" in message
+    assert "rei.runtime.monitor" in message and "rei-gen generate" in message
+    assert read_thresholds(folder).source == "default"
+    (folder / "automata" / "automata.py").write_text(text, encoding="utf-8")
+    assert read_thresholds(folder).source == "automata/automata.py"

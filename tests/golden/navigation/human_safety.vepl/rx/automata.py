@@ -45,7 +45,7 @@ from rei.runtime.observation.automata.records import (
 from rei.runtime.observation.automata.patterns import Occurrence, match_pattern
 
 SPEC_NAME = 'human_safety'
-FORMAT_VERSION = 4
+FORMAT_VERSION = 5
 PARAMETERS: dict[str, float] = {
     'eps_close': 0.25,
     'eps_collision': 0.02,
