@@ -8,11 +8,27 @@ Public API::
     Diagnostic       FILE:LINE:COL: RULE-ID: message
 """
 
+from __future__ import annotations
+
 from importlib.metadata import PackageNotFoundError, version
+from typing import Any
 
 try:
     __version__ = version("rei-testbed")
 except PackageNotFoundError:  # running from a source tree that is not installed
     __version__ = "0+unknown"
 
-__all__ = ["__version__"]
+_EXPORTS = {"Workspace": "rei.lang.workspace", "load_room": "rei.lang.workspace",
+            "load_mission": "rei.lang.workspace", "Diagnostic": "rei.lang.errors"}
+
+__all__ = ["Diagnostic", "Workspace", "__version__", "load_mission", "load_room"]
+
+
+def __getattr__(name: str) -> Any:
+    # Imported when first asked for: every `rei` command imports this package, and textX's
+    # metamodels are heavy; a command that never parses a file never pays for them.
+    if name in _EXPORTS:
+        import importlib  # noqa: PLC0415
+
+        return getattr(importlib.import_module(_EXPORTS[name]), name)
+    raise AttributeError(f"module 'rei.lang' has no attribute '{name}'")

@@ -2,7 +2,11 @@
 
 One reader for both, so every generated file is refused the same way: unreadable, not JSON,
 another format version, or a field that is missing, malformed or not finite — each with the
-file, the field, what was expected and what was found. Never imports pybullet.
+file, the field, what was expected and what was found. ``world`` reads world.json into
+typed records, ``monitor`` reads monitor.json.
+
+A contract at runtime's root: it may import the catalogue, the languages' models, ``messages``
+and ``errors``; it must never import pybullet or any wing.
 """
 
 from __future__ import annotations

@@ -7,6 +7,10 @@ processes the same stamped messages travel over the bus, with the wire schema of
 (``pip install 'rei-testbed[bus]'``), imported only when a bus is used.
 
 Errors: ``BusError`` (one line, naming what was expected and found).
+
+The ROS 2 profile (``ros2/``) puts a ROS 2 stack on rmw_zenoh's wire as the robot under test.
+The bus may import the robot wing (the robot contract travels over it), the platform and the
+contracts; it must never import the simulation, pybullet, observation or anything above.
 """
 
 from rei.runtime.bus.access import (

@@ -6,9 +6,12 @@ with `rei run` under a watchdog (``execute``); the store (``store``) records eve
 once, atomically, with its own folder; ``stats`` computes success rates with Wilson intervals,
 mission verdicts against a required pass rate and, for ``--pair-static`` campaigns (whose static
 twins ``static_pair`` writes), whether failures come from the people or the room.
-Reports on a campaign folder are ``rei.runtime.presentation.campaign_report``'s job. This package
-never imports
-pybullet: runs happen in other processes.
+``search/`` looks for failing scenarios, ``shrink/`` reduces a failing case, and
+``failure_clusters`` groups a campaign's failures. Reports on a campaign folder are
+``rei.runtime.presentation.campaign_report``'s job.
+
+It may import runs, observation, the platform and the contracts; it never imports pybullet or
+the simulation loop: runs happen in other processes (`rei run`).
 """
 
 from rei.runtime.campaigns.campaign import CampaignResult, run_campaign

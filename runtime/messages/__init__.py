@@ -3,8 +3,11 @@
 The data collector produces a ``StreamHeader`` once and then one ``Sample`` per collection
 tick; the event automata and the evaluator consume them, live or replayed from a trace.
 Per-object state travels as numpy arrays aligned with ``StreamHeader.objects`` so the monitor
-can compute geometry for thousands of objects vectorised. This module must never import
-pybullet or anything of the simulator.
+can compute geometry for thousands of objects vectorised.
+
+A contract at runtime's root, with ``ros`` (REI's one ROS 2 mapping) and ``sink`` (the
+``SampleSink`` protocol the stream is published to): it may import only the languages' models,
+the catalogue and numpy (rosbags in ``ros``), and must never import pybullet or any wing.
 """
 
 from __future__ import annotations

@@ -34,7 +34,6 @@ It must never import the simulation, pybullet or anything above the contracts.
 from rei.runtime.trace.encode import TraceEncoder, TraceWriter, write
 from rei.runtime.trace.format import TraceError
 from rei.runtime.trace.read import TraceDecoder, open_regular, read_trace, read_trace_end
-from rei.runtime.trace.rules import _Fields, _number, _numbers
 
-__all__ = ["TraceDecoder", "TraceEncoder", "TraceError", "TraceWriter", "_Fields", "_number",
-           "_numbers", "open_regular", "read_trace", "read_trace_end", "write"]
+__all__ = ["TraceDecoder", "TraceEncoder", "TraceError", "TraceWriter", "open_regular",
+           "read_trace", "read_trace_end", "write"]

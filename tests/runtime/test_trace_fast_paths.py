@@ -17,7 +17,8 @@ from typing import Any
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-from rei.runtime.trace import TraceError, _Fields, _number, _numbers
+from rei.runtime.trace import TraceError
+from rei.runtime.trace.rules import _Fields, _number, _numbers
 
 WHERE, PREFIX, KEY = "trace.jsonl:7", "belief", "odom"
 

@@ -14,8 +14,9 @@ __all__ = ["AutomataHost", "MonitorSink", "generate_automata"]
 
 
 def __getattr__(name: str) -> Any:
-    # The host joins the monitor and the evaluator, which reads the monitor's records:
-    # importing it lazily keeps `rei.runtime.observation.automata.records` importable on its own.
+    # The host (reactivex, the evaluator, the runtime model) is imported when first asked
+    # for: ``needs`` and ``functions``, which the command line imports to check options, stay
+    # light.
     if name in __all__:
         from rei.runtime.observation.monitor import automata_host as host  # noqa: PLC0415
 

@@ -1,1 +1,9 @@
-"""TODO: door sign."""
+"""The `reference` navigator shipped with REI: a real navigation stack's parts, so a mission
+runs out of the box and defects can be seeded into a correct navigator (bench/defects).
+
+``reference`` (the local planner and the navigator class), ``gridplan`` (A* over free cells),
+``recovery`` (recovery behaviours), ``mapcast`` (a scan compared with the map), ``tuning``
+(its constants in one frozen record). It may import the robot contract and the contracts at
+runtime's root; it must never import pybullet, the simulation or the monitor: it sees only
+what its sensors measured.
+"""
