@@ -58,7 +58,7 @@ from pathlib import Path
 from typing import Any
 
 import rei.runtime.robot as robot_package
-from rei.runtime.artifacts.monitor import load_monitor_config
+from rei.runtime.artifacts.monitor_config import load_monitor_config
 from rei.runtime.artifacts.world import WorldManifest, load_manifest
 from rei.runtime.raycast import scene_shapes
 from rei.runtime.robot.contract import Controller, ControllerContext

@@ -46,6 +46,8 @@ PUBLIC = {
     "rei.runtime.observation.recordings": [
         "McapRecorder", "RECORDING", "RecordedSamples", "RecordingError", "TRACE_TOPIC",
         "is_recording", "read_recording", "read_stream"],
+    # drawing a run's page
+    "rei.runtime.presentation.run_page": ["write_run_page"],
     # building a campaign's report
     "rei.runtime.presentation.campaign_report": [
         "ReportOutcome", "Table", "build_report", "execution_summary", "junit_xml",

@@ -4,6 +4,9 @@ Everything a user can cause (a wrong endpoint, missing or wrong credentials, an 
 role may not take, a port in use) is a ``BusError`` whose message is one line naming what
 was expected and what was found. A message from the wire that cannot be decoded is never an
 exception to the receiver: it is dropped and counted (``BusSession.dropped``).
+
+Every stage has an errors.py of its own (one error class per stage, all under
+``rei.lang.errors.ReiError``, as STYLE.md asks), so this file name repeats on purpose.
 """
 
 from __future__ import annotations

@@ -14,10 +14,10 @@ It may import runs, observation, the platform and the contracts; it never import
 the simulation loop: runs happen in other processes (`rei run`).
 """
 
-from rei.runtime.campaigns.campaign import CampaignResult, run_campaign
 from rei.runtime.campaigns.engines import CampaignEngine, DaskEngine, LocalEngine, check_engine
 from rei.runtime.campaigns.errors import CampaignError
 from rei.runtime.campaigns.execute import RunResult, execute_run
+from rei.runtime.campaigns.orchestration import CampaignResult, run_campaign
 from rei.runtime.campaigns.plan import CampaignPlan, RunSpec, derive_seed, plan_campaign
 from rei.runtime.campaigns.static_pair import static_twin, write_static_twins
 from rei.runtime.campaigns.stats import (

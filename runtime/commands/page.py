@@ -57,7 +57,10 @@ def run_folders(folder: Path) -> list[Path]:
 
 def run(args: argparse.Namespace) -> int:
     from rei.lang.errors import ReiError  # noqa: PLC0415
-    from rei.runtime.presentation.run_page.page import page_is_full, write_run_page  # noqa: PLC0415
+    from rei.runtime.presentation.run_page.rendering import (  # noqa: PLC0415
+        page_is_full,
+        write_run_page,
+    )
 
     # every DIR checked before any page is drawn: a typo is exit 2, with nothing half done
     folders = [run_folder for folder in args.folders for run_folder in run_folders(folder)]

@@ -130,7 +130,7 @@ def replay_bag(bag: Path, mission_path: Path, vepl: Path | None, out_dir: Path,
     """Judge the ROS 2 recording ``bag`` (MCAP file or rosbag2 folder) as a run of
     ``mission_path`` into ``out_dir``; the summary (also written as summary.json)."""
     from rei.lang.vepl.document import load_vepl  # noqa: PLC0415
-    from rei.runtime.artifacts.monitor import load_monitor_config  # noqa: PLC0415
+    from rei.runtime.artifacts.monitor_config import load_monitor_config  # noqa: PLC0415
     from rei.runtime.artifacts.world import load_manifest  # noqa: PLC0415
     from rei.runtime.observation.monitor import generate_automata  # noqa: PLC0415
     from rei.runtime.observation.monitor.functions import load_functions  # noqa: PLC0415

@@ -262,7 +262,7 @@ def write_page(out_dir: Path, trace: Path | None = None, policy: str = "all") ->
     written is reported (on stderr), never allowed to change the run's verdict or exit
     status."""
     from rei.lang.errors import ReiError  # noqa: PLC0415
-    from rei.runtime.presentation.run_page.page import write_run_page  # noqa: PLC0415
+    from rei.runtime.presentation.run_page.rendering import write_run_page  # noqa: PLC0415
 
     try:
         return write_run_page(out_dir, trace, policy=policy)

@@ -151,7 +151,7 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
     """
     from rei.generators.output import open_output  # noqa: PLC0415
     from rei.lang.vepl.document import changed_parameters, load_vepl  # noqa: PLC0415
-    from rei.runtime.artifacts.monitor import load_monitor_config  # noqa: PLC0415
+    from rei.runtime.artifacts.monitor_config import load_monitor_config  # noqa: PLC0415
     from rei.runtime.artifacts.world import load_manifest  # noqa: PLC0415
     from rei.runtime.observation.evaluator import merge_summary, write_summary  # noqa: PLC0415
     from rei.runtime.observation.monitor import MonitorSink, generate_automata  # noqa: PLC0415

@@ -121,7 +121,7 @@ class RunRequest:
     parameters: tuple[tuple[str, float], ...] = ()
     """The specification's parameter values of ``--param``, sorted by name."""
     page: str = "all"
-    """Which page to write (``--page``: rei.runtime.presentation.run_page.page.PAGE_POLICIES)."""
+    """Which page to write (``--page``: rei.runtime.results.PAGE_POLICIES)."""
 
     def to_json(self) -> str:
         return json.dumps(asdict(self), allow_nan=False)

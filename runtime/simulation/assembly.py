@@ -32,7 +32,7 @@ import numpy as np
 
 from rei.catalogue import Box, Cylinder
 from rei.generators.concrete import ConcreteMission
-from rei.runtime.artifacts.monitor import MonitorConfig
+from rei.runtime.artifacts.monitor_config import MonitorConfig
 from rei.runtime.artifacts.world import WorldManifest
 from rei.runtime.errors import RunError
 from rei.runtime.messages import SCHEMA_VERSION, GoalFacts, MissionFacts, StreamHeader

@@ -11,7 +11,7 @@ from rei.generators.concrete.build import load_concrete_mission
 from rei.generators.errors import GenerationError
 from rei.generators.output import write_tree
 from rei.generators.targets import GenerationRequest, check_target, get_target
-from rei.runtime.artifacts.monitor import load_monitor_config
+from rei.runtime.artifacts.monitor_config import load_monitor_config
 from tests.conftest import EXAMPLES
 
 

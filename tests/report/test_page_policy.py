@@ -14,7 +14,12 @@ from lxml import etree
 
 from rei.runtime.campaigns import CampaignError
 from rei.runtime.commands.cli import main
-from rei.runtime.presentation.run_page.page import BRIEF_MARK, PAGE, page_is_full, write_run_page
+from rei.runtime.presentation.run_page.rendering import (
+    BRIEF_MARK,
+    PAGE,
+    page_is_full,
+    write_run_page,
+)
 from rei.runtime.results import RunSummary, judge
 from tests.conftest import chromium
 

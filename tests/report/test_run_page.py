@@ -19,7 +19,7 @@ from rei.runtime.campaigns import CampaignStore
 from rei.runtime.commands.cli import main
 from rei.runtime.presentation.campaign_report import build_report
 from rei.runtime.presentation.campaign_report.html import run_page_link
-from rei.runtime.presentation.run_page.page import write_run_page
+from rei.runtime.presentation.run_page.rendering import write_run_page
 from rei.runtime.presentation.run_page.run_data import thin_extremes
 from tests.campaign.records import write_campaign
 from tests.conftest import chromium

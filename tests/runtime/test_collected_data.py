@@ -18,7 +18,7 @@ from rei.lang.mission.model import COLLECTED_DATA
 from rei.lang.printer import print_mission
 from rei.lang.vepl.document import load_vepl
 from rei.lang.workspace import Workspace
-from rei.runtime.artifacts.monitor import load_monitor_config
+from rei.runtime.artifacts.monitor_config import load_monitor_config
 from rei.runtime.commands.replay import replay
 from rei.runtime.errors import RunError
 from rei.runtime.observation.monitor import MonitorSink

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 import tests.runtime.faulty as faulty
-from rei.runtime.artifacts.monitor import load_monitor_config
+from rei.runtime.artifacts.monitor_config import load_monitor_config
 from rei.runtime.artifacts.world import load_manifest
 from rei.runtime.messages import LaserScan
 from rei.runtime.robot import GoalFeedback, NavGoal, Observation

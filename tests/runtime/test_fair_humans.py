@@ -28,7 +28,7 @@ import pytest
 
 from rei.lang.room.model import WALKING_SPEEDS
 from rei.lang.room.spline import CatmullRom
-from rei.runtime.artifacts.monitor import load_monitor_config
+from rei.runtime.artifacts.monitor_config import load_monitor_config
 from rei.runtime.artifacts.world import load_manifest
 from rei.runtime.messages.sink import SampleList
 from rei.runtime.robot import Observation, VelocityCommand

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from rei.lang.room.model import WALKING_SPEEDS
-from rei.runtime.artifacts.monitor import load_monitor_config
+from rei.runtime.artifacts.monitor_config import load_monitor_config
 from rei.runtime.artifacts.world import load_manifest
 from rei.runtime.messages.sink import SampleList
 from rei.runtime.simulation.animator import HumanVariation, draw_variations

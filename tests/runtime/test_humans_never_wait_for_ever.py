@@ -31,7 +31,7 @@ import numpy as np
 import pytest
 
 from rei.lang.room.spline import CatmullRom
-from rei.runtime.artifacts.monitor import load_monitor_config
+from rei.runtime.artifacts.monitor_config import load_monitor_config
 from rei.runtime.artifacts.world import load_manifest
 from rei.runtime.messages.sink import SampleList
 from rei.runtime.simulation.animator.engine import Animated, Animator, Reactions

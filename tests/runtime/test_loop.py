@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from rei.runtime.artifacts.monitor import load_monitor_config
+from rei.runtime.artifacts.monitor_config import load_monitor_config
 from rei.runtime.artifacts.world import load_manifest
 from rei.runtime.errors import RunError
 from rei.runtime.messages import (

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from rei.runtime.artifacts.monitor import load_monitor_config
+from rei.runtime.artifacts.monitor_config import load_monitor_config
 from rei.runtime.artifacts.world import load_manifest
 from rei.runtime.messages.sink import SampleList
 from rei.runtime.observation.model.geometry import FootprintSet

@@ -44,8 +44,8 @@ from rei.generators.rooms.space import (
     parse_interval,
     preset_space,
 )
-from rei.runtime.campaigns.campaign import run_campaign
 from rei.runtime.campaigns.engines import CampaignEngine
+from rei.runtime.campaigns.orchestration import run_campaign
 from rei.runtime.campaigns.plan import CampaignPlan, plan_campaign
 from rei.runtime.campaigns.search.candidates import (
     CANDIDATES,

@@ -1,4 +1,8 @@
-"""Errors of the search stage."""
+"""Errors of the search stage.
+
+Every stage has an errors.py of its own (one error class per stage, all under
+``rei.lang.errors.ReiError``, as STYLE.md asks), so this file name repeats on purpose.
+"""
 
 from rei.lang.errors import ReiError
 

@@ -1,4 +1,8 @@
-"""The recording stage's root error."""
+"""The recording stage's root error.
+
+Every stage has an errors.py of its own (one error class per stage, all under
+``rei.lang.errors.ReiError``, as STYLE.md asks), so this file name repeats on purpose.
+"""
 
 from __future__ import annotations
 

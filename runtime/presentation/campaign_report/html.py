@@ -45,7 +45,7 @@ from rei.runtime.presentation.campaign_report.tables import (
     signal_counts,
     success_table,
 )
-from rei.runtime.presentation.run_page.page import PAGE, page_is_full
+from rei.runtime.presentation.run_page.rendering import PAGE, page_is_full
 from rei.runtime.presentation.templating import environment
 
 MAX_MAPS = 40

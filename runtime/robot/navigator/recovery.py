@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rei.runtime.robot.contract import STOP, VelocityCommand
+from rei.runtime.robot.navigator.clearance import box_distance
 
 RECOVERY_MARGIN = 0.015
 """Metres the exact footprint keeps from every laser point during a recovery motion."""
@@ -58,12 +59,7 @@ def footprint_gaps(points: np.ndarray, half: tuple[float, float],
     hx, hy = half
     dx = points[None, :, 0] - poses[:, 0:1]
     dy = points[None, :, 1] - poses[:, 1:2]
-    c, s = np.cos(poses[:, 2:3]), np.sin(poses[:, 2:3])
-    qx = np.abs(c * dx + s * dy) - hx
-    qy = np.abs(-s * dx + c * dy) - hy
-    gaps: np.ndarray = (np.hypot(np.maximum(qx, 0), np.maximum(qy, 0))
-                        + np.minimum(np.maximum(qx, qy), 0))
-    return gaps
+    return box_distance(dx, dy, np.cos(poses[:, 2:3]), np.sin(poses[:, 2:3]), hx, hy)
 
 
 def arc_poses(v: float, w: float, horizon: float, steps: int) -> np.ndarray:
