@@ -7,8 +7,11 @@ vertex of either polygon inside the other (0 when only edges cross); for a circl
 signed distance of its centre to the robot's boundary minus its radius. Objects whose
 centres are so far away that no threshold of the specification can be crossed get a
 cheap lower bound instead (the broad phase), which decides every comparison against
-those thresholds the same way. This
-module must never import the simulator or keep state between calls.
+those thresholds the same way. This module must never import the simulator or keep state
+between calls.
+
+The navigator (rei.runtime.robot.navigator.clearance) measures its distance to an oriented box
+with code of its own, on purpose: the judge and the judged must not share a bug.
 """
 
 from __future__ import annotations
@@ -67,9 +70,12 @@ def _cross(o: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
                 - (a[..., 1] - o[..., 1]) * (b[..., 0] - o[..., 0]))
 
 
-def _inside(points: np.ndarray, poly: np.ndarray, poly_next: np.ndarray) -> np.ndarray:
-    """Crossing-number test: points (..., 2) inside polygons with edges poly->poly_next
-    (..., K, 2); leading axes broadcast; returns (...)."""
+def inside_polygon(points: np.ndarray, poly: np.ndarray, poly_next: np.ndarray) -> np.ndarray:
+    """Crossing-number test (even-odd rule): points (..., 2) inside polygons with edges
+    poly->poly_next (..., K, 2); leading axes broadcast; returns (...). The monitor's one
+    point-in-polygon test. On a side the answer is left to the caller's rule: the distances
+    here give such a point depth 0 either way, and ``laser_clearance`` rules a mount on a side
+    out before asking."""
     px = points[..., None, 0]
     py = points[..., None, 1]
     x1, y1 = poly[..., 0], poly[..., 1]
@@ -84,7 +90,7 @@ def _inside(points: np.ndarray, poly: np.ndarray, poly_next: np.ndarray) -> np.n
 def _inner_radius(poly: np.ndarray) -> float:
     """Radius of the largest disc about the origin inside a polygon (0 if outside)."""
     nxt = np.roll(poly, -1, axis=0)
-    if not _inside(np.zeros(2), poly, nxt):
+    if not inside_polygon(np.zeros(2), poly, nxt):
         return 0.0
     return float(np.min(_point_segment(np.zeros(2), poly, nxt)))
 
@@ -383,7 +389,7 @@ class FootprintSet:
         a = robot_world[None, :, :]
         b = np.roll(robot_world, -1, axis=0)[None, :, :]
         boundary = _point_segment(centres[:, None, :], a, b).min(axis=1)
-        inside = _inside(centres, robot_world[None], np.roll(robot_world, -1, axis=0)[None])
+        inside = inside_polygon(centres, robot_world[None], np.roll(robot_world, -1, axis=0)[None])
         return cast(np.ndarray, np.where(inside, -boundary - radii, boundary - radii))
 
     def _to_polygons(self, robot_world: np.ndarray | None, centre: tuple[float, float],
@@ -392,7 +398,7 @@ class FootprintSet:
         if robot_world is None:
             c = np.array(centre)
             boundary = _point_segment(c[None, None, :], world, nxt).min(axis=1)
-            inside = _inside(np.broadcast_to(c, (len(world), 2)), world, nxt)
+            inside = inside_polygon(np.broadcast_to(c, (len(world), 2)), world, nxt)
             return cast(np.ndarray, np.where(inside, -boundary - self.robot_radius,
                                              boundary - self.robot_radius))
         r = robot_world
@@ -402,8 +408,8 @@ class FootprintSet:
         v2 = _point_segment(r[None, None, :, :], world[:, :, None, :],
                             nxt[:, :, None, :]).min(axis=1)
         boundary = np.minimum(v1.min(axis=1), v2.min(axis=1))
-        inside1 = _inside(world, r[None, None], rn[None, None])
-        inside2 = _inside(np.broadcast_to(r, (len(world), *r.shape)), world[:, None],
+        inside1 = inside_polygon(world, r[None, None], rn[None, None])
+        inside2 = inside_polygon(np.broadcast_to(r, (len(world), *r.shape)), world[:, None],
                           nxt[:, None])
         # proper edge crossings (two footprints can overlap with no vertex inside)
         a, b = world[:, :, None, :], nxt[:, :, None, :]

@@ -25,7 +25,7 @@ import math
 import numpy as np
 
 from rei.runtime.messages import LaserScan, StreamHeader
-from rei.runtime.observation.model.geometry import _inside, _point_segment, local_shape
+from rei.runtime.observation.model.geometry import _point_segment, inside_polygon, local_shape
 from rei.runtime.observation.model.laser_clearance import beam_angles
 
 HAZARD_ROLES = ("human", "dynamic")
@@ -101,4 +101,4 @@ def _polygon_distance(points: np.ndarray, poly: np.ndarray) -> np.ndarray:
     """(N,) distance from each point to a simple polygon's area (0 inside)."""
     following = np.roll(poly, -1, axis=0)
     edges = _point_segment(points[:, None, :], poly[None, :, :], following[None, :, :])
-    return np.where(_inside(points, poly, following), 0.0, edges.min(axis=1))
+    return np.where(inside_polygon(points, poly, following), 0.0, edges.min(axis=1))

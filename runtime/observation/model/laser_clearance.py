@@ -17,7 +17,7 @@ import numpy as np
 
 from rei.catalogue import Footprint
 from rei.runtime.messages import LaserScan
-from rei.runtime.observation.model.geometry import local_shape
+from rei.runtime.observation.model.geometry import inside_polygon, local_shape
 
 _PARALLEL = 1e-12
 """A beam and a polygon side closer than this to parallel never cross (cross product)."""
@@ -36,10 +36,7 @@ def _inside_polygon(point: np.ndarray, poly: np.ndarray) -> bool:
         (rel * e).sum(axis=1) <= (e * e).sum(axis=1))
     if bool(on_side.any()):
         return False
-    straddles = (a[:, 1] > point[1]) != (b[:, 1] > point[1])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        x_cross = a[:, 0] + (point[1] - a[:, 1]) * e[:, 0] / e[:, 1]
-    return bool(np.count_nonzero(straddles & (x_cross > point[0])) % 2)
+    return bool(inside_polygon(point, a, b))
 
 
 def beam_edges(footprint: Footprint, mount: Sequence[float], angles: np.ndarray) -> np.ndarray:
