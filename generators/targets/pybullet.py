@@ -20,7 +20,7 @@ from typing import Any
 
 import jinja2
 
-from rei.catalogue import Box, Cylinder, ObjectType, Tile
+from rei.catalogue import ObjectType, codec
 from rei.generators.concrete import ConcreteObject, ConcreteWorld
 from rei.generators.errors import GenerationError
 from rei.generators.output import OutputTree
@@ -41,16 +41,9 @@ MANIFEST_VERSION = 3
 
 
 def footprint_json(otype: ObjectType, tile: float) -> dict[str, Any]:
-    """The footprint as the manifest stores it: a box or a cylinder (polygons by their box)."""
-    fp = otype.footprint
-    if isinstance(fp, Tile):
-        return {"shape": "box", "size": [tile, tile]}
-    if isinstance(fp, Cylinder):
-        return {"shape": "cylinder", "radius": fp.radius}
-    if isinstance(fp, Box):
-        return {"shape": "box", "size": [fp.size_x, fp.size_y]}
-    hx, hy = fp.half_extents()
-    return {"shape": "box", "size": [2 * hx, 2 * hy]}
+    """The footprint as the manifest stores it: the shape the simulator builds (a box or a
+    cylinder; rei.catalogue.codec)."""
+    return codec.footprint_json(codec.simulated(otype.footprint, tile))
 
 
 def _urdf(env: jinja2.Environment, otype: ObjectType, tile: float, fixed: bool) -> str:

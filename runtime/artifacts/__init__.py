@@ -16,7 +16,6 @@ import math
 from pathlib import Path
 from typing import Any
 
-from rei.catalogue import Box, Cylinder, Footprint
 from rei.runtime.errors import RunError
 
 
@@ -43,13 +42,6 @@ def finite(value: Any, where: str) -> float:
     return float(value)
 
 
-def footprint(data: Any, where: str) -> Footprint:
-    """A box or cylinder footprint as the generators write it."""
-    if not isinstance(data, dict):
-        raise RunError(f"{where}: expected a footprint object, found {data!r}")
-    if data.get("shape") == "cylinder":
-        return Cylinder(finite(data.get("radius"), f"{where}.radius"))
-    if data.get("shape") == "box":
-        size = data.get("size") or [None, None]
-        return Box(finite(size[0], f"{where}.size[0]"), finite(size[1], f"{where}.size[1]"))
-    raise RunError(f"{where}.shape: expected 'box' or 'cylinder', found {data.get('shape')!r}")
+SIMULATED_SHAPES = ("box", "cylinder")
+"""The footprints the generated world files hold: the shapes the simulator builds
+(rei.catalogue.codec.simulated)."""

@@ -7,11 +7,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from rei.catalogue import Footprint
 from rei.lang.mission.model import COLLECTED_DATA, REQUIRED_DATA
-from rei.runtime.artifacts import footprint, read_artifact
+from rei.runtime.artifacts import SIMULATED_SHAPES, read_artifact
 from rei.runtime.errors import RunError
 from rei.runtime.messages import ObservedObject
+from rei.runtime.trace.rules import observed_object_of
 
 CONFIG_VERSION = 1
 
@@ -27,13 +27,9 @@ class MonitorConfig:
     """'when_new': a sample carries a scan only when a new one was taken since the last."""
 
 
-def _footprint(data: Any) -> Footprint:
-    return footprint(data, "monitor.json: footprint")
-
-
-def _observed(data: dict[str, Any]) -> ObservedObject:
-    return ObservedObject(str(data["name"]), data["role"], str(data["type"]),
-                          _footprint(data["footprint"]), float(data["height"]))
+def _observed(data: Any, path: Path, field: str) -> ObservedObject:
+    # the trace's own rules: one decoding of observed objects for every file that holds them
+    return observed_object_of(data, str(path), field, field == "robot", SIMULATED_SHAPES)
 
 
 def _data(path: Path, value: Any) -> tuple[str, ...]:
@@ -54,8 +50,9 @@ def load_monitor_config(folder: str | Path) -> MonitorConfig:
         rate = float(data["rate"])
         if not (math.isfinite(rate) and rate > 0):
             raise RunError(f"{path}: rate: expected a positive number, found {data['rate']!r}")
-        return MonitorConfig(rate, _observed(data["robot"]),
-                             tuple(_observed(o) for o in data["objects"]),
+        return MonitorConfig(rate, _observed(data["robot"], path, "robot"),
+                             tuple(_observed(o, path, f"objects[{i}]")
+                                   for i, o in enumerate(data["objects"])),
                              _data(path, data["data"]), str(data["laser_scans"]))
     except (KeyError, IndexError, TypeError, ValueError) as exc:
         raise RunError(f"{path}: missing or malformed field ({exc})") from None

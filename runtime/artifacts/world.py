@@ -12,8 +12,9 @@ from typing import Any
 
 from rei.catalogue import DriveSpec, Footprint, LaserSpec
 from rei.lang.room.model import BEHAVIOURS, DEFAULT_BEHAVIOUR, Behaviour
-from rei.runtime.artifacts import finite, footprint, read_artifact
+from rei.runtime.artifacts import SIMULATED_SHAPES, finite, read_artifact
 from rei.runtime.errors import RunError
+from rei.runtime.trace.rules import footprint_of
 
 MANIFEST_VERSION = 3
 """3: animated bodies carry a ``behaviour``; older worlds must be regenerated."""
@@ -72,7 +73,8 @@ def _num(value: Any, where: str) -> float:
 
 
 def _footprint(data: Any, where: str) -> Footprint:
-    return footprint(data, f"world.json: {where}")
+    # the trace's own rules: one decoding of footprints for every file that holds them
+    return footprint_of(data, "world.json", where, shapes=SIMULATED_SHAPES)
 
 
 def _behaviour(value: Any, where: str) -> Behaviour:

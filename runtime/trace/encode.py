@@ -15,7 +15,7 @@ from typing import IO, Any
 
 import numpy as np
 
-from rei.catalogue import Box, Cylinder, Footprint, Polygon
+from rei.catalogue.codec import footprint_json
 from rei.generators.output import open_output
 from rei.lang.mission.model import COLLECTED_DATA
 from rei.runtime.messages import MissionEvent, MissionFacts, ObservedObject, Sample, StreamHeader
@@ -28,19 +28,9 @@ def _dumps(value: Any) -> str:
     return json.dumps(value, separators=(",", ":"), allow_nan=False, ensure_ascii=False)
 
 
-def _footprint_json(fp: Footprint) -> dict[str, Any]:
-    if isinstance(fp, Box):
-        return {"shape": "box", "size": [fp.size_x, fp.size_y]}
-    if isinstance(fp, Cylinder):
-        return {"shape": "cylinder", "radius": fp.radius}
-    if isinstance(fp, Polygon):
-        return {"shape": "polygon", "points": [list(p) for p in fp.points]}
-    return {"shape": "tile"}
-
-
 def _object_json(o: ObservedObject) -> dict[str, Any]:
     return {"name": o.name, "role": o.role, "type": o.type,
-            "footprint": _footprint_json(o.footprint), "height": o.height}
+            "footprint": footprint_json(o.footprint), "height": o.height}
 
 
 def header_json(h: StreamHeader) -> dict[str, Any]:

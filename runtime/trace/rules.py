@@ -190,8 +190,13 @@ class _Fields:
                          f"{_show(value)}")
 
 
-def _footprint(value: Any, where: str, field: str, robot: bool) -> Footprint:
-    shapes = tuple(s for s in _FOOTPRINT_KEYS if not (robot and s == "tile"))
+def footprint_of(value: Any, where: str, field: str, robot: bool = False,
+                 shapes: tuple[str, ...] | None = None) -> Footprint:
+    """The footprint a JSON value encodes (rei.catalogue.codec's encoding), every field checked;
+    TraceError naming ``where: field``, what was expected and what was found. ``shapes`` limits
+    the shapes accepted (the generated world files hold only what the simulator builds)."""
+    if shapes is None:
+        shapes = tuple(s for s in _FOOTPRINT_KEYS if not (robot and s == "tile"))
     shape = value.get("shape") if isinstance(value, dict) else None
     if shape not in shapes:
         if not isinstance(value, dict):
@@ -221,11 +226,14 @@ def _footprint(value: Any, where: str, field: str, robot: bool) -> Footprint:
     return Tile()
 
 
-def _object(value: Any, where: str, field: str, robot: bool = False) -> ObservedObject:
+def observed_object_of(value: Any, where: str, field: str, robot: bool = False,
+                       shapes: tuple[str, ...] | None = None) -> ObservedObject:
+    """The observed object a JSON value encodes (name, role, type, footprint, height), every
+    field checked, as ``footprint_of`` checks its footprint."""
     o = _Fields(value, where, field, _OBJECT_KEYS, "an observed object (a JSON object)")
     return ObservedObject(o.text("name"), o.choice("role", OBJECT_ROLES),  # type: ignore[arg-type]
-                          o.text("type"), _footprint(o.data["footprint"], where,
-                                                     o.field("footprint"), robot),
+                          o.text("type"), footprint_of(o.data["footprint"], where,
+                                                       o.field("footprint"), robot, shapes),
                           o.number("height", low=0.0))
 
 
@@ -287,8 +295,9 @@ def _header(data: Any, where: str) -> StreamHeader:
     laser_mount = h.numbers("laser_mount", 2, "[x, y]")
     return StreamHeader(
         SCHEMA_VERSION, h.text("world"), h.text("mission"), h.whole("seed", 0),
-        h.number("rate", low=0.0, low_open=True), _object(data["robot"], where, "robot", True),
-        tuple(_object(o, where, f"objects[{i}]") for i, o in enumerate(objects)),
+        h.number("rate", low=0.0, low_open=True),
+        observed_object_of(data["robot"], where, "robot", True),
+        tuple(observed_object_of(o, where, f"objects[{i}]") for i, o in enumerate(objects)),
         h.number("tile_size", low=0.0, low_open=True),
         tuple(_floor(f, where, f"floors[{i}]") for i, f in enumerate(floors)),
         (laser_mount[0], laser_mount[1]), _mission_facts(data["mission_facts"], where),
