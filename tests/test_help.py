@@ -27,7 +27,7 @@ from rei.runtime.commands.cli import DESCRIPTION as RUN_DESCRIPTION
 from rei.runtime.commands.run import CONTROLLER_HELP, final_line
 from rei.runtime.robot.teleop import SCRIPTS
 from rei.runtime.runs.session import exit_code
-from tests.campaign.records import summary_for
+from tests.campaigns.records import summary_for
 
 PROGRAMS = {"rei": (RUN_DESCRIPTION, "rei.runtime.commands"),
             "rei-gen": (GEN_DESCRIPTION, "rei.lang.commands")}

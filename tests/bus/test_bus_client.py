@@ -177,7 +177,7 @@ def test_a_late_monitor_gets_the_trace_header_from_the_simulation(  # type: igno
     from rei.runtime.bus.reception import ask_header
     from rei.runtime.bus.schema import TRACE, config_key
     from rei.runtime.trace import TraceDecoder, TraceWriter
-    from tests.runtime.test_trace import _header
+    from tests.contracts.test_trace import _header
 
     sim, monitor = join("simulation"), join("monitor")
     header = _header()

@@ -91,7 +91,7 @@ def test_a_silent_robot_is_a_run_error_naming_it(tmp_path: Path) -> None:
     with start(tmp_path / "bus") as router:
         env = {**os.environ, "REI_BUS_CREDENTIALS": str(router.bus.path)}
         robot = _rei("robot", "--bus", router.bus.endpoint, "--controller",
-                     "tests.runtime.faulty:Hanging", env=env)
+                     "tests.robot.faulty:Hanging", env=env)
         try:
             run = subprocess.run(
                 [sys.executable, "-m", "rei.runtime.commands", "run",

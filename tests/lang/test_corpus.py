@@ -19,13 +19,13 @@ CORPUS_FILES = sorted(p for folder in (CORPUS, VEPL_CORPUS) for p in folder.iter
                       if p.name not in HELPERS and p.is_file())
 
 # Rules whose inputs cannot be written as a corpus file; tests/lang/test_input_edges.py covers
-# them (INTERNAL: tests/lsp/test_lsp_robustness.py), and tests/monitor/test_user_functions.py
-# VEPL-FUNCTION (it needs a Python module), tests/runtime/test_collected_data.py VEPL-DATA (it
+# them (INTERNAL: tests/lsp/test_lsp_robustness.py), and tests/observation/test_user_functions.py
+# VEPL-FUNCTION (it needs a Python module), tests/simulation/test_collected_data.py VEPL-DATA (it
 # needs a mission or a trace beside the .vepl).
 COVERED_ELSEWHERE = {"INPUT-READ", "INPUT-KIND", "INPUT-EMPTY", "INPUT-SIZE", "INPUT-ENCODING",
                      "SYNTAX-DEPTH", "INTERNAL", "VEPL-FUNCTION", "VEPL-DATA",
                      # checked by `rei run` against the run's specification and --fault
-                     # options, not in one file: tests/runtime/test_fault_runs.py
+                     # options, not in one file: tests/simulation/test_fault_runs.py
                      "FAULT-NAME", "FAULT-SIGNAL", "FAULT-WINDOW"}
 
 

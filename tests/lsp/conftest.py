@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+import pytest_lsp
 from lsprotocol import types
 from pygls.protocol import default_converter
 from pytest_lsp import ClientServerConfig, LanguageClient
@@ -168,3 +169,12 @@ def position_of(text: str, needle: str, occurrence: int = 0, offset: int = 0
     line_start = text.rfind("\n", 0, start) + 1
     prefix = text[line_start:start]
     return types.Position(line=line, character=len(prefix.encode("utf-16-le")) // 2)
+
+
+@pytest_lsp.fixture(config=CONFIG, scope="module")
+async def client(lsp_client: RecordingClient):  # type: ignore[no-untyped-def]
+    """One initialized session of the real server per test module (a module may define its
+    own ``client``, as test_rename_references does for its workspace folder)."""
+    await lsp_client.initialize_session(initialize_params())
+    yield
+    await lsp_client.shutdown_session()

@@ -8,16 +8,13 @@ import sys
 from pathlib import Path
 
 import pytest
-import pytest_lsp
 from lsprotocol import types
 
 from rei.lang.workspace import Workspace
 from tests.lang.test_start_trigger import ROOM as TRIGGER_ROOM
 from tests.lsp.conftest import (
-    CONFIG,
     Editor,
     RecordingClient,
-    initialize_params,
     position_of,
     publish_index,
     wait_published,
@@ -25,13 +22,6 @@ from tests.lsp.conftest import (
 from tests.lsp.rooms import MISSION, ROOM
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
-
-
-@pytest_lsp.fixture(config=CONFIG, scope="module")
-async def client(lsp_client: RecordingClient):  # type: ignore[no-untyped-def]
-    await lsp_client.initialize_session(initialize_params())
-    yield
-    await lsp_client.shutdown_session()
 
 
 @pytest.fixture(scope="module")

@@ -9,26 +9,16 @@ import os
 from pathlib import Path
 
 import pytest
-import pytest_lsp
 from lsprotocol import types
 
 from tests.lsp.conftest import (
-    CONFIG,
     Editor,
     RecordingClient,
-    initialize_params,
     wait_published,
 )
 from tests.lsp.rooms import ROOM
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
-
-
-@pytest_lsp.fixture(config=CONFIG, scope="module")
-async def client(lsp_client: RecordingClient):  # type: ignore[no-untyped-def]
-    await lsp_client.initialize_session(initialize_params())
-    yield
-    await lsp_client.shutdown_session()
 
 
 async def still_checks_others(editor: Editor, tmp_path: Path) -> None:

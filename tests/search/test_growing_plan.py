@@ -11,7 +11,7 @@ import pytest
 
 from rei.runtime.campaigns import CampaignError, CampaignStore
 from rei.runtime.campaigns.store import extend_plan
-from tests.campaign.records import example_plan
+from tests.campaigns.records import example_plan
 
 
 def test_a_plan_may_only_grow_at_its_end(tmp_path: Path) -> None:

@@ -148,7 +148,7 @@ def test_the_objective_is_the_margin_and_never_hides_a_failure() -> None:
         NO_EVIDENCE,
     )
     from rei.runtime.results import Verdict  # noqa: PLC0415
-    from tests.campaign.records import summary_for  # noqa: PLC0415
+    from tests.campaigns.records import summary_for  # noqa: PLC0415
 
     spec = RunSpec("m.r00", "/m.mission", "x/m.mission", "x", 0, 1)
 
@@ -201,7 +201,7 @@ def test_a_fail_line_names_the_failed_requirements_and_labels_the_margin() -> No
         objective,
     )
     from rei.runtime.results import Verdict  # noqa: PLC0415
-    from tests.campaign.records import summary_for  # noqa: PLC0415
+    from tests.campaigns.records import summary_for  # noqa: PLC0415
 
     spec = RunSpec("m.r00", "/m.mission", "x/m.mission", "x", 0, 1)
     speed = Verdict("SPEED_LIMIT", "pass", None, "", margin=0.04)

@@ -31,7 +31,7 @@ from rei.runtime.campaigns.shrink.oracle import (
     fails_everywhere,
 )
 from rei.runtime.campaigns.shrink.shrinker import Shrinker, choose_requirement, unknown_requirement
-from tests.campaign.records import summary_for
+from tests.campaigns.records import summary_for
 
 CASES = Path(__file__).parent / "cases"
 CLUTTERED = CASES / "cluttered.mission"

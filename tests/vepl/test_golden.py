@@ -12,8 +12,8 @@ from pathlib import Path
 
 from rei.generators.targets.rx import render_module
 from rei.lang.vepl import load_vepl
-from tests.monitor.helpers import monitor
-from tests.monitor.streams import drive, straight, wall
+from tests.observation.helpers import monitor
+from tests.observation.streams import drive, straight, wall
 
 GOLDEN = Path(__file__).parent / "golden"
 

@@ -8,7 +8,7 @@ the two cells' costs. ``GridGraph.astar`` is the same algorithm, step for step, 
 neighbour order, same heap tie-breaking by insertion count, same float sums), so it returns
 the same path, while building the grid costs a few numpy operations instead of adding
 hundreds of thousands of edges to a graph, and each expansion reads plain lists.
-``tests/runtime/test_gridplan.py`` checks the equivalence against networkx.
+``tests/robot/test_gridplan.py`` checks the equivalence against networkx.
 This module must never import pybullet.
 """
 
