@@ -65,7 +65,7 @@ from rei.runtime.robot.contract import Controller, ControllerContext
 from rei.runtime.robot.host import HostedController
 from rei.runtime.robot.selection import load_controller
 from rei.runtime.runs.session import run_into
-from rei.runtime.simulation.assembly import RunConfig, RunRecord, generate_world, run_mission
+from rei.runtime.simulation.assembly import LoopRecord, RunConfig, generate_world, run_mission
 from rei.runtime.simulation.sensors.laser import Laser2D
 from rei.runtime.simulation.world.bullet import BulletWorld
 from rei.runtime.trace import TraceWriter
@@ -306,7 +306,7 @@ def component_shares(stats: pstats.Stats) -> Counter[str]:
     return shares
 
 
-def profiled(mission_file: Path, work: Path) -> tuple[Counter[str], RunRecord]:
+def profiled(mission_file: Path, work: Path) -> tuple[Counter[str], LoopRecord]:
     """The mission with the navigator in this process, under cProfile during the loop."""
     profile = cProfile.Profile()
 
@@ -317,7 +317,7 @@ def profiled(mission_file: Path, work: Path) -> tuple[Counter[str], RunRecord]:
 
     loop = run_module.run_mission
 
-    def run_profiled(*args: Any, **kwargs: Any) -> RunRecord:
+    def run_profiled(*args: Any, **kwargs: Any) -> LoopRecord:
         profile.enable()
         try:
             return loop(*args, **kwargs)

@@ -28,7 +28,7 @@ if TYPE_CHECKING:
     from rei.runtime.messages.sink import SampleSink
     from rei.runtime.observation.evaluator.signal_log import SignalRow
     from rei.runtime.runs.supervisor import RunRequest
-    from rei.runtime.simulation.assembly import RunConfig, RunProbe, RunRecord
+    from rei.runtime.simulation.assembly import LoopRecord, RunConfig, RunProbe
 
 # The simulator, the monitor and the generators are imported where they are used: `rei run`
 # itself only supervises the process that runs them (rei.runtime.runs.supervisor), and pays
@@ -133,7 +133,7 @@ def run_into(mission_path: Path, out_dir: Path, controller: str = "reference", s
              bus: str | None = None, bus_credentials: Path | None = None,
              bus_wait: float = 30.0, wait_monitor: bool = False,
              parameters: ParameterValues = ()
-             ) -> tuple[RunSummary, RunRecord]:
+             ) -> tuple[RunSummary, LoopRecord]:
     """Everything `rei run` does, in this process: generate, run, monitor with the .vepl's
     automata (the default specification unless ``vepl``; none when ``monitor`` is False),
     write outputs. Extra ``sinks`` see the same stream as the trace and the monitor; ``probe``

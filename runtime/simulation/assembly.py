@@ -42,14 +42,14 @@ from rei.runtime.robot.contract import Controller, ControllerContext, MapObstacl
 from rei.runtime.robot.watchdog import ControllerFault
 from rei.runtime.simulation.faults.stage import NO_FAULTS, FaultStage, fault_measurements
 from rei.runtime.simulation.loop import (
-    Animator,
     Board,
     Clock,
     Collector,
+    DeadReckoning,
     Faults,
+    Humans,
     Laser,
     Mission,
-    Odometry,
     Robot,
     Scheduler,
     SignalSource,
@@ -89,7 +89,11 @@ class RunConfig:
 
 
 @dataclass(frozen=True)
-class RunRecord:
+class LoopRecord:
+    """What the run loop recorded of one run (its outcome, tasks, measurements and costs);
+    ``summary_of`` makes the run's RunSummary of it. A campaign's record of a run is
+    rei.runtime.campaigns.store.RunRecord."""
+
     outcome: Outcome
     reason: str
     duration: float
@@ -172,7 +176,7 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
                 progress: Callable[[float, float], None] | None = None,
                 log: Callable[[str], None] | None = None,
                 probe: RunProbe | None = None, *,
-                faults: FaultStage | None = None) -> RunRecord:
+                faults: FaultStage | None = None) -> LoopRecord:
     """Run the mission once; the record of how it ended (never raises for controller faults).
 
     The run is the components of ``rei.runtime.simulation.loop`` on one scheduler; ``faults`` is the
@@ -220,11 +224,11 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
                   manifest.drive.max_angular, stage).start(board)
     world_run = world.start(board)
     try:
-        animator = Animator(manifest, rate, every_control, config.seed, config.vary) \
+        animator = Humans(manifest, rate, every_control, config.seed, config.vary) \
             .start(board, world_run.world.object_ids)
         world_run.track(animator.bodies)
         laser_run = laser.start(board, rng)
-        odometry = Odometry(start, config.odom_drift, every_control / rate).start(board, rng)
+        odometry = DeadReckoning(start, config.odom_drift, every_control / rate).start(board, rng)
         faults_run = Faults(stage).start(board)
         if stage is not NO_FAULTS:  # the empty stage ignores signals: nobody listens
             for sink in sinks:
@@ -318,7 +322,7 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
         statistics = getattr(stage, "statistics", None)
         if callable(statistics):
             measurements["fault_statistics"] = {s.name: dict(s.counts) for s in statistics()}
-    return RunRecord(outcome, reason, clock.now, tasks, measurements,
+    return LoopRecord(outcome, reason, clock.now, tasks, measurements,
                      wallclock.perf_counter() - wall_start,
                      wallclock.process_time() - cpu_start, clock.k,
                      scheduler.cpu_seconds())
@@ -336,7 +340,7 @@ class _Progress:
             self.next = clock.now + 1.0
 
 
-def summary_of(record: RunRecord, mission: ConcreteMission, controller: str,
+def summary_of(record: LoopRecord, mission: ConcreteMission, controller: str,
                seed: int) -> RunSummary:
     """The run summary before any monitor is attached (no signals, no verdicts yet)."""
     return RunSummary(RESULTS_VERSION, mission.name, mission.world.name, seed, controller,

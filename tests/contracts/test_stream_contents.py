@@ -17,7 +17,7 @@ from rei.runtime.observation.model.geometry import FootprintSet
 from rei.runtime.observation.model.runtime_model import RuntimeModel
 from rei.runtime.robot import Controller
 from rei.runtime.runs.session import run_into
-from rei.runtime.simulation.assembly import RunConfig, RunRecord, generate_world, run_mission
+from rei.runtime.simulation.assembly import LoopRecord, RunConfig, generate_world, run_mission
 from rei.runtime.trace import read_trace
 from tests.robot.scripted import Ram
 
@@ -58,7 +58,7 @@ def _lane(folder: Path, kind: str, goals: str = "goal a at start\n    goal b at 
 
 
 def _run(mission_path: Path, controller: Controller, config: RunConfig,
-         monitor_rate: float | None = None) -> tuple[SampleList, RunRecord]:
+         monitor_rate: float | None = None) -> tuple[SampleList, LoopRecord]:
     """Run in-process (the control rate and the sample rate are the test's to choose)."""
     world = mission_path.parent / "world"
     mission = generate_world(mission_path, world)

@@ -44,7 +44,7 @@ from rei.runtime.simulation.animator.reactive import (
     pass_side,
     social_acceleration,
 )
-from rei.runtime.simulation.assembly import RunConfig, RunRecord, generate_world, run_mission
+from rei.runtime.simulation.assembly import LoopRecord, RunConfig, generate_world, run_mission
 from tests.robot.faulty import Idle as Idle  # re-exported: a controller by module:Class
 from tests.simulation.test_humans import ROOM as ROOM_TEMPLATE
 
@@ -70,7 +70,7 @@ MISSION = """mission meet in "hall.room" {
 
 
 def _run(folder: Path, controller: object, duration: float | None = None
-         ) -> tuple[RunRecord, np.ndarray]:
+         ) -> tuple[LoopRecord, np.ndarray]:
     """The run's record and the walker's (x, y) at every sample."""
     from rei.runtime.robot.selection import make_controller  # noqa: PLC0415
 
@@ -224,7 +224,7 @@ HELD_BACK_SEED = 1066328527
 
 
 def _held_back(folder: Path, monkeypatch: pytest.MonkeyPatch, social: SocialForce,
-               blind_to_walls: bool = False) -> RunRecord:
+               blind_to_walls: bool = False) -> LoopRecord:
     """The first 50 s of the scene with the reference as the search found it with (it loops
     to a goal behind it: turning on the spot first, issue 22, the robot meets the walker
     elsewhere) and ``social`` as the humans' model (the run's humans take Reactions'

@@ -27,7 +27,7 @@ from rei.runtime.simulation.animator.reactive import (
     yield_factor,
 )
 from rei.runtime.simulation.animator.variation import mean_speed
-from rei.runtime.simulation.assembly import RunConfig, RunRecord, generate_world, run_mission
+from rei.runtime.simulation.assembly import LoopRecord, RunConfig, generate_world, run_mission
 from tests.robot.faulty import Idle
 
 ROOM = """room corridor {
@@ -50,7 +50,7 @@ MISSION = """mission stand in "corridor.room" {
 
 
 def _run(folder: Path, behaviour: str | None, seed: int = 0, vary: bool = False,
-         duration: float = 14.0) -> tuple[RunRecord, np.ndarray]:
+         duration: float = 14.0) -> tuple[LoopRecord, np.ndarray]:
     """The run's record and the walker's (x, y) at every sample."""
     folder.mkdir(parents=True, exist_ok=True)
     text = ROOM.replace("BEHAVIOUR", f" behaviour {behaviour}" if behaviour else "")
@@ -151,7 +151,7 @@ def test_a_robot_coming_closer_repels_a_social_human_more_than_one_driving_away(
 SCENES = Path(__file__).parents[1] / "scenes"
 
 
-def _reference_run(folder: Path, room_text: str) -> RunRecord:
+def _reference_run(folder: Path, room_text: str) -> LoopRecord:
     from rei.runtime.robot.selection import make_controller  # noqa: PLC0415
 
     folder.mkdir(parents=True, exist_ok=True)

@@ -46,7 +46,7 @@ from rei.runtime.simulation.animator.reactive import (
     social_acceleration,
     way_aside,
 )
-from rei.runtime.simulation.assembly import RunConfig, RunRecord, generate_world, run_mission
+from rei.runtime.simulation.assembly import LoopRecord, RunConfig, generate_world, run_mission
 
 REPO = Path(__file__).resolve().parents[2]
 SCENES = Path(__file__).parents[1] / "scenes"
@@ -70,7 +70,7 @@ def longest_wait(times: np.ndarray, walker: np.ndarray, robot: np.ndarray) -> fl
 
 
 def _scene(name: str, seed: int, folder: Path, monkeypatch: pytest.MonkeyPatch,
-           reactions: Reactions) -> tuple[RunRecord, np.ndarray, np.ndarray, np.ndarray]:
+           reactions: Reactions) -> tuple[LoopRecord, np.ndarray, np.ndarray, np.ndarray]:
     """The scene's whole mission with the reference, the search's run seed and ``reactions``
     as the humans' model; the record, the times, the walker's and the robot's (x, y)."""
     from rei.runtime.robot.selection import make_controller  # noqa: PLC0415

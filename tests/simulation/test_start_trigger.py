@@ -19,7 +19,7 @@ import pytest
 from rei.runtime.artifacts.monitor_config import load_monitor_config
 from rei.runtime.artifacts.world import load_manifest
 from rei.runtime.messages.sink import SampleList
-from rei.runtime.simulation.assembly import RunConfig, RunRecord, generate_world, run_mission
+from rei.runtime.simulation.assembly import LoopRecord, RunConfig, generate_world, run_mission
 from tests.robot.scripted import Ram
 
 ROOM = """room hall {
@@ -44,7 +44,7 @@ MOUTH = (4.0, 0.0)
 
 
 def _run(folder: Path, speed: float, trigger: bool = True, duration: float = 24.0
-         ) -> tuple[RunRecord, np.ndarray, np.ndarray, np.ndarray]:
+         ) -> tuple[LoopRecord, np.ndarray, np.ndarray, np.ndarray]:
     """The record, the sample times, the robot's (x, y) and the stepper's (x, y)."""
     folder.mkdir(parents=True, exist_ok=True)
     clause = f"when robot within {WITHIN} of g_2_5" if trigger else ""
@@ -75,7 +75,7 @@ def _robot_distance(robot: np.ndarray, at: int) -> float:
 
 
 @pytest.fixture(scope="module")
-def runs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, tuple[RunRecord, np.ndarray,
+def runs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, tuple[LoopRecord, np.ndarray,
                                                                       np.ndarray, np.ndarray]]:
     base = tmp_path_factory.mktemp("trigger")
     return {"slow": _run(base / "slow", 0.15), "fast": _run(base / "fast", 0.26),

@@ -115,7 +115,10 @@ def in_order(zenoh: Any, callback: Callable[[Any], None]) -> Any:
     return zenoh.handlers.Callback(callback, indirect=False)
 
 
-class Subscription:
+class TopicSubscription:
+    """A subscription of a ROS 2 node to a topic on rmw_zenoh's wire (the bus's own is
+    rei.runtime.bus.client.Subscription)."""
+
     def __init__(self, token: EntityToken, callback: Callable[[Any, wire.Attachment], None]
                  ) -> None:
         self.token, self._callback = token, callback
@@ -255,11 +258,11 @@ class RmwNode:
 
     def subscription(self, topic: str, msgtype: str,
                      callback: Callable[[Any, wire.Attachment], None],
-                     qos: QosProfile = DEFAULT_QOS) -> Subscription:
+                     qos: QosProfile = DEFAULT_QOS) -> TopicSubscription:
         zenoh = import_zenoh()
         token = self._entity(EntityKind.SUBSCRIPTION, topic, msgtype, qos)
         key = topic_keyexpr(self.domain, token.topic or "", msgtype, token.type_hash or "")
-        subscription = Subscription(token, callback)
+        subscription = TopicSubscription(token, callback)
         store = self.store
 
         def handler(sample: Any) -> None:

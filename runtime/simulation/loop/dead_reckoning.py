@@ -11,11 +11,11 @@ import numpy as np
 from rei.runtime.messages import OdometryReading, Pose
 from rei.runtime.simulation.loop.board import Board
 from rei.runtime.simulation.loop.scheduler import Clock
-from rei.runtime.simulation.sensors.odometry import Odometry as OdometrySensor
+from rei.runtime.simulation.sensors.odometry import Odometry
 
 
 @dataclass(frozen=True)
-class Odometry:
+class DeadReckoning:
     origin: Pose
     """The robot's start pose: odometry's origin."""
     drift: float
@@ -23,14 +23,14 @@ class Odometry:
     period: float
     """Seconds between two updates (the control period)."""
 
-    def start(self, board: Board, rng: np.random.Generator) -> OdometryRun:
-        return OdometryRun(self, board, rng)
+    def start(self, board: Board, rng: np.random.Generator) -> DeadReckoningRun:
+        return DeadReckoningRun(self, board, rng)
 
 
-class OdometryRun:
-    def __init__(self, spec: Odometry, board: Board, rng: np.random.Generator) -> None:
+class DeadReckoningRun:
+    def __init__(self, spec: DeadReckoning, board: Board, rng: np.random.Generator) -> None:
         self.spec, self.board = spec, board
-        self.sensor = OdometrySensor(spec.origin, spec.drift, rng)
+        self.sensor = Odometry(spec.origin, spec.drift, rng)
         self._seq = 0
 
     def step(self, clock: Clock) -> None:

@@ -17,34 +17,34 @@ from typing import Any
 
 from rei.runtime.artifacts.world import WorldManifest
 from rei.runtime.messages import BodyVelocities
-from rei.runtime.simulation.animator import Animator as Paths
+from rei.runtime.simulation.animator import Animator
 from rei.runtime.simulation.animator.engine import animated_bodies, variations_record, wall_boxes
 from rei.runtime.simulation.loop.board import Board
 from rei.runtime.simulation.loop.scheduler import Clock
 
 
 @dataclass(frozen=True)
-class Animator:
+class Humans:
     manifest: WorldManifest
     physics_rate: float
     control_every: int
     seed: int
     vary: bool
 
-    def start(self, board: Board, object_ids: list[int]) -> AnimatorRun:
+    def start(self, board: Board, object_ids: list[int]) -> HumansRun:
         """``object_ids``: the pybullet ids of the manifest's objects, in order."""
-        return AnimatorRun(self, board, object_ids)
+        return HumansRun(self, board, object_ids)
 
 
-class AnimatorRun:
-    def __init__(self, spec: Animator, board: Board, object_ids: list[int]) -> None:
+class HumansRun:
+    def __init__(self, spec: Humans, board: Board, object_ids: list[int]) -> None:
         self.spec, self.board = spec, board
         self.named = animated_bodies(spec.manifest.objects, object_ids, spec.seed, spec.vary)
         self.items = [a for _, a in self.named]
         self.bodies = tuple(item.body for item in self.items)
         """pybullet ids of the animated bodies, in the order ``TrackedBodies`` carries."""
         fixed = spec.manifest.walls + tuple(o for o in spec.manifest.objects if o.fixed)
-        self.paths = Paths(self.items, spec.physics_rate,
+        self.paths = Animator(self.items, spec.physics_rate,
                            spec.manifest.robot.footprint.circumradius(),
                            walls=wall_boxes(fixed))
         self._seq = 0
