@@ -5,7 +5,7 @@ Each physics step sets the body's planar velocity to the spline's displacement o
 (refreshed at the control rate) so a body that was pushed or held up by a contact (the
 robot, a wall) rejoins its path instead of walking a parallel one.
 
-How the path time runs is the body's behaviour (runtime/simulation/animator/reactive.py): a
+How the path time runs is the body's behaviour (reactive.py: yielding.py, social_force.py): a
 ``scripted`` body's is the clock (delayed and scaled by its seeded variation); a
 ``yielding`` human's only advances while the robot leaves its way free; a ``social``
 human's velocity comes from the social force model, towards a target point whose path time
@@ -21,46 +21,50 @@ Encounters are then timed by where the robot is, not by when.
 The body is never teleported, so collisions with the robot are real contacts. Humans turn to
 face their direction of motion. Loops repeat; open trajectories stop at their last vertex.
 This module only moves bodies: it is given the robot's ground-truth pose and velocity each
-control tick, and must never decide anything about the robot or the mission.
+control tick, and must never decide anything about the robot or the mission, nor import
+pybullet or the monitor.
+
+It holds one idea, the ``Animator``, and so stays one module though it is longer than most:
+its per-run state (path times, sides, patience, dodges) is shared by the scripted, yielding
+and social branches of every control tick, so splitting the class would spread one state
+machine over modules. What it is given lives elsewhere: the bodies and the reactions'
+parameters (bodies.py, re-exported here), the reactive models' pure functions (yielding.py,
+social_force.py, walls.py).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from rei.lang.room.model import DEFAULT_BEHAVIOUR, WALKING_SPEEDS, Behaviour
-from rei.lang.room.spline import CatmullRom
-from rei.runtime.artifacts.world import BodySpec, Trajectory
-from rei.runtime.errors import RunError
-from rei.runtime.simulation.animator.reactive import (
-    Agent,
+from rei.lang.room.model import WALKING_SPEEDS
+from rei.runtime.simulation.animator.agent import Agent, Vec
+from rei.runtime.simulation.animator.bodies import (
+    Animated,
+    Reactions,
+    animated_bodies,
+    spline_of,
+    variations_record,
+    wall_boxes,
+)
+from rei.runtime.simulation.animator.social_force import (
     Dodge,
     SocialForce,
-    Vec,
-    YieldRule,
     dodge_sides,
     fits_past,
-    gap_beside,
-    gap_in_the_way,
     held_back,
     keep_clear,
     limit_speed,
     pass_side,
-    room_aside,
     social_acceleration,
-    speed_share,
-    wall_normals,
-    way_aside,
 )
-from rei.runtime.simulation.animator.variation import (
-    NO_VARIATION,
-    HumanVariation,
-    draw_variations,
-    mean_speed,
-)
+from rei.runtime.simulation.animator.variation import mean_speed
+from rei.runtime.simulation.animator.walls import room_aside, wall_normals, way_aside
+from rei.runtime.simulation.animator.yielding import gap_beside, gap_in_the_way, speed_share
+
+__all__ = ["Animated", "Animator", "Reactions", "animated_bodies", "spline_of",
+           "variations_record", "wall_boxes"]
 
 CATCH_UP_GAIN = 1.0
 """1/s: how fast a displaced body returns to its path."""
@@ -82,74 +86,6 @@ its radius."""
 Pose = tuple[float, float, float]
 
 
-@dataclass(frozen=True)
-class Animated:
-    body: int
-    """The body's id in the world."""
-    spline: CatmullRom
-    face_motion: bool
-    behaviour: Behaviour = DEFAULT_BEHAVIOUR
-    variation: HumanVariation = NO_VARIATION
-    radius: float = 0.25
-    """m, the footprint's radius others keep away from."""
-    start_when: tuple[float, float, float] | None = None
-    """(x, y, within): the clock starts when the robot's centre first comes within
-    ``within`` m of (x, y); None: with the run."""
-
-
-@dataclass(frozen=True)
-class Reactions:
-    """The parameters of the reactive behaviours (one object, so two runs can differ)."""
-
-    yielding: YieldRule = field(default_factory=YieldRule)
-    social: SocialForce = field(default_factory=SocialForce)
-
-
-def spline_of(trajectory: Trajectory, name: str = "body") -> CatmullRom:
-    """The body's spline; RunError (naming it) for control points no spline passes through
-    (the checker's TRAJ-SPEED keeps generated worlds clear of them; a world.json edited by
-    hand may not be)."""
-    pts = np.array(trajectory.points, dtype=float).reshape(-1, 3)
-    times = pts[:, 0]
-    if len(times) < 2 or not np.all(np.diff(times) > 0):
-        raise RunError(f"world.json: the trajectory of '{name}': expected at least two control "
-                       f"points at increasing times, found times "
-                       f"{', '.join(f'{t:g}' for t in times[:6])}"
-                       + (" ..." if len(times) > 6 else ""))
-    return CatmullRom(times, pts[:, 1:3], trajectory.loop)
-
-
-def _triggered(body: BodySpec) -> bool:
-    return body.trajectory is not None and body.trajectory.start_when is not None
-
-
-def animated_bodies(objects: tuple[BodySpec, ...], body_ids: list[int], seed: int,
-                    vary: bool) -> list[tuple[str, Animated]]:
-    """The world's bodies with a trajectory, by name, in declaration order; humans get
-    their behaviour and (with ``vary``) their seeded variation."""
-    named = [(b.name, body_ids[i], b) for i, b in enumerate(objects) if b.trajectory is not None]
-    splines = [spline_of(b.trajectory, name) for name, _, b in named if b.trajectory is not None]
-    humans = [k for k, (_, _, b) in enumerate(named) if b.role == "human"]
-    drawn = draw_variations(seed, [splines[k] for k in humans]) if vary else ()
-    # A triggered human keeps its speed scale but not its start delay: the trigger places
-    # the encounter where the robot is, and a random delay would move it again.
-    variation = {k: replace(v, phase_s=0.0) if _triggered(named[k][2]) else v
-                 for k, v in zip(humans, drawn, strict=False)}
-    return [(name, Animated(bid, splines[k], b.role == "human",
-                            b.behaviour if b.role == "human" else DEFAULT_BEHAVIOUR,
-                            variation.get(k, NO_VARIATION),
-                            max(b.footprint.half_extents()),
-                            b.trajectory.start_when if b.trajectory is not None else None))
-            for k, (name, bid, b) in enumerate(named)]
-
-
-def variations_record(named: list[tuple[str, Animated]]) -> dict[str, dict[str, object]]:
-    """What a run's summary shows of its humans: behaviour and what was drawn."""
-    return {name: {"behaviour": a.behaviour, "phase_s": a.variation.phase_s,
-                   "speed_scale": a.variation.speed_scale}
-            for name, a in named if a.face_motion}
-
-
 def _pull(ex: float, ey: float) -> tuple[float, float]:
     err = math.hypot(ex, ey)
     if err <= 1e-9:
@@ -162,13 +98,6 @@ def _turn(face_motion: bool, vx: float, vy: float, yaw: float, threshold: float)
     if not face_motion or math.hypot(vx, vy) <= threshold:
         return 0.0
     return math.remainder(math.atan2(vy, vx) - yaw, math.tau) / TURN_TIME
-
-
-def wall_boxes(bodies: tuple[BodySpec, ...]) -> np.ndarray:
-    """(x, y, yaw, half x, half y) of each fixed body (a cylinder as its bounding square):
-    what ``fits_past`` looks at."""
-    rows = [(b.x, b.y, b.yaw, *b.footprint.half_extents()) for b in bodies]
-    return np.array(rows, dtype=float).reshape(-1, 5)
 
 
 class Animator:
