@@ -25,8 +25,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from rei.runtime.campaigns.records import RunRecord, verdict_reason
 from rei.runtime.campaigns.stats import by_mission
-from rei.runtime.campaigns.store import RunRecord, verdict_reason
 from rei.runtime.observation.run_folder import read_events
 from rei.runtime.results import failed_verdicts
 

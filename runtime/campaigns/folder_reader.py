@@ -13,7 +13,8 @@ from pathlib import Path
 from typing import Any
 
 from rei.runtime.campaigns.plan import CampaignPlan
-from rei.runtime.campaigns.store import CampaignStore, RunRecord
+from rei.runtime.campaigns.records import RunRecord
+from rei.runtime.campaigns.store import CampaignStore
 
 
 @dataclass(frozen=True)

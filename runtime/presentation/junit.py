@@ -16,8 +16,8 @@ from collections.abc import Sequence
 
 from lxml import etree
 
+from rei.runtime.campaigns.records import RunRecord
 from rei.runtime.campaigns.stats import by_mission
-from rei.runtime.campaigns.store import RunRecord
 from rei.runtime.results import Verdict
 
 

@@ -23,8 +23,8 @@ from lxml import etree
 from rei.lang.cli_support import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_RUN_ERROR
 from rei.runtime.campaigns import CampaignStore, classify_pairs, mission_verdicts
 from rei.runtime.campaigns.progress import Progress
+from rei.runtime.campaigns.records import RunRecord
 from rei.runtime.campaigns.stats import campaign_outcome
-from rei.runtime.campaigns.store import RunRecord
 
 from .conftest import require_rei_run
 from .records import EXAMPLES, example_plan, write_campaign

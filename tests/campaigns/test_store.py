@@ -11,7 +11,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from rei.runtime.campaigns import CampaignError, CampaignStore, RunRecord, RunResult, plan_campaign
-from rei.runtime.campaigns.store import rows_table
+from rei.runtime.campaigns.results_table import rows_table
 
 from .records import EXAMPLES, example_plan, result_for, write_campaign
 

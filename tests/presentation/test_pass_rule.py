@@ -10,7 +10,8 @@ import pytest
 from lxml import etree
 
 from rei.runtime.campaigns import CampaignStore, RunResult, plan_campaign
-from rei.runtime.campaigns.store import RunRecord, record_row, verdict_reason
+from rei.runtime.campaigns.records import RunRecord, verdict_reason
+from rei.runtime.campaigns.results_table import record_row
 from rei.runtime.presentation.campaign_report.build import build_report
 from rei.runtime.presentation.junit import junit_xml
 from rei.runtime.results import RESULTS_VERSION, Outcome, RunSummary, Verdict, judge

@@ -27,9 +27,9 @@ from rei.lang.vepl_parameters import (
 )
 from rei.runtime.campaigns import CampaignError, CampaignStore, RunSpec
 from rei.runtime.campaigns.plan import CampaignPlan, plan_campaign
+from rei.runtime.campaigns.records import RunRecord
 from rei.runtime.campaigns.search.driver import SearchConfig
 from rei.runtime.campaigns.shrink.oracle import RunSettings
-from rei.runtime.campaigns.store import RunRecord
 from rei.runtime.presentation.junit import junit_xml
 from rei.runtime.results import RunSummary, Verdict
 from rei.runtime.runs.cache import ArtifactCache

@@ -47,6 +47,7 @@ from rei.generators.rooms.space import (
 from rei.runtime.campaigns.engines import CampaignEngine
 from rei.runtime.campaigns.orchestration import run_campaign
 from rei.runtime.campaigns.plan import CampaignPlan, plan_campaign
+from rei.runtime.campaigns.records import RunRecord
 from rei.runtime.campaigns.search.candidates import (
     CANDIDATES,
     Candidate,
@@ -55,7 +56,7 @@ from rei.runtime.campaigns.search.candidates import (
 )
 from rei.runtime.campaigns.search.errors import SearchError
 from rei.runtime.campaigns.search.strategies import Told, make_strategy, refuse_unusable
-from rei.runtime.campaigns.store import MANIFEST, CampaignStore, RunRecord, extend_plan
+from rei.runtime.campaigns.store import MANIFEST, CampaignStore, extend_plan
 from rei.runtime.observation.evaluator.margins import smallest_margin
 
 SEARCH_FILE = "search.json"

@@ -27,6 +27,7 @@ import jinja2
 
 from rei.runtime.campaigns.failure_clusters import Cluster, clusters, failures
 from rei.runtime.campaigns.folder_reader import CampaignData
+from rei.runtime.campaigns.records import RunRecord, verdict_reason
 from rei.runtime.campaigns.stats import (
     by_mission,
     campaign_outcome,
@@ -34,7 +35,7 @@ from rei.runtime.campaigns.stats import (
     classify_pairs,
     mission_verdicts,
 )
-from rei.runtime.campaigns.store import RUNS, RunRecord, required_pass_rate, verdict_reason
+from rei.runtime.campaigns.store import RUNS, required_pass_rate
 from rei.runtime.observation.run_folder import read_events
 from rei.runtime.presentation.campaign_report import campaign_plots as plots
 from rei.runtime.presentation.campaign_report.overview import requirement_matrix
