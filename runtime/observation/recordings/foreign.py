@@ -33,15 +33,12 @@ from __future__ import annotations
 
 import heapq
 import math
-import tomllib
-from collections.abc import Iterator, Mapping
-from dataclasses import dataclass, field
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from rei.generators.concrete import ConcreteGoal
 from rei.lang.suggest import did_you_mean
 from rei.runtime.messages import (
     UNCOLLECTED,
@@ -50,7 +47,6 @@ from rei.runtime.messages import (
     NavState,
     RobotBelief,
     Sample,
-    StreamHeader,
 )
 from rei.runtime.messages.ros import (
     BELIEF_TOPICS,
@@ -65,163 +61,18 @@ from rei.runtime.messages.ros import (
     scan_of,
     seconds,
 )
-from rei.runtime.observation.recordings.errors import RecordingError
-from rei.runtime.robot.contract import GoalFeedback, NavGoal
+from rei.runtime.observation.recordings.bag_evidence import NavEvidence, TopicRate
+from rei.runtime.observation.recordings.bag_inputs import (
+    MOVING_ROLES,
+    BagError,
+    BagProblem,
+    BagWorld,
+    TopicMap,
+    load_topic_map,
+)
 from rei.runtime.simulation.mission import MissionExecutor
 
-GAP = 2.5
-"""A stream whose messages are this many of its usual intervals apart has a gap (a rate
-drop): what happened in between was not observed."""
-MOVING_ROLES = ("robot", "dynamic", "human")
-
-
-class BagError(RecordingError):
-    """A ROS 2 recording cannot be judged: unreadable, or without a topic or frame REI needs
-    (the message names the file, what was expected and what the bag holds)."""
-
-
-@dataclass(frozen=True)
-class BagProblem:
-    """Data a verdict cannot rest on: ``topic`` at ``time`` (s), ``what`` happened."""
-
-    topic: str
-    time: float
-    what: str
-
-    def text(self) -> str:
-        return f"{self.topic} at t={self.time:.3f} s: {self.what}"
-
-
-@dataclass(frozen=True)
-class TopicMap:
-    """How another stack names REI's topics and frames (``rei replay --map FILE``)."""
-
-    topics: Mapping[str, str] = field(default_factory=dict)
-    """REI's topic name (``ros.ROBOT_TOPICS``) -> the bag's."""
-    frames: Mapping[str, str] = field(default_factory=dict)
-    """REI's frame name (``map``, a body's name) -> the bag's."""
-
-    def topic(self, name: str) -> str:
-        return self.topics.get(name, name)
-
-    def frame(self, name: str) -> str:
-        return self.frames.get(name, name)
-
-
-def load_topic_map(path: Path) -> TopicMap:
-    """A mapping file: TOML with a ``[topics]`` and a ``[frames]`` table of strings::
-
-        [topics]
-        "/scan" = "/robot1/scan"
-        [frames]
-        map = "world"
-        waffle = "base_footprint"
-    """
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise BagError(f"{path}: cannot read the mapping file: {exc.strerror or exc}") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise BagError(f"{path}: expected a TOML mapping file, found text TOML cannot read "
-                       f"({exc})") from None
-    unknown = sorted(set(data) - {"topics", "frames"})
-    if unknown:
-        raise BagError(f"{path}: {unknown[0]}: expected the tables [topics] and [frames], "
-                       f"found [{unknown[0]}]" + did_you_mean(unknown[0], ["topics", "frames"]))
-    tables: dict[str, dict[str, str]] = {}
-    for name in ("topics", "frames"):
-        table = data.get(name, {})
-        if not isinstance(table, dict):
-            raise BagError(f"{path}: {name}: expected a table of names, found {table!r}")
-        for key, value in table.items():
-            if not isinstance(value, str) or not value:
-                raise BagError(f"{path}: {name}.{key}: expected a name (text), found "
-                               f"{value!r}")
-            if name == "topics" and key not in ROBOT_TOPICS:
-                raise BagError(f"{path}: topics.{key}: expected one of REI's topics "
-                               f"({', '.join(ROBOT_TOPICS)}), found {key!r}"
-                               + did_you_mean(key, list(ROBOT_TOPICS)))
-        tables[name] = dict(table)
-    return TopicMap(tables["topics"], tables["frames"])
-
-
-@dataclass(frozen=True)
-class BagWorld:
-    """What a bag is judged against: the .mission's stream header (its room's bodies, its
-    goals, what it collects), its tasks in order and the bodies' declared poses."""
-
-    header: StreamHeader
-    tasks: tuple[ConcreteGoal, ...]
-    poses: tuple[tuple[float, float, float], ...]
-    """(x, y, yaw) of each of the header's objects as the room declares it."""
-    settle: float = 0.0
-    """The .mission's settle period: seconds the mission goes on after its last task, as in
-    the live run (``runtime.loop.mission``), so its end (SIG_MISSION_END) comes as late."""
-
-
-class _Evidence:
-    """The mission executor's goal client for a recording: the navigation state the
-    recording shows (Nav2's status, when the bag has it), else the state the ground truth
-    gives (SUCCEEDED within the goal's tolerances); the executor then judges it as live."""
-
-    def __init__(self, with_status: bool) -> None:
-        self.with_status = with_status
-        self.goal: NavGoal | None = None
-        self.heading_tolerance = 0.0
-        self.statuses: dict[bytes, tuple[float, int, NavState]] = {}
-        """Nav2's goals: id -> (accepted at, first heard, state); the k-th goal accepted is
-        the mission's k-th task (a mission runner sends them one by one)."""
-        self.sent = -1
-        self.truth = (0.0, 0.0, 0.0)
-
-    def send_goal(self, goal: NavGoal) -> None:
-        self.goal = goal
-        self.sent += 1
-
-    def status(self, key: bytes, accepted: float, state: NavState) -> None:
-        first = self.statuses.get(key, (accepted, len(self.statuses), state))[1]
-        self.statuses[key] = (accepted, first, state)
-
-    def cancel_goal(self) -> None:
-        self.goal = None
-
-    def feedback(self) -> GoalFeedback:
-        goal = self.goal
-        if goal is None:
-            return GoalFeedback(NavState.IDLE, None)
-        if self.with_status:
-            goals = sorted(self.statuses.values())
-            state = goals[self.sent][2] if self.sent < len(goals) else NavState.PENDING
-            return GoalFeedback(state, goal.name, message="Nav2's navigate_to_pose status")
-        x, y, yaw = self.truth
-        near = math.hypot(x - goal.x, y - goal.y) <= goal.tolerance
-        turned = goal.yaw is None or \
-            abs(math.remainder(yaw - goal.yaw, math.tau)) <= self.heading_tolerance
-        return GoalFeedback(NavState.SUCCEEDED if near and turned else NavState.ACTIVE,
-                            goal.name)
-
-
-@dataclass
-class _Rate:
-    """A topic's message times: its usual interval, and gaps and stamps going backwards."""
-
-    last: float | None = None
-    intervals: list[float] = field(default_factory=list)
-
-    def see(self, time: float) -> str:
-        last, self.last = self.last, time
-        if last is None or not math.isfinite(time) or not math.isfinite(last):
-            return ""
-        dt = time - last
-        if dt < 0:
-            return f"its stamps go backwards ({last:.3f} s, then {time:.3f} s)"
-        usual = float(np.median(self.intervals)) if len(self.intervals) >= 5 else None
-        if len(self.intervals) < 50:
-            self.intervals.append(dt)
-        if usual is not None and usual > 0 and dt > GAP * usual:
-            return (f"a gap of {dt:.3f} s (its messages are usually {usual:.3f} s apart): "
-                    f"nothing was observed in between")
-        return ""
+__all__ = ["BagError", "BagProblem", "BagSamples", "BagWorld", "TopicMap", "load_topic_map"]
 
 
 class BagSamples(Iterator[Sample]):
@@ -269,11 +120,11 @@ class BagSamples(Iterator[Sample]):
         self._scan: LaserScan | None = None
         self._new_scan = False
         self._laser_min = math.inf
-        self._rates: dict[str, _Rate] = {}
+        self._rates: dict[str, TopicRate] = {}
         self._t0: float | None = None
         self._seq = -1
         self._executor = MissionExecutor(world.tasks, world.settle)
-        self._goals = _Evidence(NAV2_STATUS_TOPIC in self._connections)
+        self._goals = NavEvidence(NAV2_STATUS_TOPIC in self._connections)
         self._tolerances = {t.name: t.heading_tolerance for t in world.tasks}
         self._time_limit = self.header.mission_facts.time_limit \
             if self.header.mission_facts is not None else math.inf
@@ -345,7 +196,7 @@ class BagSamples(Iterator[Sample]):
         if self._t0 is None:
             self._t0 = t
         time = t - self._t0
-        problem = self._rates.setdefault(topic, _Rate()).see(time)
+        problem = self._rates.setdefault(topic, TopicRate()).see(time)
         if problem:
             self._problem(topic, time, problem)
         return time
@@ -389,7 +240,7 @@ class BagSamples(Iterator[Sample]):
             return self._robot_time if math.isfinite(self._robot_time) else 0.0
         time = log_time * 1e-9 - self._log_offset
         if topic != NAV2_STATUS_TOPIC:  # published on change, not at a rate: no gaps
-            problem = self._rates.setdefault(topic, _Rate()).see(time)
+            problem = self._rates.setdefault(topic, TopicRate()).see(time)
             if problem:
                 self._problem(topic, time, problem)
         return time
