@@ -35,7 +35,7 @@ from rei.runtime.messages import (
     Sample,
     StreamHeader,
 )
-from rei.runtime.observation.model import efficiency
+from rei.runtime.observation.model import free_space as efficiency
 from rei.runtime.observation.model.efficiency import (
     FloorGraph,
     FreeSpace,

@@ -12,6 +12,12 @@ between calls.
 
 The navigator (rei.runtime.robot.navigator.clearance) measures its distance to an oriented box
 with code of its own, on purpose: the judge and the judged must not share a bug.
+
+It stays one module past 450 lines (issue 34) because it holds one idea, the exact footprint
+distances: the functions round ``FootprintSet`` are the pieces of its broad and narrow phases
+(the footprints' local shapes, which the laser, the hazard and the free space read too, the
+point-to-segment, inside-polygon and box distances), and split off they would mean nothing
+apart from it.
 """
 
 from __future__ import annotations

@@ -3,21 +3,22 @@
 Concrete environment: pose, twist and footprint of every observed object, and the footprint
 distance from the robot to each (vectorised, rei.runtime.observation.model.geometry). Abstract
 environment: the floor the robot and every observed object stands on, through the generators'
-inverse mapping (the floor centres in the stream header, thesis 5.1), the floors of the
-mission's goals and which floors are neighbours. Robot description: odometry, laser minimum,
-laser clearance (from the latest scan, rei.runtime.observation.model.laser_clearance), navigation
-state, mission
-and task states, and the robot's own motion apart from motion it was given (``PushTracker``:
-a body that walks into a standing robot shoves it, and requirements on driven motion must not
-blame the robot for that speed). Also the sample hygiene: non-finite, out-of-order, duplicated
-and missing samples are counted, never modelled. This module must never import the simulator.
+inverse mapping (the floor centres in the stream header, thesis 5.1; the look-up is
+rei.runtime.observation.model.floors), the floors of the mission's goals and which floors are
+neighbours. Robot description: odometry, laser minimum, laser clearance (from the latest scan,
+rei.runtime.observation.model.laser_clearance), navigation state, mission and task states, and
+the robot's own motion apart from motion it was given (rei.runtime.observation.model.pushes).
+This module holds ``RuntimeModel`` and its task records; the sample hygiene
+(rei.runtime.observation.model.sample_checks) and the inputs between two samples
+(rei.runtime.observation.model.interpolation) are re-exported from here. It must never import
+pybullet, the simulation, the evaluator or the monitor's host.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from typing import ClassVar
 
 import numpy as np
@@ -26,22 +27,23 @@ from rei.lang.vepl.linker import NAMED_STATES
 from rei.lang.vepl.model import MISSION_STATES, TASK_FAILURES, TASK_STATES
 from rei.runtime.messages import MissionEvent, Sample, StreamHeader
 from rei.runtime.observation.automata.records import QueryInputs
-from rei.runtime.observation.model.efficiency import (
-    FloorGraph,
-    FreeSpace,
-    TaskEfficiency,
-    TaskProgress,
-    footprint_shapes,
-    judge_task,
-)
+from rei.runtime.observation.model.efficiency import TaskEfficiency, TaskProgress, judge_task
+from rei.runtime.observation.model.floors import FloorMap as FloorMap
+from rei.runtime.observation.model.free_space import FloorGraph, FreeSpace, footprint_shapes
 from rei.runtime.observation.model.geometry import FootprintSet
 from rei.runtime.observation.model.hazard import HazardSensor
+from rei.runtime.observation.model.interpolation import crossings as crossings
+from rei.runtime.observation.model.interpolation import interpolate as interpolate
 from rei.runtime.observation.model.laser_clearance import BeamEdges, clearance
+from rei.runtime.observation.model.pushes import PUSH_CONTACT
+from rei.runtime.observation.model.pushes import PushTracker as PushTracker
+from rei.runtime.observation.model.sample_checks import PROBLEM_KINDS as PROBLEM_KINDS
+from rei.runtime.observation.model.sample_checks import SampleProblems as SampleProblems
+from rei.runtime.observation.model.sample_checks import check_sample as check_sample
 
 FAR_AWAY = 1e3
 """Distances and laser readings of the baseline before the first sample: nothing is near,
 so a run that starts close to an object enters CLOSE with a FAR -> CLOSE transition."""
-PROBLEM_KINDS = ("non_finite", "out_of_order", "duplicate", "missing", "malformed")
 TASK_CODE = {s: i for i, s in enumerate(TASK_STATES)}
 MISSION_CODE = {s: i for i, s in enumerate(MISSION_STATES)}
 NAV_CODE = {s: i for i, s in enumerate(NAMED_STATES["nav_state"])}
@@ -53,80 +55,9 @@ APPROACH_LOOKAHEAD = 0.05
 """s: the commanded motion is projected this far ahead to see whether it closes in."""
 MOVING = 0.05
 """m/s: above this ground-truth speed the robot counts as moving (personal space)."""
-PUSH_CONTACT = 0.02
-"""m: a footprint distance below this (or a physical contact) is a contact for the push
-attribution (the default .vepl's eps_collision)."""
-PUSH_APPROACH = 0.01
-"""m/s: a contact while the robot's own command closes in faster than this is the robot's
-doing (the default .vepl's v_contact), so it never starts a push."""
-PUSH_SLACK = 0.02
-"""m/s: the robot moves beyond its command when its speed exceeds the command by more."""
-PUSH_TURN_SLACK = 0.05
-"""rad/s: likewise for turning (the default .vepl's turn_tolerance)."""
 FLOOR_MARGIN = 1e-5
 """m: a robot this far inside the tile it stood on at the last sample is still on it (the
 floors of a grid are 1e-6 m from it at most, so no other tile can claim the point)."""
-
-
-@dataclass
-class SampleProblems:
-    """Bad samples seen in a run, with when, so verdicts they touch become inconclusive."""
-
-    counts: dict[str, int] = field(default_factory=lambda: dict.fromkeys(PROBLEM_KINDS, 0))
-    times: list[float] = field(default_factory=list)
-
-    def add(self, kind: str, time: float, n: int = 1) -> None:
-        self.counts[kind] += n
-        self.times.append(time)
-
-    @property
-    def total(self) -> int:
-        return sum(self.counts.values())
-
-    def within(self, start: float, end: float) -> bool:
-        return any(start <= t <= end for t in self.times)
-
-
-@dataclass(frozen=True)
-class OwnMotion:
-    """The robot's driven motion it answers for, and whether it was being pushed."""
-
-    speed: float
-    yaw_rate: float
-    pushed: bool
-
-
-@dataclass
-class PushTracker:
-    """Tells motion the robot commanded from motion a contact it did not drive into gave it.
-
-    A push starts at a contact (physical, or footprints within ``PUSH_CONTACT``) while the
-    robot's own command does not close in on anything it touches (every ``approach`` at most
-    ``PUSH_APPROACH``): a person walking into a standing robot, a cart rolling into it. It
-    lasts while the contact does, and after it while the robot still moves beyond its
-    command (the shove's momentum); a contact the robot drives into ends it. While pushed, the
-    robot's own speed is its ground-truth speed capped at its commanded speed, and its own
-    turn rate the ground truth clamped between 0 and its commanded turn rate: a shoved robot
-    answers for what it commanded, never for more, and never for less. Outside a push, its
-    own motion is the ground truth.
-    """
-
-    active: bool = False
-
-    def update(self, speed: float, yaw_rate: float, cmd: tuple[float, float],
-               contact: np.ndarray, approach: np.ndarray) -> OwnMotion:
-        v = abs(cmd[0])
-        low, high = min(0.0, cmd[1]), max(0.0, cmd[1])
-        own_yaw = min(max(yaw_rate, low), high)
-        beyond = speed > v + PUSH_SLACK or abs(yaw_rate - own_yaw) > PUSH_TURN_SLACK
-        if contact.any():
-            self.active = not bool((approach[contact] > PUSH_APPROACH).any())
-        elif not beyond:
-            self.active = False
-        pushed = self.active and beyond
-        if not pushed:
-            return OwnMotion(speed, yaw_rate, False)
-        return OwnMotion(min(speed, v), own_yaw, True)
 
 
 @dataclass
@@ -509,143 +440,3 @@ class _Once:
         if self._value is None:
             self._value = self._of(np.asarray(self._poses)[:, :2])
         return self._value
-
-
-class FloorMap:
-    """From positions to floors: the floor tile (a square of the tile size around a floor
-    centre) each position lies in, -1 for none. Floors of a generated world sit on a grid of
-    tile-size steps, so the look-up is an index into that grid."""
-
-    def __init__(self, centres: np.ndarray, tile: float) -> None:
-        self.tile = tile
-        self.centres = centres
-        self.origin = centres.min(axis=0) if len(centres) else np.zeros(2)
-        cells = np.rint((centres - self.origin) / tile).astype(np.int64) if len(centres) \
-            else np.zeros((0, 2), dtype=np.int64)
-        self.on_grid = bool(np.allclose(cells * tile + self.origin, centres, atol=1e-6))
-        size = cells.max(axis=0) + 1 if len(cells) else np.zeros(2, dtype=np.int64)
-        self.grid = np.full((int(size[0]), int(size[1])), -1, dtype=np.int64)
-        # on a cell two floors claim, the first in header order wins (as for the robot)
-        for k in range(len(cells) - 1, -1, -1):
-            self.grid[cells[k, 0], cells[k, 1]] = k
-        self.cells = cells
-        self._adjacent: np.ndarray | None = None
-
-    def of(self, xy: np.ndarray) -> np.ndarray:
-        """The floor index of each (x, y) row, -1 off every floor."""
-        if not len(self.centres) or not len(xy):
-            return np.full(len(xy), -1, dtype=np.int64)
-        if not self.on_grid:
-            half = self.tile / 2
-            inside = np.all(np.abs(xy[:, None, :] - self.centres[None, :, :]) <= half, axis=2)
-            return np.where(inside.any(axis=1), inside.argmax(axis=1), -1)
-        cell = np.floor((xy - self.origin) / self.tile + 0.5).astype(np.int64)
-        ok = (cell >= 0).all(axis=1) & (cell[:, 0] < self.grid.shape[0]) & (
-            cell[:, 1] < self.grid.shape[1])
-        out = np.full(len(xy), -1, dtype=np.int64)
-        out[ok] = self.grid[cell[ok, 0], cell[ok, 1]]
-        return out
-
-    def side_by_side(self, a: int, b: int) -> bool:
-        """Floors ``a`` and ``b`` (indices, -1 for none) share an edge."""
-        if a < 0 or b < 0:
-            return False
-        step = np.abs(self.centres[a] - self.centres[b]) / self.tile
-        return bool(np.isclose(sorted(step), (0.0, 1.0), atol=1e-6).all())
-
-    def adjacent(self) -> np.ndarray:
-        """Floors by floors: their tiles share an edge (worked out once, on first use)."""
-        if self._adjacent is None:
-            n = len(self.centres)
-            found = np.zeros((n, n), dtype=bool)
-            if self.on_grid:
-                for di, dj in ((1, 0), (0, 1)):
-                    for k, (i, j) in enumerate(self.cells):
-                        ii, jj = i + di, j + dj
-                        if ii < self.grid.shape[0] and jj < self.grid.shape[1]:
-                            other = self.grid[ii, jj]
-                            if other >= 0:
-                                found[k, other] = found[other, k] = True
-            else:
-                for k in range(n):
-                    step = np.abs(self.centres - self.centres[k]) / self.tile
-                    near = np.isclose(step, 1.0, atol=1e-6)
-                    same = np.isclose(step, 0.0, atol=1e-6)
-                    found[k] = (near[:, 0] & same[:, 1]) | (same[:, 0] & near[:, 1])
-            self._adjacent = found
-        return self._adjacent
-
-
-def interpolate(a: QueryInputs, b: QueryInputs, f: float) -> QueryInputs:
-    """The inputs a fraction ``f`` of the way from sample ``a`` to sample ``b`` (the
-    continuous measures only; states come from ``b``).
-
-    Distances move linearly, as the bodies do at constant velocity between two samples; the
-    robot's velocities are therefore ``b``'s throughout (the command sent at ``a`` is what
-    it drives until ``b``, and ``b``'s twist is the one it drove with). Interpolating them
-    as well made up motions the robot never made: between a turn on the spot to the left
-    and an arc to the right, a left turn while driving (issue 22: a false SMOOTH_MOTION
-    failure, medium room 261)."""
-    return replace(b, distance=a.distance + f * (b.distance - a.distance),
-                   laser_min=a.laser_min + f * (b.laser_min - a.laser_min),
-                   laser_clearance=a.laser_clearance + f * (b.laser_clearance
-                                                            - a.laser_clearance),
-                   settle_travel=a.settle_travel + f * (b.settle_travel - a.settle_travel),
-                   time=a.time + f * (b.time - a.time),
-                   odom_error=a.odom_error + f * (b.odom_error - a.odom_error))
-
-
-def crossings(before: list[np.ndarray], after: list[np.ndarray]) -> list[float]:
-    """Sorted distinct fractions in [0, 1] where a comparison margin changes sign (a
-    crossing that rounds to the sample itself still counts: the state before it must be
-    visited)."""
-    found: set[float] = set()
-    for m0, m1 in zip(before, after, strict=False):
-        if np.ndim(m0) == 0 and np.ndim(m1) == 0:
-            # one number each (most margins): Python floats, the same IEEE arithmetic
-            a, b = float(m0), float(m1)
-            if math.copysign(1.0, a) != math.copysign(1.0, b) and a != b:
-                f = a / (a - b)
-                if math.isfinite(f) and 0 <= f <= 1:
-                    found.add(f)
-            continue
-        m0 = np.broadcast_to(m0, np.shape(m1)) if np.shape(m0) != np.shape(m1) else m0
-        if np.shape(m0) != np.shape(m1):
-            continue
-        flipped = np.signbit(m0) != np.signbit(m1)
-        if not np.any(flipped):
-            continue
-        a_ = np.asarray(m0)[flipped]
-        b_ = np.asarray(m1)[flipped]
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            f_ = a_ / (a_ - b_)
-        found.update(float(v) for v in f_[np.isfinite(f_) & (f_ >= 0) & (f_ <= 1)])
-    return sorted(found)
-
-
-def check_sample(s: Sample, header: StreamHeader) -> str | None:
-    """Why a sample cannot be used (a PROBLEM_KINDS entry), or None."""
-    n = len(header.objects)
-    poses = np.asarray(s.poses)
-    twists = np.asarray(s.twists)
-    if poses.shape != (n, 3) or twists.shape != (n, 3):
-        return "malformed"
-    if not all(isinstance(i, (int, np.integer)) and 0 <= i < n for i in s.contacts):
-        return "malformed"
-    scalars = (s.time, *s.robot_pose, *s.robot_twist, *s.belief.odom, *s.belief.odom_twist,
-               s.belief.laser_min, *s.belief.cmd)
-    if not all(map(math.isfinite, scalars)):
-        return "non_finite"
-    scan = s.belief.scan
-    if scan is not None:
-        ranges = np.asarray(scan.ranges)
-        if ranges.ndim != 1:
-            return "malformed"
-        # NaN and +inf ranges are beams without a return (not counted); -inf is nonsense
-        if not all(map(math.isfinite, (scan.angle_min, scan.angle_increment, scan.range_max))) \
-                or np.count_nonzero(ranges == -math.inf):
-            return "non_finite"
-    finite = np.logical_and.reduce  # the ufunc itself: no wrapper, no warnings to silence
-    if not (finite(np.isfinite(poses), axis=None) and finite(np.isfinite(twists), axis=None)):
-        return "non_finite"
-    return None
