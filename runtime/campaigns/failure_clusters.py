@@ -25,7 +25,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from rei.runtime.campaigns.records import RunRecord, verdict_reason
+from rei.runtime.campaigns.run_records import RunRecord, verdict_reason
 from rei.runtime.campaigns.stats import by_mission
 from rei.runtime.observation.run_folder import read_events
 from rei.runtime.results import failed_verdicts

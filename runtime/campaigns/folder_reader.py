@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from rei.runtime.campaigns.plan import CampaignPlan
-from rei.runtime.campaigns.records import RunRecord
+from rei.runtime.campaigns.run_records import RunRecord
 from rei.runtime.campaigns.store import CampaignStore
 
 

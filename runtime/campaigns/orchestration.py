@@ -15,7 +15,7 @@ from typing import Any, TextIO
 from rei.runtime.campaigns.engines import CampaignEngine, LocalEngine
 from rei.runtime.campaigns.plan import CampaignPlan
 from rei.runtime.campaigns.progress import Progress
-from rei.runtime.campaigns.records import RunRecord
+from rei.runtime.campaigns.run_records import RunRecord
 from rei.runtime.campaigns.static_pair import write_static_twins
 from rei.runtime.campaigns.store import CampaignStore
 

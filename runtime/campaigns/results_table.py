@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from rei.generators.output import write_atomic
-from rei.runtime.campaigns.records import RunRecord, verdict_reason
+from rei.runtime.campaigns.run_records import RunRecord, verdict_reason
 from rei.runtime.observation.evaluator.margins import RULES, smallest_margin
 from rei.runtime.results import failed_verdicts
 

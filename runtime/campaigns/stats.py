@@ -20,7 +20,7 @@ from statistics import NormalDist
 from typing import Literal
 
 from rei.lang.cli_support import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_RUN_ERROR
-from rei.runtime.campaigns.records import RunRecord
+from rei.runtime.campaigns.run_records import RunRecord
 
 
 @dataclass(frozen=True)

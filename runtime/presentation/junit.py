@@ -16,7 +16,7 @@ from collections.abc import Sequence
 
 from lxml import etree
 
-from rei.runtime.campaigns.records import RunRecord
+from rei.runtime.campaigns.run_records import RunRecord
 from rei.runtime.campaigns.stats import by_mission
 from rei.runtime.results import Verdict
 

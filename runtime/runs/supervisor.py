@@ -4,8 +4,9 @@ end, stall or fake.
 The controller runs inside the simulation's process (it is called every control tick), so
 whatever it does to that process — ``os._exit(0)``, a signal, a loop in C that never gives
 the interpreter lock back — the run's own watchdog thread cannot report. ``supervise`` runs
-``run_into`` in a child process (a fresh interpreter, ``python -m rei.runtime.runs.supervisor``,
-in its own process group) and waits on a pipe over which the child reports how far it got:
+the run in a child process (forked, or a fresh interpreter running the module `rei run`
+names, ``rei.runtime.commands.run``; in its own process group: the work it does is
+``child_work``, given by `rei run`) and waits on a pipe over which the child reports how far it got:
 the mission it loaded, each control tick's simulated time, the end of the loop and, last,
 its exit status. Two wall-clock limits apply (never simulated time, which a stalled process
 does not advance):
@@ -37,7 +38,9 @@ first removes those of supervisors that are gone: a `rei run` killed with SIGKIL
 folder only until the next `rei run` starts.
 
 This module must never import the simulator or the monitor in the supervising process: its
-cost there is an interpreter start-up, not a second copy of REI's heavy imports.
+cost there is an interpreter start-up, not a second copy of REI's heavy imports. It is one
+idea in one module, a little over 450 lines: the limits, the watch over the child's reports,
+the signals passed on and the summary written for a dead child must agree on every state.
 """
 
 from __future__ import annotations

@@ -23,7 +23,7 @@ from lxml import etree
 from rei.lang.cli_support import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_RUN_ERROR
 from rei.runtime.campaigns import CampaignStore, classify_pairs, mission_verdicts
 from rei.runtime.campaigns.progress import Progress
-from rei.runtime.campaigns.records import RunRecord
+from rei.runtime.campaigns.run_records import RunRecord
 from rei.runtime.campaigns.stats import campaign_outcome
 
 from .conftest import require_rei_run

@@ -27,7 +27,7 @@ from rei.lang.vepl_parameters import (
 )
 from rei.runtime.campaigns import CampaignError, CampaignStore, RunSpec
 from rei.runtime.campaigns.plan import CampaignPlan, plan_campaign
-from rei.runtime.campaigns.records import RunRecord
+from rei.runtime.campaigns.run_records import RunRecord
 from rei.runtime.campaigns.search.driver import SearchConfig
 from rei.runtime.campaigns.shrink.oracle import RunSettings
 from rei.runtime.presentation.junit import junit_xml

@@ -47,7 +47,7 @@ from rei.generators.rooms.space import (
 from rei.runtime.campaigns.engines import CampaignEngine
 from rei.runtime.campaigns.orchestration import run_campaign
 from rei.runtime.campaigns.plan import CampaignPlan, plan_campaign
-from rei.runtime.campaigns.records import RunRecord
+from rei.runtime.campaigns.run_records import RunRecord
 from rei.runtime.campaigns.search.candidates import (
     CANDIDATES,
     Candidate,

@@ -15,7 +15,7 @@ from typing import Literal
 import numpy as np
 
 from rei.runtime.campaigns.folder_reader import CampaignData
-from rei.runtime.campaigns.records import RunRecord
+from rei.runtime.campaigns.run_records import RunRecord
 from rei.runtime.campaigns.stats import by_mission, wilson_interval
 from rei.runtime.observation.run_folder import SignalEvent, read_events, read_paths
 from rei.runtime.presentation.figures import (

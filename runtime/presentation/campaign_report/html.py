@@ -27,7 +27,7 @@ import jinja2
 
 from rei.runtime.campaigns.failure_clusters import Cluster, clusters, failures
 from rei.runtime.campaigns.folder_reader import CampaignData
-from rei.runtime.campaigns.records import RunRecord, verdict_reason
+from rei.runtime.campaigns.run_records import RunRecord, verdict_reason
 from rei.runtime.campaigns.stats import (
     by_mission,
     campaign_outcome,

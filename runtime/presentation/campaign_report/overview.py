@@ -15,7 +15,7 @@ from dataclasses import dataclass
 # rei.runtime.campaigns.failure_clusters, and these names stay importable from here for existing
 # callers.
 from rei.runtime.campaigns.failure_clusters import Cluster, Failure, clusters, failures
-from rei.runtime.campaigns.records import RunRecord
+from rei.runtime.campaigns.run_records import RunRecord
 from rei.runtime.campaigns.stats import by_mission, wilson_interval
 
 

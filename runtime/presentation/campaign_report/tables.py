@@ -12,7 +12,7 @@ import statistics
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
-from rei.runtime.campaigns.records import RunRecord
+from rei.runtime.campaigns.run_records import RunRecord
 from rei.runtime.campaigns.stats import SuccessRate, by_group, by_mission, success_rates
 from rei.runtime.presentation.signals import SIGNAL_ORDER
 
