@@ -19,8 +19,8 @@ from rei.runtime.campaigns.errors import CampaignError
 from rei.runtime.campaigns.execute import RunResult, execute_run
 from rei.runtime.campaigns.orchestration import CampaignResult, run_campaign
 from rei.runtime.campaigns.plan import CampaignPlan, RunSpec, derive_seed, plan_campaign
-from rei.runtime.campaigns.run_records import RunRecord
 from rei.runtime.campaigns.results_table import record_row, write_tables
+from rei.runtime.campaigns.run_records import RunRecord
 from rei.runtime.campaigns.static_pair import static_twin, write_static_twins
 from rei.runtime.campaigns.stats import (
     MissionVerdict,

@@ -32,8 +32,8 @@ from rei.generators.output import OutputTree, remove_tree, write_atomic, write_t
 from rei.runtime.campaigns.errors import CampaignError
 from rei.runtime.campaigns.execute import RunResult
 from rei.runtime.campaigns.plan import CampaignPlan, RunSpec
-from rei.runtime.campaigns.run_records import RECORD_FORMAT, STORE_VERSION, RunRecord
 from rei.runtime.campaigns.results_table import write_tables
+from rei.runtime.campaigns.run_records import RECORD_FORMAT, STORE_VERSION, RunRecord
 
 FORMAT = "rei-campaign"
 MANIFEST = "campaign.json"

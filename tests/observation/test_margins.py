@@ -158,8 +158,8 @@ def test_margins_reach_the_results_row_junit_and_summary_json() -> None:
     from lxml import etree  # noqa: PLC0415
 
     from rei.runtime.campaigns import plan_campaign  # noqa: PLC0415
-    from rei.runtime.campaigns.run_records import RunRecord  # noqa: PLC0415
     from rei.runtime.campaigns.results_table import record_row  # noqa: PLC0415
+    from rei.runtime.campaigns.run_records import RunRecord  # noqa: PLC0415
     from rei.runtime.presentation.junit import junit_xml  # noqa: PLC0415
     from rei.runtime.results import RESULTS_VERSION, RunSummary  # noqa: PLC0415
     from tests.conftest import EXAMPLES  # noqa: PLC0415

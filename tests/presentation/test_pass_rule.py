@@ -10,8 +10,8 @@ import pytest
 from lxml import etree
 
 from rei.runtime.campaigns import CampaignStore, RunResult, plan_campaign
-from rei.runtime.campaigns.run_records import RunRecord, verdict_reason
 from rei.runtime.campaigns.results_table import record_row
+from rei.runtime.campaigns.run_records import RunRecord, verdict_reason
 from rei.runtime.presentation.campaign_report.build import build_report
 from rei.runtime.presentation.junit import junit_xml
 from rei.runtime.results import RESULTS_VERSION, Outcome, RunSummary, Verdict, judge

@@ -16,8 +16,8 @@ from rei.generators.output import write_atomic
 from rei.runtime.campaigns.failure_clusters import CLUSTERS_JSON, clusters, clusters_json, failures
 from rei.runtime.campaigns.folder_reader import load_campaign
 from rei.runtime.campaigns.plan import RunSpec
-from rei.runtime.campaigns.run_records import RunRecord
 from rei.runtime.campaigns.results_table import write_tables
+from rei.runtime.campaigns.run_records import RunRecord
 from rei.runtime.presentation.junit import junit_xml
 
 
