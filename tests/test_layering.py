@@ -22,7 +22,8 @@ pytestmark = pytest.mark.skipif(not LINT.exists(), reason="import-linter is in t
 
 
 def lint(root: Path, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([str(LINT), "--config", str(root / "pyproject.toml")], cwd=root,
+    return subprocess.run([str(LINT), "--no-cache", "--config", str(root / "pyproject.toml")],
+                          cwd=root,
                           env=env, capture_output=True, text=True, timeout=300)
 
 
@@ -47,10 +48,18 @@ def house(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict[str, str
     return root, env
 
 
-def _edit(path: Path, text: str) -> str:
+def lint_broken(house: tuple[Path, dict[str, str]], module: str, line: str
+                ) -> subprocess.CompletedProcess[str]:
+    """`lint-imports` on the copy with ``line`` added at the end of ``module`` (a path under
+    rei/runtime), the module restored afterwards."""
+    root, env = house
+    path = root / "rei" / "runtime" / module
     before = path.read_text(encoding="utf-8")
-    path.write_text(before + text, encoding="utf-8")
-    return before
+    path.write_text(before + line, encoding="utf-8")
+    try:
+        return lint(root, env)
+    finally:
+        path.write_text(before, encoding="utf-8")
 
 
 def test_a_copy_of_the_house_keeps_its_rules(house: tuple[Path, dict[str, str]]) -> None:
@@ -61,14 +70,8 @@ def test_a_copy_of_the_house_keeps_its_rules(house: tuple[Path, dict[str, str]])
 
 def test_an_upward_import_inside_a_function_breaks_the_layers(
         house: tuple[Path, dict[str, str]]) -> None:
-    root, env = house
-    teleop = root / "rei" / "runtime" / "robot" / "teleop.py"
-    before = _edit(teleop, "\n\ndef _wrong() -> None:\n"
-                           "    from rei.runtime.commands import cli  # noqa: F401\n")
-    try:
-        done = lint(root, env)
-    finally:
-        teleop.write_text(before, encoding="utf-8")
+    done = lint_broken(house, "robot/teleop.py", "\n\ndef _wrong() -> None:\n"
+                       "    from rei.runtime.commands import cli  # noqa: F401\n")
     assert done.returncode != 0
     assert "downward only" in done.stdout and "BROKEN" in done.stdout
     assert "rei.runtime.robot.teleop -> rei.runtime.commands" in done.stdout
@@ -78,13 +81,8 @@ def test_the_judge_reaching_pybullet_through_another_module_breaks_its_contract(
         house: tuple[Path, dict[str, str]]) -> None:
     """observation may import a contract of the simulation (layers allow it), but once that
     module imports pybullet, the observation side reaches it indirectly and fails."""
-    root, env = house
-    stage = root / "rei" / "runtime" / "simulation" / "faults" / "stage.py"
-    before = _edit(stage, "\n\nimport pybullet  # noqa: E402,F401\n")
-    try:
-        done = lint(root, env)
-    finally:
-        stage.write_text(before, encoding="utf-8")
+    done = lint_broken(house, "simulation/faults/stage.py",
+                       "\n\nimport pybullet  # noqa: E402,F401\n")
     assert done.returncode != 0
     broken = done.stdout.split("Broken contracts")[1]
     assert "never reach pybullet" in broken
@@ -94,13 +92,7 @@ def test_the_judge_reaching_pybullet_through_another_module_breaks_its_contract(
 
 def test_a_cycle_between_sibling_packages_breaks_its_contract(
         house: tuple[Path, dict[str, str]]) -> None:
-    root, env = house
-    model = root / "rei" / "runtime" / "observation" / "automata" / "records.py"
-    before = _edit(model, "\n\ndef _wrong() -> None:\n"
-                          "    from rei.runtime.observation import monitor  # noqa: F401\n")
-    try:
-        done = lint(root, env)
-    finally:
-        model.write_text(before, encoding="utf-8")
+    done = lint_broken(house, "observation/automata/records.py", "\n\ndef _wrong() -> None:\n"
+                       "    from rei.runtime.observation import monitor  # noqa: F401\n")
     assert done.returncode != 0
     assert "No cycles are allowed in rei.runtime.observation" in done.stdout
