@@ -48,7 +48,7 @@ def test_hysteresis_generates_relaxed_thresholds(tmp_path: Path) -> None:
 def test_automata_of_an_older_rei_are_refused_by_name(tmp_path: Path) -> None:
     """Automata generated before the runtime's regrouping import rei.runtime.monitor.*: loading
     them (a saved run folder's automata/) says what they are and what to do, never a
-    traceback; a run's page falls back to the default thresholds and says so."""
+    traceback; a run's page falls back to the default thresholds and says why."""
     import pytest
 
     from rei.runtime.observation.errors import MonitorError
@@ -68,6 +68,8 @@ def test_automata_of_an_older_rei_are_refused_by_name(tmp_path: Path) -> None:
     message = str(refused.value)
     assert "expected automata of format 5, found automata of an older REI" in message
     assert "rei.runtime.monitor" in message and "rei-gen generate" in message
-    assert read_thresholds(folder).source == "default"
+    source = read_thresholds(folder).source
+    assert source.startswith("default; automata/automata.py: expected automata of format 5")
+    assert "older REI" in source
     (folder / "automata" / "automata.py").write_text(text, encoding="utf-8")
     assert read_thresholds(folder).source == "automata/automata.py"

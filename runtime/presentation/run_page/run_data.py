@@ -50,7 +50,8 @@ class Thresholds:
     close: float
     collision: float
     source: str
-    """Where they were read: the automata file, or 'default'."""
+    """Where they were read: the automata file, or 'default' (with why, when the run's
+    automata could not be read)."""
 
 
 @dataclass(frozen=True)
@@ -197,15 +198,19 @@ def read_series(path: Path, manifest: WorldManifest | None = None) -> TraceSerie
 def read_thresholds(out_dir: Path) -> Thresholds:
     """eps_close and eps_collision of the automata that judged the run."""
     path = out_dir / "automata" / "automata.py"
+    default = "default"
     if path.is_file():
         try:
             parameters = getattr(load_generated(path), "PARAMETERS", {})
-        except (MonitorError, OSError, SyntaxError):
+        except MonitorError as exc:  # e.g. automata of an older REI: say so on the page
+            parameters = {}
+            default = f"default; automata/automata.py: {str(exc).partition(': ')[2]}"
+        except (OSError, SyntaxError):
             parameters = {}
         close, collision = parameters.get("eps_close"), parameters.get("eps_collision")
         if isinstance(close, (int, float)) and isinstance(collision, (int, float)):
             return Thresholds(float(close), float(collision), "automata/automata.py")
-    return Thresholds(EPS_CLOSE, EPS_COLLISION, "default")
+    return Thresholds(EPS_CLOSE, EPS_COLLISION, default)
 
 
 def read_signals(out_dir: Path) -> list[SignalRow]:
