@@ -36,7 +36,7 @@ from __future__ import annotations
 import queue
 import threading
 from collections.abc import Callable
-from typing import Any
+from typing import Any, TypeVar
 
 from rei.runtime.robot.contract import (
     ContractViolation,
@@ -49,6 +49,8 @@ from rei.runtime.robot.contract import (
     checked_command,
     checked_feedback,
 )
+
+T = TypeVar("T")
 
 
 def raised(what: str, exc: BaseException) -> str:
@@ -209,12 +211,17 @@ class GuardedController:
         return value
 
     def _checked_feedback(self, answer: Any) -> GoalFeedback:
+        return self._checked("feedback", checked_feedback, answer)
+
+    def _checked(self, what: str, check: Callable[[Any], T], answer: Any) -> T:
+        """``check(answer)``; a ControllerFault naming ``what`` when the answer breaks the
+        contract or raises while it is read."""
         try:
-            return checked_feedback(answer)
+            return check(answer)
         except ContractViolation as problem:
-            raise self._violated("feedback", problem) from None
+            raise self._violated(what, problem) from None
         except Exception as exc:  # noqa: BLE001  (a user's subclass whose fields raise)
-            self._broken = raised("feedback", exc) + " while its answer was read"
+            self._broken = raised(what, exc) + " while its answer was read"
             raise ControllerFault(self._broken) from None
 
     def step(self, observation: Observation) -> VelocityCommand:
@@ -222,10 +229,4 @@ class GuardedController:
                             then=self.controller.feedback)
         if self._hosted is not None:  # checked as it arrived
             return answer  # type: ignore[no-any-return]
-        try:
-            return checked_command(answer)
-        except ContractViolation as problem:
-            raise self._violated("step", problem) from None
-        except Exception as exc:  # noqa: BLE001  (a user's subclass whose fields raise)
-            self._broken = raised("step", exc) + " while its answer was read"
-            raise ControllerFault(self._broken) from None
+        return self._checked("step", checked_command, answer)

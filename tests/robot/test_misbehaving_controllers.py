@@ -224,7 +224,7 @@ def test_a_thread_left_running_does_not_cost_the_run_its_result(tmp_path: Path) 
 
 def test_the_conformance_checker_reports_what_would_end_a_run_in_error() -> None:
     from rei.runtime.robot import check_controller
-    from tests.runtime import faulty
+    from tests.robot import faulty
 
     assert "step() broke the contract: command.linear: expected a finite real number, " \
            "found str 'abc'" in check_controller(faulty.SendsStr())

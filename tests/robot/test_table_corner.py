@@ -139,7 +139,7 @@ def test_the_reference_gets_past_the_table_corner_the_rounded_one_does_not(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     from rei.runtime.runs.session import run_into  # noqa: PLC0415
 
-    monkeypatch.chdir(REPO)  # `tests.runtime...:RoundedClearance` is imported from here
+    monkeypatch.chdir(REPO)  # `tests.robot...:RoundedClearance` is imported from here
     old, _ = run_into(SCENE, tmp_path / "old", "tests.robot.test_table_corner:RoundedClearance",
                       seed=1, monitor=False)
     beyond = old.measurements["tasks"][-1]
