@@ -40,18 +40,14 @@ def test_a_seed_numpy_cannot_take_is_refused_before_anything_runs(tmp_path: Path
 
 
 def test_an_internal_error_is_saved_and_reported_not_printed_as_a_traceback(
-        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
-) -> None:
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     def broken(request: RunRequest, probe: object) -> tuple[int, dict[str, object]]:
         raise ZeroDivisionError("a bug in REI")
 
-    import rei.runtime.commands.run as run_command
-
-    monkeypatch.setattr(run_command, "execute_request", broken)
     read, write = os.pipe()
     request = RunRequest(str(SIMPLE_WALL), str(tmp_path))
     try:
-        status = child_main([str(write), request.to_json()])
+        status = child_main([str(write), request.to_json()], broken)  # the child's work raises
     finally:
         os.close(write)
     with os.fdopen(read, encoding="utf-8") as pipe:
