@@ -346,7 +346,7 @@ STARTUP_PROBE = """
 import resource, sys, time
 cpu0, wall0 = time.process_time(), time.perf_counter()
 from pathlib import Path
-from rei.runtime.commands.run import run_into
+from rei.runtime.runs.session import run_into
 cpu1 = time.process_time()
 run_into(Path(sys.argv[1]), Path(sys.argv[2]), duration=0.01)
 cpu2, wall2 = time.process_time(), time.perf_counter()
@@ -371,7 +371,7 @@ def startup(mission_file: Path, work: Path) -> dict[str, float]:
 SCALING_PROBE = """
 import json, resource, sys, time
 from pathlib import Path
-from rei.runtime.commands.run import run_into
+from rei.runtime.runs.session import run_into
 
 class Windows:
     \"\"\"A sink reading this process's CPU at the sample that opens each sixth of the run:
