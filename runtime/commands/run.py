@@ -9,7 +9,8 @@ stream), ``events.csv`` (one row per signal), ``summary.json`` (a RunSummary wit
 output is a function of the inputs, the seed and the REI version only: wall-clock time goes to the
 terminal, never into DIR. The simulation runs in a child process under
 ``rei.runtime.runs.supervisor`` (``run`` here validates the options, starts it and prints);
-``run_into`` is the same work in the caller's process, for the library and tests. Results
+``rei.runtime.runs.run_into`` is the same work in the caller's process, for the library and
+tests; the child's work is ``child_work`` (the run, then its page). Results
 (the outcome line, the requirements, the page, the final verdict line) go to stdout,
 progress and diagnostics to stderr; --quiet leaves the final verdict line alone. Exit status:
 0 every requirement passed (without the monitor: the run did not break), 1 one failed or was
