@@ -43,12 +43,8 @@ import json  # noqa: E402
 import math  # noqa: E402
 import time  # noqa: E402
 
-from rei.runtime.observation.model.efficiency import (  # noqa: E402
-    FloorGraph,
-    FreeSpace,
-    TaskProgress,
-    judge_task,
-)
+from rei.runtime.observation.model.efficiency import TaskProgress, judge_task  # noqa: E402
+from rei.runtime.observation.model.free_space import FloorGraph, FreeSpace  # noqa: E402
 from rei.runtime.observation.model.runtime_model import RuntimeModel  # noqa: E402
 from rei.runtime.trace import read_trace  # noqa: E402
 
@@ -172,9 +168,9 @@ def halls() -> int:
     from bench.simulation import SCALING_HALLS, TYPES
     from rei.catalogue import Tile
     from rei.catalogue.loader import default_catalogue
-    from rei.runtime.observation.model.efficiency import footprint_shapes
+    from rei.runtime.observation.model.floors import FloorMap
+    from rei.runtime.observation.model.free_space import footprint_shapes
     from rei.runtime.observation.model.geometry import FootprintSet
-    from rei.runtime.observation.model.runtime_model import FloorMap
 
     catalogue = default_catalogue()
     robot = catalogue.types["turtlebot3_waffle"].footprint

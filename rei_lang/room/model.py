@@ -17,7 +17,7 @@ DEFAULT_TILE_SIZE = 1.0
 Role = Literal["static", "dynamic", "human", "robot"]
 Behaviour = Literal["scripted", "yielding", "social"]
 BEHAVIOURS: tuple[Behaviour, ...] = ("scripted", "yielding", "social")
-"""How a human reacts to the robot (runtime/simulation/animator/reactive.py): ``scripted`` walks its
+"""How a human reacts to the robot (runtime/simulation/animator/): ``scripted`` walks its
 spline regardless, ``yielding`` waits while the robot is in its way, ``social`` is pushed
 around it by a social force. ``scripted`` is the default so hand-written rooms keep the
 thesis's behaviour."""

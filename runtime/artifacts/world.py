@@ -46,7 +46,8 @@ class BodySpec:
     footprint: Footprint
     trajectory: Trajectory | None
     behaviour: Behaviour = DEFAULT_BEHAVIOUR
-    """How an animated human reacts to the robot (runtime/simulation/animator/reactive.py)."""
+    """How an animated human reacts to the robot (runtime/simulation/animator/: yielding.py,
+    social_force.py)."""
 
 
 @dataclass(frozen=True)

@@ -9,7 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from rei.runtime.observation.model.runtime_model import RuntimeModel, check_sample
+from rei.runtime.observation.model.runtime_model import RuntimeModel
+from rei.runtime.observation.model.sample_checks import check_sample
 from tests.observation.helpers import default_automata, geom, monitor
 from tests.observation.streams import drive, human, straight, wall
 

@@ -36,14 +36,10 @@ from rei.runtime.messages import (
     StreamHeader,
 )
 from rei.runtime.observation.model import free_space as efficiency
-from rei.runtime.observation.model.efficiency import (
-    FloorGraph,
-    FreeSpace,
-    TaskProgress,
-    footprint_shapes,
-    judge_task,
-)
-from rei.runtime.observation.model.runtime_model import FloorMap, RuntimeModel
+from rei.runtime.observation.model.efficiency import TaskProgress, judge_task
+from rei.runtime.observation.model.floors import FloorMap
+from rei.runtime.observation.model.free_space import FloorGraph, FreeSpace, footprint_shapes
+from rei.runtime.observation.model.runtime_model import RuntimeModel
 from tests.observation.helpers import monitor
 from tests.observation.streams import ROBOT
 

@@ -16,7 +16,9 @@ from rei.lang.vepl import model as vm
 from rei.runtime.messages import SCHEMA_VERSION, MissionEvent, ObservedObject, StreamHeader
 from rei.runtime.observation.automata.records import Matches, RequirementSpec, load_generated
 from rei.runtime.observation.evaluator.verdicts import RequirementChecker
-from rei.runtime.observation.model.runtime_model import RuntimeModel, SampleProblems, crossings
+from rei.runtime.observation.model.interpolation import crossings
+from rei.runtime.observation.model.runtime_model import RuntimeModel
+from rei.runtime.observation.model.sample_checks import SampleProblems
 from tests.observation.helpers import default_automata
 
 ROBOT = ObservedObject("robot", "static", "turtlebot3_waffle", Box(0.281, 0.306), 0.2)

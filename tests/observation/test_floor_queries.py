@@ -14,7 +14,7 @@ from rei.lang.source import SourceText
 from rei.lang.vepl.document import analyse_vepl
 from rei.runtime.messages import GoalFacts, MissionFacts, ObservedObject, Sample
 from rei.runtime.observation.evaluator.signal_log import SignalRow
-from rei.runtime.observation.model.runtime_model import FloorMap
+from rei.runtime.observation.model.floors import FloorMap
 from tests.observation.helpers import monitor
 from tests.observation.streams import header, human, sample
 

@@ -17,7 +17,8 @@ from rei.runtime.observation.model.laser_clearance import (
     beam_edges,
     clearance,
 )
-from rei.runtime.observation.model.runtime_model import FAR_AWAY, RuntimeModel, check_sample
+from rei.runtime.observation.model.runtime_model import FAR_AWAY, RuntimeModel
+from rei.runtime.observation.model.sample_checks import check_sample
 from tests.observation.helpers import monitor
 from tests.observation.streams import ROBOT, header, sample, wall
 

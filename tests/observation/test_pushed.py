@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rei.runtime.observation.model.runtime_model import PushTracker
+from rei.runtime.observation.model.pushes import PushTracker
 from tests.observation.streams import human
 from tests.observation.test_default_requirements import Tick, run
 from tests.simulation.test_humans import ROOM as HUMANS_ROOM

@@ -18,15 +18,14 @@ from rei.runtime.artifacts.monitor_config import load_monitor_config
 from rei.runtime.artifacts.world import load_manifest
 from rei.runtime.messages.sink import SampleList
 from rei.runtime.simulation.animator import HumanVariation, draw_variations
-from rei.runtime.simulation.animator.reactive import (
-    Agent,
+from rei.runtime.simulation.animator.agent import Agent
+from rei.runtime.simulation.animator.social_force import (
     SocialForce,
-    YieldRule,
     elliptical_distance,
     social_acceleration,
-    yield_factor,
 )
 from rei.runtime.simulation.animator.variation import mean_speed
+from rei.runtime.simulation.animator.yielding import YieldRule, yield_factor
 from rei.runtime.simulation.assembly import LoopRecord, RunConfig, generate_world, run_mission
 from tests.robot.faulty import Idle
 

@@ -34,18 +34,16 @@ from rei.lang.room.spline import CatmullRom
 from rei.runtime.artifacts.monitor_config import load_monitor_config
 from rei.runtime.artifacts.world import load_manifest
 from rei.runtime.messages.sink import SampleList
+from rei.runtime.simulation.animator.agent import Agent, Vec
 from rei.runtime.simulation.animator.engine import Animated, Animator, Reactions
-from rei.runtime.simulation.animator.reactive import (
-    Agent,
+from rei.runtime.simulation.animator.social_force import (
     Dodge,
     SocialForce,
-    Vec,
     away_from_approach,
     dodge_sides,
-    room_aside,
     social_acceleration,
-    way_aside,
 )
+from rei.runtime.simulation.animator.walls import room_aside, way_aside
 from rei.runtime.simulation.assembly import LoopRecord, RunConfig, generate_world, run_mission
 
 REPO = Path(__file__).resolve().parents[2]

@@ -19,8 +19,10 @@ import math
 import numpy as np
 
 from rei.lang.room.spline import CatmullRom
+from rei.runtime.simulation.animator.agent import Agent
 from rei.runtime.simulation.animator.engine import Animated, Animator, Reactions
-from rei.runtime.simulation.animator.reactive import Agent, SocialForce, keep_clear, wall_normals
+from rei.runtime.simulation.animator.social_force import SocialForce, keep_clear
+from rei.runtime.simulation.animator.walls import wall_normals
 
 WALL_TOP = -0.5
 """The wall fills y <= -0.5 (a box 1 m thick, 20 m long)."""

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 from rei.lang.vepl import model as vm
 from rei.runtime.observation.automata.records import RequirementSpec
-from rei.runtime.observation.model.runtime_model import SampleProblems
+from rei.runtime.observation.model.sample_checks import SampleProblems
 from rei.runtime.results import Verdict, VerdictStatus
 
 _CMP: dict[str, Callable[[float, float], bool]] = {

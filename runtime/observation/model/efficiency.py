@@ -15,9 +15,6 @@ import math
 from dataclasses import dataclass
 
 from rei.runtime.messages import GoalFacts
-from rei.runtime.observation.model.free_space import FloorGraph as FloorGraph
-from rei.runtime.observation.model.free_space import FreeSpace as FreeSpace
-from rei.runtime.observation.model.free_space import footprint_shapes as footprint_shapes
 
 MIN_JUDGED = 0.5
 """m: a task whose shortest path less its tolerance is shorter is not judged (ratios 0)."""

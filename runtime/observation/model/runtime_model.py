@@ -28,18 +28,12 @@ from rei.lang.vepl.model import MISSION_STATES, TASK_FAILURES, TASK_STATES
 from rei.runtime.messages import MissionEvent, Sample, StreamHeader
 from rei.runtime.observation.automata.records import QueryInputs
 from rei.runtime.observation.model.efficiency import TaskEfficiency, TaskProgress, judge_task
-from rei.runtime.observation.model.floors import FloorMap as FloorMap
+from rei.runtime.observation.model.floors import FloorMap
 from rei.runtime.observation.model.free_space import FloorGraph, FreeSpace, footprint_shapes
 from rei.runtime.observation.model.geometry import FootprintSet
 from rei.runtime.observation.model.hazard import HazardSensor
-from rei.runtime.observation.model.interpolation import crossings as crossings
-from rei.runtime.observation.model.interpolation import interpolate as interpolate
 from rei.runtime.observation.model.laser_clearance import BeamEdges, clearance
-from rei.runtime.observation.model.pushes import PUSH_CONTACT
-from rei.runtime.observation.model.pushes import PushTracker as PushTracker
-from rei.runtime.observation.model.sample_checks import PROBLEM_KINDS as PROBLEM_KINDS
-from rei.runtime.observation.model.sample_checks import SampleProblems as SampleProblems
-from rei.runtime.observation.model.sample_checks import check_sample as check_sample
+from rei.runtime.observation.model.pushes import PUSH_CONTACT, PushTracker
 
 FAR_AWAY = 1e3
 """Distances and laser readings of the baseline before the first sample: nothing is near,

@@ -32,13 +32,9 @@ from rei.runtime.observation.evaluator.margins import MarginTracker
 from rei.runtime.observation.evaluator.signal_log import SignalLog
 from rei.runtime.observation.evaluator.summary import MonitorResult
 from rei.runtime.observation.evaluator.verdicts import RequirementChecker
-from rei.runtime.observation.model.runtime_model import (
-    RuntimeModel,
-    SampleProblems,
-    check_sample,
-    crossings,
-    interpolate,
-)
+from rei.runtime.observation.model.interpolation import crossings, interpolate
+from rei.runtime.observation.model.runtime_model import RuntimeModel
+from rei.runtime.observation.model.sample_checks import SampleProblems, check_sample
 
 UserFunction = Callable[..., Any]
 FINISHED = ("completed", "failed")

@@ -5,12 +5,13 @@ Each physics step sets the body's planar velocity to the spline's displacement o
 (refreshed at the control rate) so a body that was pushed or held up by a contact (the
 robot, a wall) rejoins its path instead of walking a parallel one.
 
-How the path time runs is the body's behaviour (reactive.py: yielding.py, social_force.py): a
+How the path time runs is the body's behaviour (yielding.py, social_force.py): a
 ``scripted`` body's is the clock (delayed and scaled by its seeded variation); a
 ``yielding`` human's only advances while the robot leaves its way free; a ``social``
 human's velocity comes from the social force model, towards a target point whose path time
 only advances while the human keeps up with it. A reactive human that turned back (held
-back for its patience, reactive.py) walks its path backwards: its path time runs back.
+back for its patience: the package docstring) walks its path backwards: its path time
+runs back.
 
 A trajectory with a start trigger (``when robot within D of FLOOR``) keeps its clock
 at zero, so its body stands at its first vertex, until a control tick finds the robot's centre

@@ -16,17 +16,17 @@ walker stood on goal_2 from 31 s until the reference aborted it at 227 s).
 A human steps only where it has room (``way_aside``: across the robot's heading, else
 straight away from the robot or up to 90 degrees off that, wherever the place
 ``aside_room`` ahead of its step keeps its radius from every wall); with nowhere to step
-it turns back along its path (reactive.py). Stepping aside into a wall, it stood beside the
-robot, came back, yielded and stepped into the wall again, and both waited until the goal
+it turns back along its path (the package docstring). Stepping aside into a wall, it stood
+beside the robot, came back, yielded and stepped into the wall again, and both waited until the goal
 aborted (issue 25, a MAP-Elites room: the walker's loop ran along a wall through the
 robot's goal). At the turning point of a path that goes out and back, turning back leads
 the same way, into the robot: there only a step away helps (a TPE room of issue 25's
 protocol, where the walker stood at its turning point beside a wall's end).
 
-Turning back is told in reactive.py; the turning back itself, and the stepping aside, are
-the animator's (engine.py): here are the rule's parameters and the pure functions of poses it
-decides by. This module must never
-import pybullet or the monitor, nor judge the robot.
+Turning back is told in the package docstring; the turning back itself, and the stepping
+aside, are the animator's (engine.py): here are the rule's parameters and the pure functions
+of poses it decides by. This module must never import pybullet or the monitor, nor judge the
+robot.
 """
 
 from __future__ import annotations
