@@ -63,7 +63,7 @@ from rei.runtime.artifacts.world import WorldManifest, load_manifest
 from rei.runtime.raycast import scene_shapes
 from rei.runtime.robot.contract import Controller, ControllerContext
 from rei.runtime.robot.host import HostedController
-from rei.runtime.robot.selection import load_controller
+from rei.runtime.robot.loading import load_controller
 from rei.runtime.runs.session import run_into
 from rei.runtime.simulation.assembly import LoopRecord, RunConfig, generate_world, run_mission
 from rei.runtime.simulation.sensors.laser import Laser2D

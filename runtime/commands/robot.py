@@ -76,7 +76,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from rei.runtime.bus.remote_robot import serve_robot  # noqa: PLC0415
-    from rei.runtime.robot.selection import load_controller  # noqa: PLC0415
+    from rei.runtime.robot.loading import load_controller  # noqa: PLC0415
 
     folder = os.getcwd()
     load_controller(args.controller, folder)  # a bad name is said before joining (exit 2)

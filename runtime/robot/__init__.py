@@ -21,7 +21,8 @@ from rei.runtime.robot.contract import (
     VelocityCommand,
 )
 from rei.runtime.robot.host import HostedController
-from rei.runtime.robot.selection import BUILT_IN, load_controller, make_controller
+from rei.runtime.robot.loading import BUILT_IN, load_controller
+from rei.runtime.robot.selection import make_controller
 
 __all__ = ["BUILT_IN", "Controller", "ControllerContext", "GoalFeedback", "GoalTracker",
            "HostedController", "MapObstacle", "NavGoal", "Observation", "VelocityCommand",

@@ -3,9 +3,9 @@
 
 ``make_controller`` starts the robot under test in its own process (``HostedController``,
 see ``rei.runtime.robot.host``): `rei run` and campaigns use it, so a controller cannot end,
-stall or falsify its own test. ``load_controller`` makes the same controller in this process
-(the host itself uses it; so may a library caller that trusts the controller, e.g. to read
-its class or to call it without the cost of messages).
+stall or falsify its own test. ``load_controller`` (``loading``) makes the same controller in
+this process (the host itself uses it; so may a library caller that trusts the controller,
+e.g. to read its class or to call it without the cost of messages).
 """
 
 from __future__ import annotations
@@ -13,7 +13,6 @@ from __future__ import annotations
 from rei.runtime.robot.host.caller import HostedController
 from rei.runtime.robot.loading import (
     BUILT_IN,
-    ROS2_ADAPTER,
     is_ros2,
     load_controller,
     ros2_options,
@@ -31,4 +30,4 @@ def make_controller(spec: str, folder: str | None = None) -> HostedController:
     return HostedController(spec, folder)
 
 
-__all__ = ["BUILT_IN", "ROS2_ADAPTER", "load_controller", "make_controller"]
+__all__ = ["make_controller"]

@@ -23,7 +23,7 @@ from rei.lang.workspace import Workspace
 from rei.runtime.artifacts.world import Trajectory
 from rei.runtime.errors import RunError
 from rei.runtime.observation.automata.records import load_generated
-from rei.runtime.simulation.animator.engine import spline_of
+from rei.runtime.simulation.animator.bodies import spline_of
 
 GOALS = "  goal a at x timeout 1\n  goal b at y timeout 1\n}\n"
 VEPL = """specification s

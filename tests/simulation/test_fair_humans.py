@@ -34,7 +34,8 @@ from rei.runtime.messages.sink import SampleList
 from rei.runtime.robot import Observation, VelocityCommand
 from rei.runtime.runs.session import run_into
 from rei.runtime.simulation.animator.agent import Agent
-from rei.runtime.simulation.animator.engine import Animated, Animator, Reactions
+from rei.runtime.simulation.animator.bodies import Animated, Reactions
+from rei.runtime.simulation.animator.engine import Animator
 from rei.runtime.simulation.animator.social_force import (
     SocialForce,
     fits_past,

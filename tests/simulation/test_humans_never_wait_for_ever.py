@@ -35,7 +35,8 @@ from rei.runtime.artifacts.monitor_config import load_monitor_config
 from rei.runtime.artifacts.world import load_manifest
 from rei.runtime.messages.sink import SampleList
 from rei.runtime.simulation.animator.agent import Agent, Vec
-from rei.runtime.simulation.animator.engine import Animated, Animator, Reactions
+from rei.runtime.simulation.animator.bodies import Animated, Reactions
+from rei.runtime.simulation.animator.engine import Animator
 from rei.runtime.simulation.animator.social_force import (
     Dodge,
     SocialForce,

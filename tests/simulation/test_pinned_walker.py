@@ -20,7 +20,8 @@ import numpy as np
 
 from rei.lang.room.spline import CatmullRom
 from rei.runtime.simulation.animator.agent import Agent
-from rei.runtime.simulation.animator.engine import Animated, Animator, Reactions
+from rei.runtime.simulation.animator.bodies import Animated, Reactions
+from rei.runtime.simulation.animator.engine import Animator
 from rei.runtime.simulation.animator.social_force import SocialForce, keep_clear
 from rei.runtime.simulation.animator.walls import wall_normals
 

@@ -44,10 +44,6 @@ from rei.runtime.simulation.animator.agent import Agent, Vec
 from rei.runtime.simulation.animator.bodies import (
     Animated,
     Reactions,
-    animated_bodies,
-    spline_of,
-    variations_record,
-    wall_boxes,
 )
 from rei.runtime.simulation.animator.social_force import (
     Dodge,
@@ -63,9 +59,6 @@ from rei.runtime.simulation.animator.social_force import (
 from rei.runtime.simulation.animator.variation import mean_speed
 from rei.runtime.simulation.animator.walls import room_aside, wall_normals, way_aside
 from rei.runtime.simulation.animator.yielding import gap_beside, gap_in_the_way, speed_share
-
-__all__ = ["Animated", "Animator", "Reactions", "animated_bodies", "spline_of",
-           "variations_record", "wall_boxes"]
 
 CATCH_UP_GAIN = 1.0
 """1/s: how fast a displaced body returns to its path."""

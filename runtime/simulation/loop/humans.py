@@ -18,7 +18,7 @@ from typing import Any
 from rei.runtime.artifacts.world import WorldManifest
 from rei.runtime.messages import BodyVelocities
 from rei.runtime.simulation.animator import Animator
-from rei.runtime.simulation.animator.engine import animated_bodies, variations_record, wall_boxes
+from rei.runtime.simulation.animator.bodies import animated_bodies, variations_record, wall_boxes
 from rei.runtime.simulation.loop.board import Board
 from rei.runtime.simulation.loop.scheduler import Clock
 
