@@ -1,16 +1,18 @@
 """Issue 34's regrouping of runtime/ into wings, driven by scripts/regroup-table.tsv.
 
-`python scripts/regroup.py --move` moved every module of the table with `git mv` and rewrote
-every import and dotted name in the repository; it was run once, in its own commit. What stays
-useful is the rewrite alone, for code outside REI that imports the old paths (a controller
+The move itself (every module of the table moved with `git mv`, then this rewrite over the whole
+repository) was made once, in its own commit ("runtime/: the move of scripts/regroup-table.tsv").
+What stays useful is the rewrite, for code outside REI that imports the old paths (a controller
 importing ``rei.runtime.robot.protocol``, a script importing ``rei.runtime.commands.run``):
 
-    python scripts/regroup.py --rewrite PATH...     # rewrite those files (or folders) in place
+    python scripts/regroup.py PATH...     # rewrite those files (or folders) in place
 
 It rewrites ``from OLD import name`` statements (``from rei.runtime.animator import animator``
 included: a module imported from its package), names from the two packages that were dissolved
 (``rei.runtime.collector``, ``rei.runtime.world``: each name to the module defining it now),
-and every other dotted mention of an old module (strings, docstrings, comments, Markdown).
+names the later splits moved out of a module (``SPLIT_OUT``: ``run_into`` to
+``rei.runtime.runs.session``, ...), and every other dotted mention of an old module (strings,
+docstrings, comments, Markdown).
 """
 
 from __future__ import annotations
@@ -18,7 +20,6 @@ from __future__ import annotations
 import argparse
 import ast
 import re
-import subprocess
 import sys
 from pathlib import Path
 
@@ -41,6 +42,45 @@ DISSOLVED = {
         "BodySpec": "world.manifest", "Trajectory": "world.manifest",
         "WorldManifest": "world.manifest", "load_manifest": "world.manifest",
     },
+}
+_R = PREFIX
+SPLIT_OUT = {
+    # Names the later splits of issue 34 moved out of the module the table gives: (that
+    # module, name) -> the module that defines the name now.
+    **{(f"{_R}.commands.run", n): f"{_R}.runs.session" for n in (
+        "run_into", "execute_request", "check_options", "exit_code", "make_folder",
+        "set_aside", "settle_earlier", "read_summary", "PAGE", "TRACE", "SUMMARY", "LOG",
+        "EVENTS", "RECORDING", "RUN_OUTPUTS", "EARLIER_OUTPUTS")},
+    (f"{_R}.commands.replay", "judge_stream"): f"{_R}.observation.judgement",
+    **{(f"{_R}.simulation.sensors.laser", n): f"{_R}.raycast" for n in (
+        "ShapeSet", "RayCaster", "merge_wall_tiles", "shapes_of", "scene_shapes", "ray_boxes",
+        "ray_circles")},
+    **{(f"{_R}.campaigns.folder_reader", n): f"{_R}.observation.run_folder" for n in (
+        "Paths", "SignalEvent", "read_events", "read_paths")},
+    **{(f"{_R}.campaigns.store", n): f"{_R}.campaigns.run_records" for n in (
+        "RunRecord", "verdict_reason", "RECORD_FORMAT", "STORE_VERSION")},
+    **{(f"{_R}.campaigns.store", n): f"{_R}.campaigns.results_table" for n in (
+        "record_row", "rows_table", "write_tables")},
+    **{(f"{_R}.robot.selection", n): f"{_R}.robot.loading" for n in (
+        "load_controller", "BUILT_IN")},
+    **{(f"{_R}.simulation.animator.engine", n): f"{_R}.simulation.animator.bodies" for n in (
+        "Animated", "Reactions", "spline_of", "animated_bodies", "variations_record",
+        "wall_boxes")},
+    **{(f"{_R}.simulation.animator.social_force", n): f"{_R}.simulation.animator.{m}"
+       for m, names in (("agent", ("Agent", "Vec")),
+                        ("walls", ("wall_distance", "wall_normals", "room_aside", "way_aside")),
+                        ("yielding", ("YieldRule", "gap_in_the_way", "gap_beside",
+                                      "speed_share", "yield_factor")))
+       for n in names},
+    **{(f"{_R}.observation.model.runtime_model", n): f"{_R}.observation.model.{m}"
+       for m, names in (("floors", ("FloorMap",)), ("pushes", ("PushTracker",)),
+                        ("interpolation", ("interpolate", "crossings")),
+                        ("sample_checks", ("PROBLEM_KINDS", "SampleProblems", "check_sample")))
+       for n in names},
+    **{(f"{_R}.observation.model.efficiency", n): f"{_R}.observation.model.free_space"
+       for n in ("FloorGraph", "FreeSpace", "footprint_shapes")},
+    **{(f"{_R}.presentation.run_page.rendering", n): f"{_R}.presentation.campaign_report.html"
+       for n in ("run_page_link",)},
 }
 TEXT_SUFFIXES = {".py", ".md", ".j2", ".toml", ".txt", ".sh", ".cfg", ".ini", ".json", ".tsv", ""}
 
@@ -106,8 +146,10 @@ class Rewriter:
                             alias.name, alias.asname))
                 changed = True
             else:
-                out.append((self.target(module), alias.name, alias.asname))
-                changed = changed or self.target(module) != module
+                target = self.target(module)
+                target = SPLIT_OUT.get((target, alias.name), target)
+                out.append((target, alias.name, alias.asname))
+                changed = changed or target != module
         return out if changed else None
 
     def python(self, text: str) -> str:
@@ -171,46 +213,14 @@ def files_under(paths: list[Path]) -> list[Path]:
     return out
 
 
-def move(rows: list[tuple[str, str]]) -> None:
-    runtime = ROOT / "runtime"
-    for old, new in rows:
-        if old == new:
-            continue
-        (runtime / new).parent.mkdir(parents=True, exist_ok=True)
-        subprocess.run(["git", "mv", str(runtime / old), str(runtime / new)], check=True,
-                       cwd=ROOT)
-    for package in DISSOLVED:
-        init = runtime / package / "__init__.py"
-        if init.exists():
-            subprocess.run(["git", "rm", "-q", str(init)], check=True, cwd=ROOT)
-    for folder in sorted(runtime.rglob("*"), reverse=True):  # new packages get an __init__
-        if folder.is_dir() and folder.name != "__pycache__" and any(folder.glob("*.py")) \
-                and not (folder / "__init__.py").exists():
-            (folder / "__init__.py").write_text('"""TODO: door sign."""\n', encoding="utf-8")
-    for folder in sorted(runtime.rglob("*"), reverse=True):  # emptied ones go
-        if folder.is_dir() and not any(p for p in folder.rglob("*")
-                                       if p.is_file() and "__pycache__" not in p.parts):
-            subprocess.run(["rm", "-rf", str(folder)], check=True)
-
-
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--move", action="store_true",
-                        help="git mv the table's modules, then rewrite the whole repository")
-    parser.add_argument("--rewrite", nargs="+", type=Path, metavar="PATH",
-                        help="rewrite old import paths in these files or folders")
+    parser.add_argument("paths", nargs="+", type=Path, metavar="PATH",
+                        help="rewrite old import paths in these files or folders, in place")
     args = parser.parse_args()
     rows = load_table()
     rewriter = Rewriter(module_map(rows), dict(rows))
-    if args.move:
-        move(rows)
-        targets = [ROOT]
-    elif args.rewrite:
-        targets = args.rewrite
-    else:
-        parser.error("give --move or --rewrite PATH...")
-    changed = [p for p in files_under(targets) if p.resolve() != TABLE and p.resolve() != Path(
-        __file__).resolve() and rewriter.file(p)]
+    changed = [p for p in files_under(args.paths) if p.resolve() != TABLE and rewriter.file(p)]
     print(f"{len(changed)} files rewritten", file=sys.stderr)
     return 0
 
