@@ -25,6 +25,7 @@ from urllib.parse import quote
 
 import jinja2
 
+from rei.runtime.campaigns.coverage import behaviour_coverage
 from rei.runtime.campaigns.failure_clusters import Cluster, clusters, failures
 from rei.runtime.campaigns.folder_reader import CampaignData
 from rei.runtime.campaigns.run_records import RunRecord, verdict_reason
@@ -40,6 +41,7 @@ from rei.runtime.observation.run_folder import read_events
 from rei.runtime.presentation.campaign_report import campaign_plots as plots
 from rei.runtime.presentation.campaign_report.overview import requirement_matrix
 from rei.runtime.presentation.campaign_report.tables import (
+    coverage_table,
     execution_summary,
     group_success_table,
     mission_success,
@@ -161,6 +163,7 @@ def render_html(data: CampaignData, rerun: dict[str, str],
     css = resources.files("rei.runtime.presentation").joinpath("templates/report.css").read_text(
         encoding="utf-8")
     mission_count = len(runs_of)
+    coverage = behaviour_coverage(records)
     return _environment().get_template("report.html.j2").render(
         title=f"REI campaign: {mission_count} mission{'s' if mission_count != 1 else ''} × "
               f"{data.plan.repeat} repeat{'s' if data.plan.repeat != 1 else ''}",
@@ -183,6 +186,7 @@ def render_html(data: CampaignData, rerun: dict[str, str],
         pages=page_counts(data.root, records),
         success_tables=[success_table(missions, "Mission"), group_success_table(records)],
         summary_tables=tables, signal_table=signal_counts(records),
+        coverage=coverage, coverage_table=coverage_table(coverage),
         utility_plot=plots.utility_over_time(data),
         signal_plot=plots.signal_distribution(records),
         descriptor_plot=plots.success_by_descriptor(records),

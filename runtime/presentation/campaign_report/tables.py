@@ -12,6 +12,7 @@ import statistics
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
+from rei.runtime.campaigns.coverage import Coverage
 from rei.runtime.campaigns.run_records import RunRecord
 from rei.runtime.campaigns.stats import SuccessRate, by_group, by_mission, success_rates
 from rei.runtime.presentation.signals import SIGNAL_ORDER
@@ -127,3 +128,11 @@ def mission_success(records: Sequence[RunRecord]) -> list[SuccessRate]:
 
 def group_success(records: Sequence[RunRecord]) -> list[SuccessRate]:
     return success_rates(records, by_group)
+
+
+def coverage_table(coverage: Coverage) -> Table:
+    """Behaviour coverage: one row per behaviour, the runs that exercised it and how much."""
+    rows = tuple((r.name, r.meaning, r.runs, r.episodes, round(r.seconds, 1))
+                 for r in coverage.rows)
+    return Table("Behaviours exercised", ("Behaviour", "Meaning", "Runs", "Episodes",
+                                          "Seconds"), rows)

@@ -22,6 +22,7 @@ from typing import Protocol
 
 from rei.generators.concrete import ConcreteMission
 from rei.runtime.messages import MissionEvent, MissionStatus, NavState, Pose
+from rei.runtime.robot.behaviours import SPEED_LIMIT_SHARE, BehaviourLog, observed, reported
 from rei.runtime.simulation.loop.board import Board
 from rei.runtime.simulation.loop.scheduler import Clock
 from rei.runtime.simulation.mission import MissionExecutor
@@ -53,6 +54,8 @@ class MissionRun:
         self.executor = MissionExecutor(spec.mission.tasks(), spec.mission.settle)
         self.path_length = 0.0
         self.timed_out = False
+        self.behaviours = BehaviourLog()
+        """The behaviours the run exercised (summary.json's ``behaviours``)."""
         self._last = spec.start_pose
         self._seq = 0
 
@@ -66,13 +69,28 @@ class MissionRun:
             self.probe.tick(clock.now)
         events = self.executor.tick(clock.now, self.robot, pose)
         try:
-            state = self.robot.feedback().state
+            feedback = self.robot.feedback()
         except BaseException:  # the events happened: they reach the collector all the same
             self._publish(clock.now, events, *self._nav())
             raise
-        self._publish(clock.now, events, state, self.executor.current_task)
+        self._publish(clock.now, events, feedback.state, self.executor.current_task)
+        self._log_behaviours(clock.now, feedback.message if feedback.state is NavState.ACTIVE
+                             else "")
         if self.executor.finished:
             clock.stop("mission finished")
+
+    def _log_behaviours(self, now: float, message: str) -> None:
+        """What the robot's last step did: what it reports and what its command shows (the
+        command of the step the feedback answers for: this component runs before the robot)."""
+        names = list(reported(message))
+        command = self.board.command
+        if command is not None:
+            linear, angular = command.raw
+            names += observed(linear, angular)
+            limit = self.spec.mission.max_speed
+            if limit is not None and abs(linear) >= SPEED_LIMIT_SHARE * limit:
+                names.append("speed_limit")
+        self.behaviours.tick(now, names)
 
     def deadline(self, clock: Clock) -> None:
         """The last tick: the time (or duration) limit ends the mission."""
