@@ -32,6 +32,14 @@ from rei.lang.suggest import did_you_mean
 
 _TYPE_FIELDS = {"kind", "description", "footprint", "height", "mass", "inertia", "colour",
                 "mesh", "drive", "laser"}
+_DRIVE_FIELDS = {"max_linear", "max_angular", "wheel_separation", "wheel_radius",
+                 "max_linear_accel", "max_linear_decel", "max_angular_accel",
+                 "max_angular_decel"}
+_ACCELERATIONS = {"max_linear_accel": DriveSpec.max_linear_accel,
+                  "max_linear_decel": DriveSpec.max_linear_decel,
+                  "max_angular_accel": DriveSpec.max_angular_accel,
+                  "max_angular_decel": DriveSpec.max_angular_decel}
+"""The drive's optional fields and their defaults (Nav2's velocity smoother's)."""
 _MAX_DIMENSION = 1000.0
 _MAX_MASS = 1.0e6
 
@@ -152,6 +160,10 @@ class _Reader:
             self.error(tname, "drive", "a table with max_linear, max_angular, wheel_separation, "
                        "wheel_radius", raw)
             return None
+        for key in raw:
+            if key not in _DRIVE_FIELDS:
+                self.error(tname, f"drive.{key}",
+                           "a known field" + did_you_mean(key, _DRIVE_FIELDS), key)
         return DriveSpec(
             max_linear=self.number(tname, "drive.max_linear", raw.get("max_linear"), low=0.0,
                                    high=100.0, low_open=True),
@@ -162,6 +174,9 @@ class _Reader:
                                          low_open=True),
             wheel_radius=self.number(tname, "drive.wheel_radius", raw.get("wheel_radius"),
                                      low=0.0, high=100.0, low_open=True),
+            **{key: self.number(tname, f"drive.{key}", raw.get(key, default), low=0.0,
+                                high=1000.0, low_open=True)
+               for key, default in _ACCELERATIONS.items()},
         )
 
     def laser(self, tname: str, raw: Any) -> LaserSpec | None:

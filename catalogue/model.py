@@ -90,12 +90,22 @@ Footprint = Box | Cylinder | Polygon | Tile
 
 @dataclass(frozen=True)
 class DriveSpec:
-    """Differential drive limits."""
+    """Differential drive limits: speeds, and the accelerations its commands may ask for (all
+    positive magnitudes; the defaults are Nav2's velocity smoother's, so a catalogue written
+    before they existed still loads)."""
 
     max_linear: float
     max_angular: float
     wheel_separation: float
     wheel_radius: float
+    max_linear_accel: float = 2.5
+    """m/s^2 the linear command may rise by per second (speeding up, either direction)."""
+    max_linear_decel: float = 2.5
+    """m/s^2 the linear command may fall by per second (slowing down towards standstill)."""
+    max_angular_accel: float = 3.2
+    """rad/s^2 the angular command may rise by per second."""
+    max_angular_decel: float = 3.2
+    """rad/s^2 the angular command may fall by per second."""
 
 
 @dataclass(frozen=True)

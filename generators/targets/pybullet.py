@@ -110,7 +110,11 @@ def build_manifest(world: ConcreteWorld, source_name: str, room_file: str) -> tu
     drive, laser = robot_type.drive, robot_type.laser
     robot["drive"] = {"max_linear": drive.max_linear, "max_angular": drive.max_angular,
                       "wheel_separation": drive.wheel_separation,
-                      "wheel_radius": drive.wheel_radius}
+                      "wheel_radius": drive.wheel_radius,
+                      "max_linear_accel": drive.max_linear_accel,
+                      "max_linear_decel": drive.max_linear_decel,
+                      "max_angular_accel": drive.max_angular_accel,
+                      "max_angular_decel": drive.max_angular_decel}
     robot["laser"] = {"beams": laser.beams, "min_range": laser.min_range,
                       "max_range": laser.max_range, "rate": laser.rate, "fov": laser.fov,
                       "mount": [laser.mount_x, laser.mount_y, laser.mount_z],

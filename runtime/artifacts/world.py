@@ -118,8 +118,13 @@ def load_manifest(folder: str | Path) -> WorldManifest:
     try:
         robot = _body(data["robot"], "robot")
         d, las = data["robot"]["drive"], data["robot"]["laser"]
+        # the accelerations are absent from a world generated before they were (the
+        # catalogue's defaults then stand)
         drive = DriveSpec(_num(d["max_linear"], "drive"), _num(d["max_angular"], "drive"),
-                          _num(d["wheel_separation"], "drive"), _num(d["wheel_radius"], "drive"))
+                          _num(d["wheel_separation"], "drive"), _num(d["wheel_radius"], "drive"),
+                          *(_num(d.get(key, getattr(DriveSpec, key)), "drive")
+                            for key in ("max_linear_accel", "max_linear_decel",
+                                        "max_angular_accel", "max_angular_decel")))
         laser = LaserSpec(int(las["beams"]), _num(las["min_range"], "laser"),
                           _num(las["max_range"], "laser"), _num(las["rate"], "laser"),
                           _num(las["fov"], "laser"), _num(las["mount"][0], "laser"),

@@ -12,6 +12,7 @@ and must never import pybullet, the monitor or any wing.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, replace
 from enum import StrEnum
 from typing import Literal, get_args
@@ -120,6 +121,14 @@ class MissionFacts:
     """rad/s: the drive's max_angular."""
     mission_max_speed: float | None
     """The mission's own max_speed (m/s), None when it sets none."""
+    accel_limit: float = math.inf
+    decel_limit: float = math.inf
+    """m/s^2 the linear command may rise and fall by per second: the drive's
+    max_linear_accel and max_linear_decel (inf: not known, a trace recorded before REI
+    carried them)."""
+    turn_accel_limit: float = math.inf
+    turn_decel_limit: float = math.inf
+    """rad/s^2, likewise for the angular command (max_angular_accel, max_angular_decel)."""
 
 
 @dataclass(frozen=True)

@@ -136,9 +136,11 @@ def mission_facts(manifest: WorldManifest, mission: ConcreteMission) -> MissionF
     goals = tuple(GoalFacts(g.name, g.x, g.y,
                             None if g.yaw is None else math.remainder(g.yaw, math.tau),
                             g.tolerance, g.heading_tolerance, g.timeout) for g in mission.goals)
+    drive = manifest.drive
     return MissionFacts(goals, mission.cycles, mission.time_limit,
-                        speed_limit(manifest, mission), manifest.drive.max_angular,
-                        mission.max_speed)
+                        speed_limit(manifest, mission), drive.max_angular, mission.max_speed,
+                        drive.max_linear_accel, drive.max_linear_decel,
+                        drive.max_angular_accel, drive.max_angular_decel)
 
 
 def stream_header(manifest: WorldManifest, monitor: MonitorConfig,
@@ -298,6 +300,7 @@ def run_mission(mission: ConcreteMission, manifest: WorldManifest, monitor: Moni
     tasks = tuple(executor.results)
     measurements: dict[str, Any] = {
         "path_length": mission_run.path_length,
+        "behaviours": mission_run.behaviours.to_json(),
         "tasks": [{"index": r.index, "task": r.task, "succeeded": r.succeeded, "reason": r.reason,
                    "start": r.start, "end": r.end, "time": r.end - r.start,
                    "final_distance": r.final_distance, "cause": r.cause} for r in tasks],

@@ -8,6 +8,7 @@ import the simulation or pybullet.
 from __future__ import annotations
 
 import json
+import math
 import os
 from collections.abc import Iterator
 from pathlib import Path
@@ -20,7 +21,7 @@ from rei.generators.output import open_output
 from rei.lang.mission.model import COLLECTED_DATA
 from rei.runtime.messages import MissionEvent, MissionFacts, ObservedObject, Sample, StreamHeader
 from rei.runtime.trace.format import FORMAT, TRACE_VERSION, TraceError
-from rei.runtime.trace.rules import _header
+from rei.runtime.trace.rules import COMMAND_LIMITS, _header
 from rei.runtime.trace.sample_rules import _StreamRules
 
 
@@ -51,7 +52,10 @@ def _facts_json(f: MissionFacts) -> dict[str, Any]:
               "timeout": g.timeout} for g in f.goals]
     return {"goals": goals, "cycles": f.cycles, "time_limit": f.time_limit,
             "speed_limit": f.speed_limit, "turn_limit": f.turn_limit,
-            "mission_max_speed": f.mission_max_speed}
+            "mission_max_speed": f.mission_max_speed,
+            # only when known: a header without them reads as before (JSON has no inf)
+            **({key: getattr(f, key) for key in COMMAND_LIMITS}
+               if all(math.isfinite(getattr(f, key)) for key in COMMAND_LIMITS) else {})}
 
 
 def _event_json(e: MissionEvent) -> dict[str, Any]:

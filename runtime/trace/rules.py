@@ -36,6 +36,9 @@ _FOOTPRINT_KEYS = {"box": frozenset(("shape", "size")),
                    "polygon": frozenset(("shape", "points")), "tile": frozenset(("shape",))}
 _FACTS_KEYS = frozenset(("goals", "cycles", "time_limit", "speed_limit", "turn_limit",
                          "mission_max_speed"))
+COMMAND_LIMITS = ("accel_limit", "decel_limit", "turn_accel_limit", "turn_decel_limit")
+"""The mission facts' command acceleration limits: all four or none (a trace recorded before
+REI carried them; the limits then read as unknown, inf)."""
 _GOAL_KEYS = frozenset(("name", "x", "y", "heading", "tolerance", "heading_tolerance",
                         "timeout"))
 _FAULT_KEYS = frozenset(("name", "entry"))
@@ -250,7 +253,9 @@ def _mission_facts(value: Any, where: str) -> MissionFacts | None:
     a zero speed limit would give verdicts about nothing."""
     if value is None:
         return None
-    f = _Fields(value, where, "mission_facts", _FACTS_KEYS,
+    limits = isinstance(value, dict) and any(key in value for key in COMMAND_LIMITS)
+    f = _Fields(value, where, "mission_facts",
+                _FACTS_KEYS | frozenset(COMMAND_LIMITS) if limits else _FACTS_KEYS,
                 "the mission's facts (a JSON object, or null)")
     raw = f.array("goals", "goals")
     if not raw:
@@ -269,7 +274,9 @@ def _mission_facts(value: Any, where: str) -> MissionFacts | None:
     return MissionFacts(tuple(goals), f.whole("cycles", 1),
                         f.number("time_limit", **positive), f.number("speed_limit", **positive),
                         f.number("turn_limit", **positive),
-                        f.optional_number("mission_max_speed", **positive))
+                        f.optional_number("mission_max_speed", **positive),
+                        *(f.number(key, **positive) if limits else math.inf
+                          for key in COMMAND_LIMITS))
 
 
 def _header(data: Any, where: str) -> StreamHeader:

@@ -21,6 +21,9 @@ def test_turtlebot3_waffle_published_figures() -> None:
     assert tb3 is not None and tb3.kind == "robot"
     assert tb3.footprint == Box(0.281, 0.306)
     assert tb3.drive is not None and tb3.drive.max_linear == 0.26 and tb3.drive.max_angular == 1.82
+    # ROBOTIS's Nav2 parameters for the waffle (DWB acc_lim_x / acc_lim_theta and decel)
+    assert (tb3.drive.max_linear_accel, tb3.drive.max_linear_decel,
+            tb3.drive.max_angular_accel, tb3.drive.max_angular_decel) == (2.5, 2.5, 3.2, 3.2)
     assert tb3.laser is not None
     assert (tb3.laser.beams, tb3.laser.min_range, tb3.laser.max_range) == (360, 0.12, 3.5)
     assert math.isclose(tb3.laser.fov, 2 * math.pi)
@@ -72,6 +75,20 @@ mass = 3.0
     assert Workspace().check(path) == []
 
 
+_ROBOT = ('kind = "robot"\nfootprint = { shape = "box", size = [0.3, 0.3] }\nheight = 1\n'
+          'mass = 1\nlaser = { beams = 8, min_range = 0.1, max_range = 3.0, rate = 5 }\n'
+          'drive.max_linear = 0.3\ndrive.max_angular = 1.0\ndrive.wheel_separation = 0.3\n'
+          'drive.wheel_radius = 0.03\ndrive.')
+
+
+def test_a_drive_without_accelerations_takes_nav2s_defaults(write) -> None:  # type: ignore[no-untyped-def]
+    path = write("old.toml", "[types.t]\n" + _ROBOT.removesuffix("drive.") + "\n")
+    drive = load_catalogue(path).get("t").drive  # type: ignore[union-attr]
+    assert drive is not None
+    assert (drive.max_linear_accel, drive.max_linear_decel, drive.max_angular_accel,
+            drive.max_angular_decel) == (2.5, 2.5, 3.2, 3.2)
+
+
 @pytest.mark.parametrize("body,needle", [
     ('kind = "robotic"',
      "types.t.kind: expected one of floor, wall, static, dynamic, human, robot"),
@@ -85,6 +102,12 @@ mass = 3.0
      "types.t.mas: expected a known field; did you mean 'mass'?"),
     ('kind = "robot"\nfootprint = { shape = "box", size = [0.3, 0.3] }\nheight = 1\nmass = 1',
      "types.t.drive: expected a table"),
+    (_ROBOT + "max_linear_accel = 0.0\n", "types.t.drive.max_linear_accel: expected a finite "
+     "number > 0 and <= 1000, found 0.0"),
+    (_ROBOT + "max_angular_decel = inf\n", "types.t.drive.max_angular_decel: expected a finite "
+     "number > 0"),
+    (_ROBOT + "max_angular_decl = 3.2\n", "types.t.drive.max_angular_decl: expected a known "
+     "field; did you mean 'max_angular_decel'"),
 ])
 def test_catalogue_errors_name_the_field(write, body: str, needle: str) -> None:  # type: ignore[no-untyped-def]
     path = write("bad.toml", f"# header\n\n[types.t]\n{body}\n")
