@@ -52,7 +52,9 @@ KEPT_READS = {
     "goal_floor": "goal_floor", "humans": "humans", "dynamic_objects": "dynamic_objects",
     "cycles": "cycles", "headed_goals": "headed_goals", "goals": "goals",
     "neighbouring_goals": "neighbouring_goals", "speed_limit": "speed_limit",
-    "turn_limit": "turn_limit", "robot_inradius": "robot_inradius",
+    "turn_limit": "turn_limit", "accel_limit": "accel_limit", "decel_limit": "decel_limit",
+    "turn_accel_limit": "turn_accel_limit", "turn_decel_limit": "turn_decel_limit",
+    "robot_inradius": "robot_inradius",
     "robot_circumradius": "robot_circumradius", "laser_clearance": "laser_clearance",
     "hazard_clearance": "hazard_clearance",
 }

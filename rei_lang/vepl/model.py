@@ -34,7 +34,10 @@ SCALAR_MEASURES = ("laser_min", "laser_clearance", "speed", "time", "odom_error"
                    "turn_rate", "yaw_rate", "yaw", "speed_limit", "turn_limit", "humans",
                    "dynamic_objects", "cycles", "headed_goals", "goals", "neighbouring_goals",
                    "own_speed", "own_turn_rate", "own_yaw_rate", "pushed", "settle_travel",
-                   "hazard_clearance", "path_ratio", "time_ratio", "goal_spin")
+                   "hazard_clearance", "path_ratio", "time_ratio", "goal_spin",
+                   "cmd_linear", "cmd_yaw_rate", "cmd_accel", "cmd_decel", "cmd_turn_accel",
+                   "cmd_turn_decel", "settle_time", "accel_limit", "decel_limit",
+                   "turn_accel_limit", "turn_decel_limit")
 """Names an expression may read from the robot description (and the scenario's facts)
 without arguments; docs/vepl.md says what each means."""
 

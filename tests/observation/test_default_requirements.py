@@ -116,6 +116,7 @@ def test_a_clean_run_passes_and_absent_premises_are_not_applicable(tmp_path: Pat
     assert status.pop("HUMAN_SLOW_ZONE") == "not_applicable"
     assert status.pop("GOAL_HEADING") == "not_applicable"
     assert status.pop("REACTION_TIME") == "not_applicable"  # no people, nothing moving
+    assert status.pop("COMMAND_AT_REST") == "not_applicable"  # ends 0.1 s after its goal
     assert set(status.values()) == {"pass"}, status
     assert judge(summary_of(result)) == "pass"
 

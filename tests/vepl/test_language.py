@@ -49,7 +49,8 @@ def test_default_specification_has_table_3_and_the_5_1_2_requirements() -> None:
         "MISSION_SEQUENCE", "MISSION_SEQUENCE_CYCLE", "MISSION_WITH_HUMAN_TRAJECTORY",
         "MISSION_GOALS_REACHED", "GOAL_HEADING", "SPEED_LIMIT", "HUMAN_SLOW_ZONE",
         "NO_ROBOT_COLLISION", "EFFICIENT_PATH", "TIME_TO_GOAL", "NO_SPIN_AT_GOAL", "SETTLE",
-        "SMOOTH_MOTION", "REACTION_TIME"]
+        "SMOOTH_MOTION", "REACTION_TIME", "COMMAND_ACCELERATION", "COMMAND_CHATTER",
+        "COMMAND_AT_REST"]
     assert spec.parameters["N_COLLISION"] == 1
     by_name = {r.name: r for r in spec.requirements}
     human = by_name["MISSION_WITH_HUMAN_TRAJECTORY"]

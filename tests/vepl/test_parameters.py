@@ -99,7 +99,7 @@ def test_an_undeclared_name_is_refused_with_the_declared_ones() -> None:
     assert diagnostic.rule == "VEPL-UNKNOWN" and diagnostic.span.file.endswith("default.vepl")
     assert "--param react_zon: expected a parameter the specification declares (" \
         in diagnostic.message
-    assert "react_zone, settle_tolerance" in diagnostic.message
+    assert "react_zone, rest_after, rest_tolerance, settle_tolerance" in diagnostic.message
     assert diagnostic.message.endswith("found 'react_zon'; did you mean 'react_zone'?")
     # a specification's own names: human_safety.vepl has no react_zone
     with pytest.raises(LanguageError, match="declares .*personal_space.*found 'react_zone'"):

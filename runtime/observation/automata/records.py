@@ -100,6 +100,19 @@ class QueryInputs:
     """|linear| of the robot's last command as sent, before the motor clips it (m/s)."""
     cmd_turn: float = 0.0
     """|angular| of the last command as sent (rad/s)."""
+    cmd_linear: float = 0.0
+    """Signed linear of the last command as sent (m/s; positive: forward)."""
+    cmd_yaw_rate: float = 0.0
+    """Signed angular of the last command as sent (rad/s; positive: turning left)."""
+    cmd_accel: float = 0.0
+    cmd_decel: float = 0.0
+    """m/s^2 the linear command sped up (or slowed down, or reversed) by in the step into
+    the current command, per second of the time that step can have taken; 0 when that step
+    was of the other kind (rei.runtime.observation.model.commands). Kept until the command
+    changes again."""
+    cmd_turn_accel: float = 0.0
+    cmd_turn_decel: float = 0.0
+    """rad/s^2, likewise for the angular command."""
     turn_rate: float = 0.0
     """|angular velocity| the robot actually turns at (rad/s, ground truth)."""
     yaw_rate: float = 0.0
@@ -120,6 +133,9 @@ class QueryInputs:
     settle_travel: float = 0.0
     """Metres the robot's own motion covered since its last task ended, while no task runs
     (the mission's settle period); 0 while a task runs and once the mission ended."""
+    settle_time: float = 0.0
+    """Seconds since the robot's last task ended, while no task runs (the settle period);
+    0 while a task runs and once the mission ended."""
     path_ratio: float = 0.0
     time_ratio: float = 0.0
     """Of the last task that succeeded, until the next one starts (0: none, or not judged):
@@ -134,6 +150,12 @@ class QueryInputs:
     """The tighter of the drive's and the mission's linear limits (m/s)."""
     turn_limit: float = math.inf
     """The drive's angular limit (rad/s)."""
+    accel_limit: float = math.inf
+    decel_limit: float = math.inf
+    turn_accel_limit: float = math.inf
+    turn_decel_limit: float = math.inf
+    """The drive's command acceleration limits (m/s^2, rad/s^2; the catalogue's
+    max_linear_accel, ...); inf when the stream does not say (a trace recorded before)."""
     humans: float = 0.0
     dynamic_objects: float = 0.0
     """Counts of the scenario's humans and other moving objects."""

@@ -74,9 +74,17 @@ RULES: dict[str, MarginRule] = {
     "SETTLE": MarginRule(
         "m", "settle_tolerance minus the most the robot's own motion covered in a settle "
              "period"),
+    "COMMAND_ACCELERATION": MarginRule(
+        "fraction", "the smallest headroom, as a fraction of the allowed value (the limit "
+                    "times 1 + accel_margin), of the commands' linear and angular "
+                    "accelerations and decelerations (none if the limits are not known)"),
+    "COMMAND_AT_REST": MarginRule(
+        "m/s or rad/s", "rest_tolerance minus the largest linear or angular command from "
+                        "rest_after seconds into a settle period on"),
 }
 """The default requirements that have a natural margin. The others (the laser and mission
-patterns of thesis 5.1.2, SMOOTH_MOTION) are decided by event patterns and get none."""
+patterns of thesis 5.1.2, SMOOTH_MOTION, COMMAND_CHATTER) are decided by event patterns and get
+none."""
 
 APPROACH_RANGE = 0.5
 """Metres within which the model works out approach(o)
@@ -114,6 +122,8 @@ class MarginTracker:
         self.time_ratio = 0.0
         self.spin = -math.inf
         self.settle = 0.0
+        self.command_headroom = math.inf
+        self.rest_command = -math.inf
         self.goal_time_left = math.inf
         self.goal_failed = False
         self.heading_left = math.inf
@@ -170,6 +180,17 @@ class MarginTracker:
         self.path_ratio = max(self.path_ratio, w.path_ratio)
         self.time_ratio = max(self.time_ratio, w.time_ratio)
         self.settle = max(self.settle, w.settle_travel)
+        if "COMMAND_ACCELERATION" in self.defined:
+            scale = 1.0 + p.get("accel_margin", 0.0)
+            for rate, limit in ((w.cmd_accel, w.accel_limit), (w.cmd_decel, w.decel_limit),
+                                (w.cmd_turn_accel, w.turn_accel_limit),
+                                (w.cmd_turn_decel, w.turn_decel_limit)):
+                allowed = limit * scale
+                if math.isfinite(allowed) and allowed > 0:
+                    self.command_headroom = min(self.command_headroom,
+                                                (allowed - rate) / allowed)
+        if w.settle_time > p.get("rest_after", 1.0):
+            self.rest_command = max(self.rest_command, w.cmd_speed, w.cmd_turn)
 
     def task_ended(self, w: QueryInputs, index: int | None, elapsed: float, succeeded: bool,
                    cause: str) -> None:
@@ -207,6 +228,9 @@ class MarginTracker:
             "NO_SPIN_AT_GOAL": lambda: _finite(p.get("max_goal_spin", 4.7) - self.spin),
             "SETTLE": lambda: p.get("settle_tolerance", 0.1) - self.settle,
             "REACTION_TIME": self._reaction_margin,
+            "COMMAND_ACCELERATION": lambda: _finite(self.command_headroom),
+            "COMMAND_AT_REST": lambda: _finite(p.get("rest_tolerance", 0.001)
+                                               - self.rest_command),
         }
         return compute[name]()
 

@@ -27,6 +27,7 @@ from rei.lang.vepl.linker import NAMED_STATES
 from rei.lang.vepl.model import MISSION_STATES, TASK_FAILURES, TASK_STATES
 from rei.runtime.messages import MissionEvent, Sample, StreamHeader
 from rei.runtime.observation.automata.records import QueryInputs
+from rei.runtime.observation.model.commands import CommandTracker
 from rei.runtime.observation.model.efficiency import TaskEfficiency, TaskProgress, judge_task
 from rei.runtime.observation.model.floors import FloorMap
 from rei.runtime.observation.model.free_space import FloorGraph, FreeSpace, footprint_shapes
@@ -142,6 +143,9 @@ class RuntimeModel:
         """Metres of the robot's own motion since its last task ended while no task runs (the
         settle period after the last goal); 0 while a task runs."""
         self._idle = False
+        self._idle_since = 0.0
+        """When the last task ended (the settle period's start, while ``_idle``)."""
+        self.commands = CommandTracker()
         self.task_failures = np.zeros(0, dtype=np.int64)
         roles = [o.role for o in header.objects]
         self.humans = float(roles.count("human"))
@@ -149,6 +153,10 @@ class RuntimeModel:
         facts = header.mission_facts
         self.speed_limit = facts.speed_limit if facts is not None else math.inf
         self.turn_limit = facts.turn_limit if facts is not None else math.inf
+        self.accel_limit = facts.accel_limit if facts is not None else math.inf
+        self.decel_limit = facts.decel_limit if facts is not None else math.inf
+        self.turn_accel_limit = facts.turn_accel_limit if facts is not None else math.inf
+        self.turn_decel_limit = facts.turn_decel_limit if facts is not None else math.inf
         self.cycles = float(facts.cycles) if facts is not None else 1.0
         self.headed_goals = float(sum(g.heading is not None for g in facts.goals)) \
             if facts is not None else 0.0
@@ -173,6 +181,9 @@ class RuntimeModel:
                            MISSION_CODE["pending"], NAV_CODE["idle"],
                            approach=np.zeros(n), task_failure=self.task_failures.copy(),
                            speed_limit=self.speed_limit, turn_limit=self.turn_limit,
+                           accel_limit=self.accel_limit, decel_limit=self.decel_limit,
+                           turn_accel_limit=self.turn_accel_limit,
+                           turn_decel_limit=self.turn_decel_limit,
                            humans=self.humans, dynamic_objects=self.dynamic_objects,
                            cycles=self.cycles, headed_goals=self.headed_goals, goals=self.goals,
                            neighbouring_goals=self.neighbouring_goals,
@@ -236,27 +247,41 @@ class RuntimeModel:
                 self.hazard_clearance = self.hazards.clearance(scan, s.robot_pose, s.poses,
                                                                distance)
         ox, oy, _ = s.belief.odom
+        linear, angular = s.belief.cmd
+        rates = self.commands.observe(s.time, s.belief.cmd)
         return QueryInputs(
             distance, self.kind_masks, self._robot_floor(x, y), self.task_codes,
             float(s.belief.laser_min), self.laser_clearance, speed,
             s.time, math.hypot(ox - x, oy - y), self.inradius, self.circumradius,
             self.mission_state, NAV_CODE.get(s.belief.nav_state.value, 0),
             approach=approach, task_failure=self.task_failures,
-            cmd_speed=abs(s.belief.cmd[0]), cmd_turn=abs(s.belief.cmd[1]),
+            cmd_speed=abs(linear), cmd_turn=abs(angular), cmd_linear=linear,
+            cmd_yaw_rate=angular, cmd_accel=rates.accel, cmd_decel=rates.decel,
+            cmd_turn_accel=rates.turn_accel, cmd_turn_decel=rates.turn_decel,
             turn_rate=abs(s.robot_twist[2]), yaw_rate=s.robot_twist[2], yaw=s.robot_pose[2],
             own_speed=own.speed, own_turn_rate=abs(own.yaw_rate), own_yaw_rate=own.yaw_rate,
             pushed=1.0 if own.pushed else 0.0, hazard_clearance=self.hazard_clearance,
             settle_travel=self.idle_travel if self._idle else 0.0,
+            settle_time=self._settle_time(s.time),
             path_ratio=self._judged.path_ratio, time_ratio=self._judged.time_ratio,
             goal_spin=self._judged.spin,
             # the scenario's facts, constant through the run
-            speed_limit=self.speed_limit, turn_limit=self.turn_limit, humans=self.humans,
+            speed_limit=self.speed_limit, turn_limit=self.turn_limit,
+            accel_limit=self.accel_limit, decel_limit=self.decel_limit,
+            turn_accel_limit=self.turn_accel_limit, turn_decel_limit=self.turn_decel_limit,
+            humans=self.humans,
             dynamic_objects=self.dynamic_objects, cycles=self.cycles,
             headed_goals=self.headed_goals, goals=self.goals,
             neighbouring_goals=self.neighbouring_goals,
             object_floors=_Once(self.floors.of, s.poses),
             goal_floor=self.goal_floor,
             adjacency=self.floor_adjacent)
+
+    def _settle_time(self, time: float) -> float:
+        """Seconds of the settle period at ``time`` (0 outside it)."""
+        if self._idle and self.mission_state == MISSION_CODE["running"]:
+            return max(0.0, time - self._idle_since)
+        return 0.0
 
     def _nearest_human(self, s: Sample, distance: np.ndarray, moving: bool) -> None:
         """Update the closest approach to a person (and, while moving, personal space). The
@@ -309,6 +334,7 @@ class RuntimeModel:
             key = str(e.index) if e.index is not None else (e.task or "")
             record = next((t for t in self.tasks if t.key == key), None)
             self._idle = e.kind != "task_start"
+            self._idle_since = e.time
             self.idle_travel = 0.0
             self._task_event(e)
             if e.kind == "task_start":
@@ -337,6 +363,7 @@ class RuntimeModel:
         return replace(w, task_state=self.task_codes, mission_state=self.mission_state,
                        task_failure=self.task_failures,
                        settle_travel=self.idle_travel if self._idle else 0.0,
+                       settle_time=self._settle_time(w.time),
                        path_ratio=self._judged.path_ratio, time_ratio=self._judged.time_ratio,
                        goal_spin=self._judged.spin)
 

@@ -24,6 +24,13 @@ MEASURE_DATA = {
     "odom_error": "odometry",
     "cmd_speed": "nav_state",
     "cmd_turn": "nav_state",
+    "cmd_linear": "nav_state",
+    "cmd_yaw_rate": "nav_state",
+    "cmd_accel": "nav_state",  # the commands' changes, over the samples' times
+    "cmd_decel": "nav_state",
+    "cmd_turn_accel": "nav_state",
+    "cmd_turn_decel": "nav_state",
+    "settle_time": "mission_events",  # since the mission events' last task end
     # the robot's own motion is the ground truth capped at its command while it is pushed
     "own_speed": "nav_state",
     "own_turn_rate": "nav_state",
