@@ -27,9 +27,22 @@ bench/RESULTS.md. ``--quick`` is a smoke test: the first seed, 2 rooms, one run 
 ``--examples`` adds the four bundled examples to every campaign: the small preset has no
 humans and no goal headings or speed limits, so some defects cannot show in the demo suite.
 
+``--families`` measures the suite instead of scoring a fixed set of defects: each knock-out
+family of bench/knockouts (one defect at graded severities, a wrapper around any navigator)
+runs at each severity on each seed, against the same campaigns, with the navigator the
+knock-outs wrap as the baseline (``reference``, or ``--base SPEC``). Reported per family: its
+*detection threshold*, the mildest severity caught on every seed (a point of a sensitivity
+curve: milder defects than that slip through the suite), with the seeds caught at each
+severity and the requirements that caught it; and knock-outs whose every run was the same as
+the baseline's (a defect the suite never lets show, or, for ``recovery``, a base that does
+not report its recoveries). All severities run unless ``--stop-after-miss``: then each family
+runs from severe to mild and stops after the first severity missed on every seed (the output
+says which were not run). Writes bench/out/families.json.
+
 Usage: python bench/bugs.py [--seeds S ...] [--workers N] [--only NAME ...] [--quick]
        [--count N] [--repeat K] [--preset small|medium|large] [--examples] [--resume]
        [--markdown] [--out DIR]
+       python bench/bugs.py --families [FAMILY ...] [--base SPEC] [--stop-after-miss] ...
 """
 
 from __future__ import annotations
@@ -54,6 +67,15 @@ os.environ["PYTHONPATH"] = os.pathsep.join(
     p for p in (str(REPO), os.environ.get("PYTHONPATH", "")) if p)
 
 from bench.defects import DEFECTS  # noqa: E402
+from bench.knockouts import (  # noqa: E402
+    BASE_VARIABLE,
+    FAMILIES,
+    KNOCKOUTS,
+    Family,
+    Knockout,
+    base_spec,
+)
+from bench.knockouts import make as make_knockout  # noqa: E402
 from rei.runtime.campaigns import LocalEngine, RunRecord, plan_campaign, run_campaign  # noqa: E402
 from rei.runtime.robot import load_controller  # noqa: E402
 
@@ -120,12 +142,16 @@ class CampaignOutcome:
         return sum(r.simulated for r in self.runs)
 
 
+def expected_catcher(doc: str) -> str:
+    """The "Expected catcher:" paragraph of a defect's docstring, on one line."""
+    return " ".join(doc.split("Expected catcher:", 1)[-1].split("\n\n")[0].split())
+
+
 def navigators(only: list[str] | None) -> list[Navigator]:
     found = [Navigator(REFERENCE, "correct", REFERENCE, "nothing (the correct navigator)")]
     for d in DEFECTS:
         doc = type(load_controller(d.spec)).__doc__ or ""
-        expected = " ".join(doc.split("Expected catcher:", 1)[-1].split("\n\n")[0].split())
-        found.append(Navigator(d.name, d.kind, d.spec, expected))
+        found.append(Navigator(d.name, d.kind, d.spec, expected_catcher(doc)))
     if only:
         unknown = sorted(set(only) - {n.name for n in found})
         if unknown:
@@ -197,12 +223,13 @@ def catchers(campaigns: list[CampaignOutcome]) -> Counter[str]:
 
 
 def summarise(navs: list[Navigator], results: dict[str, list[CampaignOutcome]],
-              seeds: list[int]) -> dict[str, Any]:
+              seeds: list[int], baseline: str = REFERENCE) -> dict[str, Any]:
     """Per navigator and overall figures. Runs are paired with the reference's run of the same
     mission, repeat and seed: a defect is *caught* on a seed when it fails a run the reference
     passed (a failure both share, such as a mission the reference cannot complete either, is
-    the suite's, not a detection)."""
-    ref_camps = results[REFERENCE]
+    the suite's, not a detection). ``baseline`` names the correct navigator (the first of
+    ``navs``)."""
+    ref_camps = results[baseline]
     ref_wall = {c.seed: c.wall for c in ref_camps}
     ref_sim = {c.seed: c.simulated for c in ref_camps}
     ref_passed = {(c.seed, r.run_id) for c in ref_camps for r in c.runs if r.passed}
@@ -233,7 +260,7 @@ def summarise(navs: list[Navigator], results: dict[str, list[CampaignOutcome]],
             "time_vs_reference": sum(ratios) / len(ratios) if ratios else None,
             "simulated_vs_reference": sum(sim) / len(sim) if sim else None,
         })
-    defects = [r for r in rows if r["navigator"] != REFERENCE]
+    defects = [r for r in rows if r["navigator"] != baseline]
     ref = rows[0]
 
     def rate(key: str, every: bool) -> float | None:
@@ -337,6 +364,204 @@ def table(summary: dict[str, Any], markdown: bool) -> str:
     return "\n".join(lines)
 
 
+# -- knock-out families (--families) -------------------------------------------------------
+
+def knockout_navigator(family: Family, knockout: Knockout) -> Navigator:
+    doc = type(make_knockout(knockout.name)).__doc__ or ""
+    return Navigator(knockout.name, family.name, knockout.spec, expected_catcher(doc))
+
+
+def chosen_families(names: list[str]) -> list[Family]:
+    known = {f.name: f for f in FAMILIES}
+    unknown = sorted(set(names) - set(known))
+    if unknown:
+        raise SystemExit(f"--families: unknown famil{'y' if len(unknown) == 1 else 'ies'} "
+                         f"{', '.join(unknown)}; expected among {', '.join(known)}")
+    return [f for f in FAMILIES if not names or f.name in names]
+
+
+def caught_on(camp: CampaignOutcome, baseline: CampaignOutcome) -> bool:
+    """Whether ``camp`` fails a run its baseline campaign (same seed) passed."""
+    passed = {r.run_id for r in baseline.runs if r.passed}
+    return any(not r.passed and r.run_id in passed for r in camp.runs)
+
+
+def same_as_baseline(camps: list[CampaignOutcome], base: list[CampaignOutcome]) -> bool:
+    """Every run ended as the baseline's run of the same mission, repeat and seed: the same
+    outcome, the same failed requirements and the same simulated seconds to the last bit (a
+    defect that never showed, or a knock-out equal to its base on this suite)."""
+    by_seed = {c.seed: {r.run_id: r for r in c.runs} for c in base}
+    for camp in camps:
+        theirs = by_seed.get(camp.seed, {})
+        for run in camp.runs:
+            other = theirs.get(run.run_id)
+            if other is None or (run.passed, run.outcome, run.failed, run.simulated) != (
+                    other.passed, other.outcome, other.failed, other.simulated):
+                return False
+    return True
+
+
+def family_rows(families: list[Family], summary: dict[str, Any],
+                results: dict[str, list[CampaignOutcome]], baseline: str) -> list[dict[str, Any]]:
+    """Per family: each severity's seeds caught and catchers (severities not run: None), and
+    the detection threshold, the mildest severity caught on every seed."""
+    rows = {r["navigator"]: r for r in summary["rows"]}
+    found: list[dict[str, Any]] = []
+    for family in families:
+        severities: list[dict[str, Any]] = []
+        for severity in family.severities:
+            name = f"{family.name}_{severity}"
+            row = rows.get(name)
+            entry: dict[str, Any] = {"knockout": name, "severity": severity,
+                                     "shown": f"{severity * family.shown:g}",
+                                     "label": family.label(severity), "run": row is not None}
+            if row is not None:
+                entry.update({
+                    "seeds": row["seeds"], "seeds_caught": row["seeds_caught"],
+                    "seeds_flagged": row["seeds_flagged"],
+                    "caught_seeds": [int(s) for s, found in row["per_seed"].items() if found],
+                    "caught_by": row["caught_by"],
+                    "same_as_baseline": same_as_baseline(results[name], results[baseline]),
+                    "expected_catcher": row["expected_catcher"],
+                    "simulated_vs_baseline": row["simulated_vs_reference"]})
+            severities.append(entry)
+        every = [e for e in severities if e["run"] and e["seeds"]
+                 and e["seeds_caught"] == e["seeds"]]
+        threshold = every[0] if every else None  # severities run mild to severe
+        worse = severities[severities.index(threshold) + 1:] if threshold else []
+        found.append({
+            "family": family.name, "severity_is": family.unit.format("N"),
+            "threshold": None if threshold is None else threshold["severity"],
+            "threshold_label": None if threshold is None else threshold["label"],
+            "missed_beyond_threshold": [e["severity"] for e in worse
+                                        if e["run"] and e["seeds_caught"] < e["seeds"]],
+            "severities": severities})
+    return found
+
+
+def family_table(rows: list[dict[str, Any]], summary: dict[str, Any], baseline: str,
+                 stop_after_miss: bool, markdown: bool) -> str:
+    def curve(row: dict[str, Any]) -> str:
+        return ", ".join(f"{e['shown']}: {e['seeds_caught']}/{e['seeds']}" if e["run"]
+                         else f"{e['shown']}: not run" for e in row["severities"])
+
+    def threshold(row: dict[str, Any]) -> str:
+        if row["threshold"] is None:
+            return "none (no severity caught on every seed)"
+        text = str(row["threshold_label"])
+        if row["missed_beyond_threshold"]:
+            text += (" (yet missed on some seed at the more severe "
+                     + ", ".join(map(str, row["missed_beyond_threshold"])) + ")")
+        return text
+
+    def seeds(e: dict[str, Any]) -> str:
+        return ", ".join(map(str, e["caught_seeds"])) or "none"
+
+    ref = summary["rows"][0]
+    heads = (["family", "severity N", "detection threshold (mildest caught on every seed)",
+              "seeds caught per N, mild to severe"],
+             ["knock-out", "severity", "seeds caught (flagged)", "caught on seeds",
+              "caught by (runs the baseline passed)", "same runs as the baseline"])
+    first = [[r["family"], r["severity_is"], threshold(r), curve(r)] for r in rows]
+    second = [[e["knockout"], e["label"], f"{e['seeds_caught']}/{e['seeds']} "
+               f"({e['seeds_flagged']})", seeds(e), named_catchers(e["caught_by"]),
+               "yes" if e["same_as_baseline"] else "no"]
+              for r in rows for e in r["severities"] if e["run"]]
+    notes = [
+        f"* Baseline: {baseline} (the navigator every knock-out wraps); its campaigns with any "
+        f"failed run: {ref['seeds_flagged']}/{ref['seeds']} ({ref['runs_failed']} failed "
+        f"run(s)). Caught: a knock-out fails a run (same mission, repeat and seed) the "
+        f"baseline passed.",
+        "* Severities: " + ("each family ran from severe to mild and stopped after the first "
+                            "severity missed on every seed (--stop-after-miss); 'not run' "
+                            "severities are milder than that one." if stop_after_miss else
+                            "every severity of every family ran."),
+        "* 'same runs as the baseline': every run ended exactly as the baseline's (outcome, "
+        "failed requirements, simulated seconds): the defect never showed on this suite, or "
+        "the knock-out equals its base here (overspeed without mission speed limits; "
+        "recovery on a base that does not report its recoveries or never recovers).",
+    ]
+    if markdown:
+        def md(head: list[str], body: list[list[str]]) -> list[str]:
+            return (["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+                    + ["| " + " | ".join(cells) + " |" for cells in body])
+        return "\n".join([*md(heads[0], first), "", *notes, "",
+                          "Per knock-out (runs the baseline passed):", "",
+                          *md(heads[1], second)])
+
+    def plain(head: list[str], body: list[list[str]]) -> list[str]:
+        widths = [max(len(c) for c in column) for column in zip(head, *body, strict=True)]
+        return ["  ".join(c.ljust(w) for c, w in zip(cells, widths, strict=True)).rstrip()
+                for cells in (head, *body)]
+    return "\n".join([*plain(heads[0], first), "", *notes, "", *plain(heads[1], second)])
+
+
+def run_families(args: argparse.Namespace, seeds: list[int], count: int, repeat: int) -> int:
+    """The --families mode: every knock-out family at each severity on each seed."""
+    families = chosen_families(args.families)
+    base = args.base or base_spec()
+    # Every run's process makes its knock-out around this base (it inherits the environment).
+    os.environ[BASE_VARIABLE] = base
+    baseline = Navigator(REFERENCE if base == REFERENCE else "base", "baseline", base,
+                         f"nothing (the base navigator, {base})")
+    out: Path = args.out
+    started = time.perf_counter()
+    inputs = {seed: suite(out / "suites", count, args.preset, seed, args.examples,
+                          args.stressor) for seed in seeds}
+    results: dict[str, list[CampaignOutcome]] = {}
+
+    def campaigns(nav: Navigator) -> list[CampaignOutcome]:
+        found = []
+        for seed in seeds:
+            camp = run_one(nav, inputs[seed], seed, repeat, args.workers,
+                           out / "families" / f"seed{seed}" / nav.name, args.resume)
+            failed = sum(not r.passed for r in camp.runs)
+            print(f"seed {seed} {nav.name}: {failed}/{len(camp.runs)} runs failed "
+                  f"({camp.wall:.0f} s)", file=sys.stderr)
+            found.append(camp)
+        results[nav.name] = found
+        return found
+
+    campaigns(baseline)
+    ran: list[Navigator] = []
+    for family in families:
+        # severe first: the order --stop-after-miss needs
+        for knockout in reversed(_knockouts(family)):
+            nav = knockout_navigator(family, knockout)
+            ran.append(nav)
+            camps = campaigns(nav)
+            if args.stop_after_miss and not any(
+                    caught_on(c, b) for c, b in zip(camps, results[baseline.name], strict=True)):
+                break
+    order = {k.name: i for i, k in enumerate(k for f in families for k in _knockouts(f))}
+    navs = [baseline, *sorted(ran, key=lambda n: order[n.name])]
+    summary = summarise(navs, results, seeds, baseline.name)
+    rows = family_rows(families, summary, results, baseline.name)
+    settings = {"seeds": seeds, "count": count, "repeat": repeat, "preset": args.preset,
+                "examples": args.examples, "stressor": args.stressor, "base": base,
+                "families": [f.name for f in families], "stop_after_miss": args.stop_after_miss,
+                "workers": args.workers, "quick": args.quick, "resumed": args.resume,
+                "wall_seconds": time.perf_counter() - started,
+                "campaign_wall_seconds": {n: [c.wall for c in camps]
+                                          for n, camps in results.items()}}
+    report = {"settings": settings, "families": rows, "summary": summary,
+              "campaigns": [asdict(c) for camps in results.values() for c in camps]}
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "families.json").write_text(json.dumps(report, indent=1) + "\n", encoding="utf-8")
+    rooms = f"{args.stressor} stress" if args.stressor else args.preset
+    walls = [c.wall for camps in results.values() for c in camps]
+    print(f"{len(seeds)} seed(s) x {count} {rooms} room(s) x {repeat} run(s)"
+          f"{' + examples' if args.examples else ''}; {len(walls)} campaigns, "
+          f"{sum(walls) / len(walls):.0f} s each on average "
+          f"({time.perf_counter() - started:.0f} s in all); {out / 'families.json'}\n")
+    print(family_table(rows, summary, baseline.name, args.stop_after_miss, args.markdown))
+    return 0
+
+
+def _knockouts(family: Family) -> list[Knockout]:
+    return [k for k in KNOCKOUTS if k.family == family.name]
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3], metavar="S",
@@ -364,10 +589,27 @@ def main() -> int:
                         help="print the table for bench/RESULTS.md (full expected catchers)")
     parser.add_argument("--out", type=Path, default=REPO / "bench" / "out",
                         help="folder for suites, campaigns and bugs.json (default bench/out)")
+    parser.add_argument("--families", nargs="*", default=None, metavar="FAMILY",
+                        help="instead of bench/defects, the knock-out families of "
+                             "bench/knockouts (all, or these) at each severity: per family "
+                             "the detection threshold; writes families.json")
+    parser.add_argument("--base", default=None, metavar="SPEC",
+                        help="with --families: the navigator the knock-outs wrap, also the "
+                             f"baseline, as --controller takes it (default ${BASE_VARIABLE} "
+                             "or reference)")
+    parser.add_argument("--stop-after-miss", action="store_true",
+                        help="with --families: run each family from severe to mild and stop "
+                             "after the first severity missed on every seed")
     args = parser.parse_args()
     seeds, count, repeat = args.seeds, args.count, args.repeat
     if args.quick:
         seeds, count, repeat = seeds[:1], 2, 1
+    if args.families is not None:
+        if args.only:
+            parser.error("--only names defects of bench/defects; with --families name families")
+        return run_families(args, seeds, count, repeat)
+    if args.base or args.stop_after_miss:
+        parser.error("--base and --stop-after-miss go with --families")
     navs = navigators(args.only)
     out: Path = args.out
     results: dict[str, list[CampaignOutcome]] = {n.name: [] for n in navs}
