@@ -15,6 +15,7 @@ import zlib
 
 import numpy as np
 
+from rei.runtime.errors import RunError
 from rei.runtime.messages import NavState
 from rei.runtime.robot.contract import (
     STOP,
@@ -42,7 +43,12 @@ def base_spec() -> str:
 
 def base_controller() -> Controller:
     """A fresh navigator of ``base_spec()`` (RunError naming the choices when unknown)."""
-    return load_controller(base_spec())
+    spec = base_spec()
+    if spec.partition(":")[0] == __name__.rpartition(".")[0]:
+        # its own base would be the same variable again: a knock-out wrapping itself forever
+        raise RunError(f"{BASE_VARIABLE}: expected a navigator, found the knock-out '{spec}' "
+                       f"(wrap one knock-out in another in Python: make(NAME, inner))")
+    return load_controller(spec)
 
 
 def seeded(context: ControllerContext, family: str) -> np.random.Generator:

@@ -165,6 +165,10 @@ def test_the_base_is_the_reference_unless_rei_knockout_base_names_another(
     monkeypatch.setenv(BASE_VARIABLE, "no_such_navigator")
     with pytest.raises(RunError, match="no_such_navigator"):
         make("delay_100")
+    monkeypatch.setenv(BASE_VARIABLE, "bench.knockouts:held_10")
+    with pytest.raises(RunError, match="found the knock-out 'bench.knockouts:held_10'"):
+        make("delay_100")
+    assert make("delay_100", make("held_10", FakeNavigator())).inner.name == "held_10(fake)"
 
 
 # -- the contract ----------------------------------------------------------------------------
