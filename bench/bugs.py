@@ -449,6 +449,8 @@ def family_table(rows: list[dict[str, Any]], summary: dict[str, Any], baseline: 
         if row["threshold"] is None:
             return "none (no severity caught on every seed)"
         text = str(row["threshold_label"])
+        if row["threshold"] == row["severities"][0]["severity"]:
+            text += " (the mildest tried: the suite's limit is milder still)"
         if row["missed_beyond_threshold"]:
             text += (" (yet missed on some seed at the more severe "
                      + ", ".join(map(str, row["missed_beyond_threshold"])) + ")")

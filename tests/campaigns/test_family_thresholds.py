@@ -67,6 +67,19 @@ def test_the_threshold_is_the_mildest_severity_caught_on_every_seed(bugs: Module
            f"seed at the more severe {third}) |" in table
 
 
+def test_a_threshold_at_the_mildest_severity_says_the_limit_is_milder(bugs: ModuleType) -> None:
+    tolerance = next(f for f in FAMILIES if f.name == "tolerance")
+    outcomes = {"reference": [campaign(bugs, "reference", s, {}) for s in SEEDS]}
+    outcomes |= {f"tolerance_{v}": [campaign(bugs, "t", s, {"room_a.r00": "GOALS"})
+                                    for s in SEEDS] for v in tolerance.severities}
+    navs = [bugs.Navigator(name, "", "", "") for name in outcomes]
+    summary = bugs.summarise(navs, outcomes, list(SEEDS), "reference")
+    (row,) = bugs.family_rows([tolerance], summary, outcomes, "reference")
+    assert row["threshold"] == tolerance.severities[0]
+    table = bugs.family_table([row], summary, "reference", False, markdown=True)
+    assert "goal tolerance × 1.5 (the mildest tried: the suite's limit is milder still)" in table
+
+
 def test_a_knockout_whose_runs_all_end_as_the_baselines_is_reported_so(bugs: ModuleType) -> None:
     base = [campaign(bugs, "reference", s, {}) for s in SEEDS]
     same = [campaign(bugs, "x", s, {}) for s in SEEDS]
