@@ -18,6 +18,7 @@ class ArcsAround(ReferenceNavigator):
     found without it)."""
 
     hold_near_people = False
+    smooth = False  # nor the velocity smoother of issue 40
 
     def _turn_to_path(self, pose: tuple[float, float, float], points: np.ndarray,
                       margin: float) -> VelocityCommand | None:

@@ -35,8 +35,11 @@ def test_a_goal_behind_is_turned_to_on_the_spot_then_driven_to_straight() -> Non
     start = (1.0, 0.0, math.pi - 2.3)  # the goal 2.3 rad off the heading, as in room_0216
     run = drive(open_room(), [], [], BEHIND, start, 40.0)
     assert run.states[-1] == NavState.SUCCEEDED
-    assert all(c.linear == 0.0 and abs(c.angular) == 0.6 * DRIVE.max_angular
-               for c in run.commands[:5])
+    # on the spot, at 0.6 of the turn limit once the smoother let it get there
+    first = run.commands[:8]
+    assert all(c.linear == 0.0 and 0.0 < abs(c.angular) <= 0.6 * DRIVE.max_angular + 1e-9
+               for c in first)
+    assert abs(first[-1].angular) == 0.6 * DRIVE.max_angular
     # about the straight line less the 0.1 m the reference stops short of the goal
     assert path_length(run) < 1.1 * 1.4
     looping = drive(open_room(), [], [], BEHIND, start, 40.0, navigator=ArcsAround)

@@ -17,6 +17,7 @@ import pytest
 from rei.catalogue import DriveSpec, LaserSpec
 from rei.runtime.messages import LaserScan, NavState
 from rei.runtime.robot import NavGoal, Observation, VelocityCommand
+from rei.runtime.robot.behaviours import reported
 from rei.runtime.robot.contract import ControllerContext, MapObstacle
 from rei.runtime.robot.navigator.recovery import footprint_gaps, motion_is_safe
 from rei.runtime.robot.navigator.reference import ABORT_GRACE, BLOCKED_AFTER, ReferenceNavigator
@@ -116,6 +117,8 @@ class Drive:
     times: list[float]
     gaps: list[float]
     navigator: ReferenceNavigator
+    doing: list[tuple[str, ...]]
+    """What the navigator reported doing after each step (behaviours.reported)."""
 
 
 def drive(walls: list[Box], unknown: list[Box], people: list[Circle], goal: NavGoal,
@@ -127,7 +130,7 @@ def drive(walls: list[Box], unknown: list[Box], people: list[Circle], goal: NavG
     nav.reset(context_of(walls))
     nav.send_goal(goal)
     pose = list(start)
-    out = Drive([], [], [], [], nav)
+    out = Drive([], [], [], [], nav, [])
     t = 0.0
     while t < seconds:
         here = people if t < people_until else []
@@ -140,8 +143,10 @@ def drive(walls: list[Box], unknown: list[Box], people: list[Circle], goal: NavG
             pose[1] += cmd.linear * math.sin(pose[2]) * DT
             pose[2] = math.remainder(pose[2] + cmd.angular * DT, math.tau)
         out.gaps.append(gap_to((pose[0], pose[1], pose[2]), walls + unknown, here))
-        state = nav.feedback().state
+        feedback = nav.feedback()
+        state = feedback.state
         out.states.append(state)
+        out.doing.append(reported(feedback.message))
         t = round(t + DT, 9)
         if state in (NavState.SUCCEEDED, NavState.ABORTED, NavState.PREEMPTED):
             break
@@ -193,6 +198,14 @@ def test_a_pinned_robot_backs_up_and_turns_before_it_aborts_within_the_limit() -
     assert backed and turned and min(backed) < end and min(turned) < end
     assert {"backup", "spin"} <= set(run.navigator._recovery.log)
     assert within_limits(run.commands)
+    # ... and says so in its feedback, on the steps that back up and turn
+    said = {name for doing in run.doing for name in doing}
+    assert {"recovery.backup", "recovery.spin"} <= said, said
+    for t, command, doing in zip(run.times, run.commands, run.doing, strict=True):
+        if doing == ("recovery.backup",):
+            assert command.linear < 0, t
+        if doing == ("recovery.spin",):
+            assert command.linear == 0 and command.angular != 0, t
 
 
 def test_a_person_standing_in_a_corridor_for_good_aborts_the_goal_without_contact() -> None:
@@ -204,6 +217,13 @@ def test_a_person_standing_in_a_corridor_for_good_aborts_the_goal_without_contac
     assert min(run.gaps) > 0.0  # never touched the person or a wall
     assert {"backup", "replan", "replan_reduced", "wait"} <= set(run.navigator._recovery.log)
     assert within_limits(run.commands)
+    said = {name for doing in run.doing for name in doing}
+    assert {"recovery.backup", "recovery.replan", "recovery.replan_reduced", "recovery.wait",
+            "slow_for_person"} <= said, said
+    # no way round the person: no re-plan around them was adopted
+    assert "replan_unmapped" not in said
+    # an aborted goal's feedback is the reason, not a behaviour
+    assert run.doing[-1] == ()
 
 
 def test_a_person_who_walks_on_lets_the_robot_reach_the_goal() -> None:

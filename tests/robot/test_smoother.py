@@ -11,6 +11,7 @@ import pytest
 
 from rei.catalogue.model import DriveSpec
 from rei.runtime.robot.contract import STOP, VelocityCommand
+from rei.runtime.robot.navigator.reference import ReferenceNavigator
 from rei.runtime.robot.navigator.smoother import (
     VelocitySmoother,
     clear_to_brake,
@@ -75,9 +76,9 @@ def test_a_smoothed_command_running_into_a_point_is_not_sent() -> None:
 def test_a_new_run_gets_a_new_smoother() -> None:
     from tests.robot.test_reference_recovery import context_of, corridor_walls  # noqa: PLC0415
 
-    ctx = context_of(corridor_walls())
-    s = VelocitySmoother.of_run(ctx)
-    s.sent(VelocityCommand(0.2, 0.0), 5.0)
-    assert s.belongs_to(ctx, 5.1)
-    assert not s.belongs_to(ctx, 0.0)  # the time went back: a new run
-    assert not s.belongs_to(context_of(corridor_walls()), 5.1)
+    nav = ReferenceNavigator()
+    nav.reset(context_of(corridor_walls()))
+    first = nav._smoother
+    first.sent(VelocityCommand(0.2, 0.0), 5.0)
+    nav.reset(context_of(corridor_walls()))
+    assert nav._smoother is not first and nav._smoother.last == STOP

@@ -41,9 +41,12 @@ This module must never import pybullet.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
+from rei.runtime.messages import NavState
+from rei.runtime.robot.behaviours import doing_message
 from rei.runtime.robot.contract import (
     STOP,
     ControllerContext,
@@ -57,6 +60,7 @@ from rei.runtime.robot.navigator.clearance import clearance_field
 from rei.runtime.robot.navigator.gridplan import GridGraph
 from rei.runtime.robot.navigator.localplan import LocalPlanner
 from rei.runtime.robot.navigator.recovery import Recovery
+from rei.runtime.robot.navigator.smoother import VelocitySmoother, smooth_safely
 from rei.runtime.robot.navigator.tuning import DEFAULT_TUNING, ReferenceTuning, Tuned
 
 # The default tuning under the module-level names it had before the record (tests, bench
@@ -106,6 +110,9 @@ class ReferenceNavigator(LocalPlanner):
     for ``SIDE_MEMORY`` (``TURN_COMMITMENT``; False: only its cost, the planner before issue
     25's TPE cand0045)."""
 
+    smooth = Tuned[bool]()
+    """Whether the commands pass the velocity smoother (``ReferenceTuning.smooth``)."""
+
     def __init__(self, tuning: ReferenceTuning = DEFAULT_TUNING) -> None:
         self.tuning = tuning
         self._tracker = GoalTracker()
@@ -117,6 +124,10 @@ class ReferenceNavigator(LocalPlanner):
         self._ctx = context
         self._tracker = GoalTracker()
         self._slow_until = -math.inf
+        self._now = -math.inf
+        """The time of the last step's observation."""
+        self._doing: list[str] = []
+        """What the last step did (behaviours.BEHAVIOURS' names), for the feedback."""
         self._path: np.ndarray | None = None
         self._pose = None
         self._trig_key = None
@@ -125,6 +136,8 @@ class ReferenceNavigator(LocalPlanner):
         self._best_remaining = math.inf
         self._last_progress_time = 0.0
         self._stuck_since: float | None = None
+        self._stuck_turn = 0.0
+        """The direction of the turn on the spot while stuck (0: none yet)."""
         self._tight_until = -math.inf
         self._turn_side = 0.0
         """Sign of the local planner's last driving turn (0: none since the goal or a
@@ -158,6 +171,7 @@ class ReferenceNavigator(LocalPlanner):
         # Backing up is only done where the laser sees behind the robot.
         self._recovery = Recovery(self._half, self._vmax, self._wmax,
                                   rear_visible=laser.fov >= 1.9 * math.pi)
+        self._smoother = VelocitySmoother.of_run(context)
 
     def _build_grid(self, ctx: ControllerContext) -> None:
         res = self.tuning.resolution
@@ -194,7 +208,13 @@ class ReferenceNavigator(LocalPlanner):
         self._tracker.cancel()
 
     def feedback(self) -> GoalFeedback:
-        return self._tracker.feedback(self._remaining if self._tracker.running else None)
+        feedback = self._tracker.feedback(self._remaining if self._tracker.running else None)
+        if feedback.state is not NavState.ACTIVE:
+            return feedback
+        # What the last step did, as behaviours.py asks a controller to report it; the slow
+        # zone is the step's last word (it may scale what _navigate chose).
+        doing = self._doing + (["slow_for_person"] if self._now < self._slow_until else [])
+        return replace(feedback, message=doing_message(doing))
 
     # -- planning --------------------------------------------------------------------------
 
@@ -259,12 +279,19 @@ class ReferenceNavigator(LocalPlanner):
         if abs(cmd.linear) > t.slow_zone_speed and observation.time < self._slow_until:
             # Scaling both keeps the arc the local planner checked against the laser.
             k = t.slow_zone_speed / abs(cmd.linear)
-            return VelocityCommand(cmd.linear * k, cmd.angular * k)
-        return cmd
+            cmd = VelocityCommand(cmd.linear * k, cmd.angular * k)
+        # Within the drive's accelerations (smoother.py), unless braking from the smoothed
+        # command would come nearer the laser points than the planner's margin allows.
+        if not self.smooth:
+            return cmd
+        margin = t.tight_margin if observation.time < self._tight_until else t.margin
+        return smooth_safely(self._smoother, cmd, observation.time, points, self._half, margin)
 
     def _navigate(self, observation: Observation) -> VelocityCommand:
         tracker, t = self._tracker, self.tuning
         self._pose = observation.odom_pose
+        self._now = observation.time
+        self._doing = []
         if not tracker.running or tracker.goal is None:
             return STOP
         goal = tracker.goal
@@ -277,6 +304,7 @@ class ReferenceNavigator(LocalPlanner):
             self._best_remaining = math.inf
             self._last_progress_time = observation.time
             self._stuck_since = None
+            self._stuck_turn = 0.0
             self._turn_side = 0.0
             self._align_first = True
             if self._path is None:
@@ -293,6 +321,7 @@ class ReferenceNavigator(LocalPlanner):
                 tracker.succeed()
                 return STOP
             turn = float(np.clip(2.0 * err, -0.6 * self._wmax, 0.6 * self._wmax))
+            self._doing.append("goal_heading")
             return VelocityCommand(0.0, turn)
         now = observation.time
         recovery = self._recovery
@@ -311,15 +340,18 @@ class ReferenceNavigator(LocalPlanner):
         points = self._laser_points(observation)
         pose = observation.odom_pose
         if recovery.active:
+            begun = len(recovery.log)
             action = recovery.step(now, pose, points,
                                    lambda reduced: self._replan_around(points, goal, (x, y),
                                                                        reduced),
                                    lambda: self._path_heading((x, y)))
+            self._report_recovery(begun)
             if action.command is not None:
                 return action.command
             # The level is over: drive on, keeping closer to obstacles for a while.
             self._tight_until = now + t.tight_for
             self._stuck_since = None
+            self._stuck_turn = 0.0
             self._turn_side = 0.0
         if dist < t.final_approach:
             cmd = self._approach(pose, goal, dist, points)
@@ -349,8 +381,19 @@ class ReferenceNavigator(LocalPlanner):
                 self._stuck_since = now
             if now - self._stuck_since >= t.stuck_after:
                 return self._start_recovery(now, pose, points, goal)
-            return STOP if chosen is None else chosen
+            # Nothing ahead is admissible: turn on the spot as the planner says, but never
+            # back the other way while stuck (with a person in a door ahead it picked left
+            # and right by turns, a chatter of commands that got it nowhere: the standing
+            # stressor, COMMAND_CHATTER); stand and wait for the way to clear instead.
+            if chosen is None or chosen.angular * self._stuck_turn < 0.0:
+                self._doing.append("wait_for_person")
+                return STOP
+            self._stuck_turn = chosen.angular or self._stuck_turn
+            return chosen
         self._stuck_since = None
+        self._stuck_turn = 0.0
+        if chosen.linear > 0.0 and self._squeezed(points):
+            self._doing.append("tight_passage")
         if now - max(self._last_progress_time, recovery.ended_at or -math.inf) > t.oscillate_after:
             return self._start_recovery(now, pose, points, goal)
         return chosen
@@ -359,16 +402,29 @@ class ReferenceNavigator(LocalPlanner):
                         goal: NavGoal) -> VelocityCommand:
         """Begin the next level of the recovery ladder and return its first command."""
         recovery = self._recovery
+        begun = len(recovery.log)
         recovery.begin(now, pose)
         self._stuck_since = None
+        self._stuck_turn = 0.0
         action = recovery.step(now, pose, points,
                                lambda reduced: self._replan_around(points, goal, pose[:2],
                                                                    reduced),
                                lambda: self._path_heading(pose[:2]))
+        self._report_recovery(begun)
         if action.command is not None:
             return action.command
         self._tight_until = now + self.tuning.tight_for
         return STOP
+
+    def _report_recovery(self, begun: int) -> None:
+        """Report the recovery behaviour running now and those begun since the recovery log
+        held ``begun`` entries (a re-plan begins and ends within one step)."""
+        recovery = self._recovery
+        start = min(begun, len(recovery.log) - 1) if recovery.active else begun
+        for behaviour in recovery.log[max(0, start):]:
+            name = f"recovery.{behaviour}"
+            if name not in self._doing:
+                self._doing.append(name)
 
     def _path_heading(self, xy: tuple[float, float]) -> float | None:
         """World direction from the robot to the lookahead point of its path."""
@@ -425,12 +481,17 @@ class ReferenceNavigator(LocalPlanner):
         blocked: set[tuple[int, int]] = set(zip(ii[keep].tolist(), jj[keep].tolist(),
                                                 strict=True))
         path = self._plan(xy, goal, blocked, reduced)
+        # Around an obstacle the map does not show: what the laser sees includes such one.
+        around = bool(blocked) and bool(len(points)) and bool(
+            self._unmapped(points, self._pose).any())
         if path is None and blocked:
             # What the laser sees shuts every way: the map alone may still have one (a
             # person about to move on); keep to it rather than to the stale path.
-            path = self._plan(xy, goal, None, reduced)
+            path, around = self._plan(xy, goal, None, reduced), False
         if path is None:
             return False
+        if around:
+            self._doing.append("replan_unmapped")
         self._path, self._index, self._tail = path, 0, None
         # A new path is measured afresh: a longer detour is not a loss of progress, but
         # adopting it is no progress either (the abort clock keeps running).

@@ -41,11 +41,8 @@ def _limited(last: float, target: float, accel: float, decel: float, dt: float) 
 class VelocitySmoother:
     """The last command sent and the limits each next one is kept within (per run)."""
 
-    def __init__(self, drive: DriveSpec, period: float,
-                 context: ControllerContext | None = None) -> None:
+    def __init__(self, drive: DriveSpec, period: float) -> None:
         self.drive = drive
-        self.context = context
-        """The run's context it was made for (a navigator makes a new one per run)."""
         self.period = period
         """Seconds between control ticks: the step of the first command, and how long a
         command is held before the next can change it."""
@@ -58,12 +55,7 @@ class VelocitySmoother:
     @classmethod
     def of_run(cls, context: ControllerContext) -> VelocitySmoother:
         """A smoother of the run's drive and control period."""
-        return cls(context.drive, 1.0 / context.control_rate, context)
-
-    def belongs_to(self, context: ControllerContext | None, time: float) -> bool:
-        """Whether this smoother is the one of the run of ``context`` at ``time`` (not when
-        the context changed or the time went back: a new run)."""
-        return context is self.context and (self.time is None or time >= self.time)
+        return cls(context.drive, 1.0 / context.control_rate)
 
     def smoothed(self, target: VelocityCommand, time: float) -> VelocityCommand:
         """``target`` within the limits from the last command sent (not sent yet)."""

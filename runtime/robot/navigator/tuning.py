@@ -127,6 +127,10 @@ class ReferenceTuning:
     """Whether, while the slow zone holds, the side of the last driving turn is held outright
     for ``SIDE_MEMORY`` (``TURN_COMMITMENT``; False: only its cost, the planner before issue
     25's TPE cand0045)."""
+    smooth: bool = True
+    """Whether the commands pass the velocity smoother (smoother.py: within the drive's
+    accelerations, COMMAND_ACCELERATION); False: the planner's commands as they are, as the
+    reference sent them before issue 40 (and as tests of the planner's choices read them)."""
 
     @property
     def slow_zone_reach(self) -> float:
