@@ -32,11 +32,12 @@ NO_LIMIT = "none"
 NO_STRESSOR = "none"
 
 SHAPES = ("rect", "L", "joined")
-STRESSORS = ("none", "emerge", "oncoming", "crossing", "gap", "doorway")
+STRESSORS = ("none", "emerge", "oncoming", "crossing", "gap", "doorway", "standing")
 """One stress scenario on the robot's first leg (generators/rooms/stressors.py): a person
 emerging from behind a corner, an oncoming person in a one-tile corridor, a cart crossing at
 a right angle, a furniture row whose gap on the direct line is narrower than the robot, a
-person stepping out of a doorway beside the route as the robot comes level."""
+person stepping out of a doorway beside the route as the robot comes level, a person standing
+in a one-tile corridor (on the phone, giving way to nobody) for a while."""
 CROSSINGS = ("cross", "any")
 YES_NO = ("yes", "no")
 
@@ -124,17 +125,20 @@ PRESETS: Mapping[str, Mapping[str, tuple[str, ...]]] = {
     },
     # Rooms that punish late perception and a planner blind to the robot's footprint: each
     # puts one stressor on the first leg, timed from the robot's planned arrival. The
-    # people they add yield (so a careful navigator can pass) and no other human walks, so
-    # what fails is the stressor's doing. The systematic design lists the stressors first
-    # (they vary fastest), which is how `rei demo` takes one room of each. `doorway` is a
-    # level of the factor but not of the preset: it needs the straight line between the
-    # first goals on the floor, which a joined room seldom gives (`--stressor doorway`).
+    # people they add yield (so a careful navigator can pass), but for the standing one, who
+    # gives way to nobody for a while (a careful navigator waits or recovers), and no other
+    # human walks, so what fails is the stressor's doing. The systematic design lists the
+    # stressors first (they vary fastest), which is how `rei demo` takes one room of each.
+    # `doorway` is a level of the factor but not of the preset: it needs the straight line
+    # between the first goals on the floor, which a joined room seldom gives (`--stressor
+    # doorway`).
     "stress": {
         "shape": ("rect", "L"), "size": ("10x6", "12x7"), "objects": ("3", "5"),
         "mix": ("furniture", "mixed"), "humans": ("0",), "vertices": ("2",),
         "speed": ("1.0", "0.8"), "loop": ("no",), "crossing": ("any",), "goals": ("2",),
         "spacing": ("6",), "cycles": ("1",), "behaviour": ("yielding",), "heading": ("no",),
-        "max_speed": (NO_LIMIT,), "stressor": ("emerge", "crossing", "gap", "oncoming"),
+        "max_speed": (NO_LIMIT,),
+        "stressor": ("emerge", "crossing", "gap", "standing", "oncoming"),
     },
 }
 

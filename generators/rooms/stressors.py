@@ -6,6 +6,11 @@ perception, or planning without its footprint, runs into — and a careful one p
 * ``oncoming``: the route runs through a one-tile corridor (walls turned out of floors on
   both sides for ``CORRIDOR_LENGTH`` tiles); a person walks it towards the robot and steps
   aside past its near end.
+* ``standing``: the same one-tile corridor, with a person standing in its middle tile, looking
+  at a phone: a scripted person, who does not give way. It stands there until ``STAND_FOR``
+  seconds after the robot's planned arrival at the corridor, then walks on out of the far end
+  and steps aside. A navigator must wait for it, recover (back up, turn, re-plan) or go round
+  the corridor, and must neither drive into it nor give up the goal while it stands there.
 * ``crossing``: a cart (a scripted dynamic object) crosses the route at a right angle from
   two tiles off it and is parked on the tile beside the route on the other side, where the
   robot passes it.
@@ -93,6 +98,11 @@ CART_LEAD = 1.2
 CART_CLEARANCE = 0.2
 """m the cart keeps from the robot at its top speed (footprint to footprint, at least)."""
 CORRIDOR_LENGTH = 3
+STAND_FOR = 20.0
+"""s the standing person stays in the corridor after the robot's planned arrival there: longer
+than a navigator's patience for one recovery (the reference starts its ladder after about 1 s
+without an admissible motion and aborts after 30 s without progress), shorter than a goal's
+timeout; what a person finishing a phone call in a passage takes."""
 """Tiles of the one-tile corridor."""
 DOORWAY_AHEAD = 0.2
 """m before level with the doorway a robot at its top speed is when the stepping person first
@@ -111,7 +121,7 @@ CART_TYPE = "cart"
 """The catalogue type of the crossing cart."""
 SIDES = ("left", "right")
 """The side of the robot's route (looking along it) a stressor's mover ends up beside."""
-MOVER_KINDS = ("emerge", "crossing", "oncoming", "doorway")
+MOVER_KINDS = ("emerge", "crossing", "oncoming", "standing", "doorway")
 """The stressors with a mover (the gap has none)."""
 
 
@@ -293,6 +303,8 @@ def plan_layout(params: RoomParameters, floors: set[Cell], goals: Sequence[Cell]
         return _crossing(floors, leg, blocked, rng, side)
     if kind == "oncoming":
         return _oncoming(floors, leg, blocked, rng, side)
+    if kind == "standing":
+        return _standing(floors, leg, blocked, rng, side)
     if kind == "doorway":
         return _doorway(floors, goals, leg, blocked, rng, side)
     raise ValueError(kind)
@@ -397,8 +409,12 @@ def _crossing(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: rando
                          "one side and one on the other for a crossing cart")
 
 
-def _oncoming(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: random.Random,
-              side: str | None) -> StressorLayout:
+def _corridors(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: random.Random,
+               side: str | None) -> Iterator[tuple[int, Cell, list[Cell], Cell, frozenset[Cell]]]:
+    """(a, n, corridor, aside, walls): one-tile corridors of ``CORRIDOR_LENGTH`` tiles on a
+    straight stretch of the first leg from ``leg[a]`` (floors on both sides turned into
+    ``walls``), with a free tile ``aside`` beside its near end on the side ``n`` points to;
+    farthest from the start first."""
     length = CORRIDOR_LENGTH
     # One straight cell before the corridor and the corridor, whose far end (the person's
     # start) must not be the goal.
@@ -409,22 +425,61 @@ def _oncoming(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: rando
     runs.sort(key=lambda run: -run[0])
     for a, d in runs:
         corridor = leg[a:a + length]
-        entrance = leg[a - 1]
         for n in _perpendiculars(d, rng, side):
             walls = {_add(c, n, s) for c in corridor for s in (1, -1)} & floors
-            aside = _add(entrance, n)
+            aside = _add(leg[a - 1], n)
             if aside not in floors or aside in blocked or walls & blocked:
                 continue
             if not walls or not is_connected(floors - walls):
                 continue
-            path = (*reversed(corridor), entrance, aside)
-            mover = MoverPath("oncoming_person", "human", "human", path,
-                              anchor=len(corridor) - 1, lead=ONCOMING_LEAD)
-            return StressorLayout("oncoming", frozenset(walls), (), mover, corridor[0],
-                                  tuple(leg[a - 1:a + length]), frozenset(leg) | {aside},
-                                  side=side_cell(entrance, d, aside))
-    raise StressorFailed(f"no straight stretch of {length + 1} tiles on the first leg for a "
-                         f"one-tile corridor")
+            yield a, n, corridor, aside, frozenset(walls)
+
+
+def _oncoming(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: random.Random,
+              side: str | None) -> StressorLayout:
+    for a, _, corridor, aside, walls in _corridors(floors, leg, blocked, rng, side):
+        entrance = leg[a - 1]
+        d = _sub(corridor[0], entrance)
+        path = (*reversed(corridor), entrance, aside)
+        mover = MoverPath("oncoming_person", "human", "human", path,
+                          anchor=len(corridor) - 1, lead=ONCOMING_LEAD)
+        return StressorLayout("oncoming", walls, (), mover, corridor[0],
+                              tuple(leg[a - 1:a + len(corridor)]), frozenset(leg) | {aside},
+                              side=side_cell(entrance, d, aside))
+    raise StressorFailed(f"no straight stretch of {CORRIDOR_LENGTH + 1} tiles on the first "
+                         f"leg for a one-tile corridor")
+
+
+def _standing(floors: set[Cell], leg: list[Cell], blocked: set[Cell], rng: random.Random,
+              side: str | None) -> StressorLayout:
+    """A one-tile corridor that is the only way on (the walls across the room at its middle
+    tile: a door in a wall), its person standing in that middle tile; it leaves by the far
+    end and steps aside past it."""
+    for a, n, corridor, _, walls in _corridors(floors, leg, blocked, rng, side):
+        middle = corridor[len(corridor) // 2]
+        across = set(walls)
+        for way in (n, (-n[0], -n[1])):
+            cell = _add(middle, way)
+            while cell in floors:
+                across.add(cell)
+                cell = _add(cell, way)
+        if across & blocked:
+            continue
+        rest = floors - across
+        if not is_connected(rest) or is_connected(rest - {middle}):
+            continue  # the door must be the only way on, and no floor cut off by the wall
+        d = _sub(corridor[1], corridor[0])
+        beyond = leg[a + len(corridor)]
+        aside = _add(beyond, n)
+        if aside not in rest or aside in blocked:
+            continue
+        path = (middle, *corridor[len(corridor) // 2 + 1:], beyond, aside)
+        mover = MoverPath("standing_person", "human", "human", path, anchor=0, lead=0.0)
+        return StressorLayout("standing", frozenset(across), (), mover, corridor[0],
+                              tuple(leg[a - 1:a + len(corridor) + 1]),
+                              frozenset(leg) | {aside}, side=side_cell(beyond, d, aside))
+    raise StressorFailed("no straight stretch of the first leg where a wall across the room "
+                         "leaves a one-tile corridor as the only way on")
 
 
 def _gap(floors: set[Cell], goals: Sequence[Cell], leg: list[Cell], half: float,
@@ -553,6 +608,8 @@ def time_layout(layout: StressorLayout, route: Sequence[Cell], params: RoomParam
     walk = route_lengths(mover.vertices)
     speed = params.speed
     go = meeting - walk[mover.anchor] / speed
+    if layout.kind == "standing":
+        go = arrival + STAND_FOR  # it stands from the start until then
     if mover.role == "dynamic":
         # A scripted cart must have left the robot's lane before the robot, at its top
         # speed and on the straightest way, could be there.
@@ -575,7 +632,9 @@ def time_layout(layout: StressorLayout, route: Sequence[Cell], params: RoomParam
     timed = [(mover.vertices[0], t) for t in hold_times(go)]
     timed += [(v, round(go + walk[m] / speed, 2)) for m, v in enumerate(mover.vertices)
               if m > 0]
-    behaviour = "yielding" if mover.role == "human" else "scripted"
+    # The standing person is absorbed in a phone call: it gives way to nobody.
+    behaviour = "yielding" if mover.role == "human" and layout.kind != "standing" \
+        else "scripted"
     return StressorPlan(layout, TimedMover(mover.name, mover.role, mover.type, tuple(timed),
                                            mover.heading, behaviour),
                         round(arrival, 2), round(go + walk[mover.anchor] / speed, 2))

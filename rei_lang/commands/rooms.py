@@ -32,7 +32,8 @@ OVERRIDES = (
                  "behind a corner), oncoming (a person in a one-tile corridor), crossing (a "
                  "cart crosses at a right angle), gap (a furniture gap narrower than the "
                  "robot on the direct line), doorway (a person steps out of a doorway "
-                 "beside the route as the robot comes level)"),
+                 "beside the route as the robot comes level), standing (a person stands in "
+                 "a one-tile corridor, giving way to nobody, for a while)"),
 )
 
 

@@ -46,7 +46,7 @@ def test_the_demo_suite_has_a_doorway_on_each_side_and_every_small_level(
     assert [i.parent.name for i in indexes] == ["suite", "stress", "doorway"]
     rows = {i.parent.name: list(csv.DictReader(i.read_text(encoding="utf-8").splitlines()))
             for i in indexes}
-    assert [r["stressor"] for r in rows["stress"]] == ["emerge", "crossing", "gap"]
+    assert [r["stressor"] for r in rows["stress"]] == ["emerge", "crossing", "gap", "standing"]
     workspace = Workspace()
     sides = sorted(_side_of_doorway_person(indexes[2].parent / r["mission"], workspace)
                    for r in rows["doorway"])
@@ -67,10 +67,10 @@ def test_the_demo_suite_has_a_doorway_on_each_side_and_every_small_level(
 def test_smaller_demos_keep_their_rooms_and_the_default_adds_the_doorway_pair() -> None:
     shares = {count: (count - stress_share(count, "small") - doorway_share(count, "small"),
                       stress_share(count, "small"), doorway_share(count, "small"))
-              for count in (1, 2, 4, 6, 7, 8, 10)}
+              for count in (1, 2, 4, 6, 7, 8, 9, 10)}
     assert shares == {1: (1, 0, 0), 2: (1, 1, 0), 4: (2, 2, 0), 6: (3, 3, 0), 7: (4, 3, 0),
-                      8: (3, 3, 2), 10: (5, 3, 2)}
-    assert DEMO_ROOMS == 8
+                      8: (2, 4, 2), 9: (3, 4, 2), 10: (4, 4, 2)}
+    assert DEMO_ROOMS == 9
     assert stress_share(8, "medium") == doorway_share(8, "medium") == 0
 
 

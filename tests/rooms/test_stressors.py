@@ -36,10 +36,11 @@ from rei.lang.room.checks import blocking_objects, rotated_half_extents
 from rei.lang.workspace import Workspace, load_mission
 
 REPO = Path(__file__).resolve().parents[2]
-KINDS = ("emerge", "crossing", "gap", "oncoming", "doorway")
+KINDS = ("emerge", "crossing", "gap", "standing", "oncoming", "doorway")
 MOVERS = {"emerge": "emerging_person", "crossing": "crossing_cart",
-          "oncoming": "oncoming_person", "doorway": "doorway_person"}
-ENCOUNTER_M = {"emerge": 1.0, "crossing": 1.5, "oncoming": 1.5}
+          "oncoming": "oncoming_person", "doorway": "doorway_person",
+          "standing": "standing_person"}
+ENCOUNTER_M = {"emerge": 1.0, "crossing": 1.5, "oncoming": 1.5, "standing": 1.5}
 """Centre-to-centre distance within which the mover and the robot count as having met (over
 32 reference runs of the stress preset, bench/RESULTS.md, the medians were 0.63 m, 1.01 m
 and 1.13 m). The emerging person's footprint then comes within about 0.6 m of the robot's;
@@ -89,9 +90,9 @@ def test_other_presets_are_unchanged_by_the_stressor_factor() -> None:
 
 
 def test_the_stress_preset_lists_every_stressor_first_in_its_systematic_design() -> None:
-    suite = generate(SuiteRequest(preset_space("stress"), "systematic", 4, 0), Path("unused"))
+    suite = generate(SuiteRequest(preset_space("stress"), "systematic", 5, 0), Path("unused"))
     assert [p.params.stressor for p in suite.pairs] == ["emerge", "crossing", "gap",
-                                                        "oncoming"]
+                                                        "standing", "oncoming"]
 
 
 def _passing_side(pair: GeneratedPair) -> str:
@@ -130,10 +131,11 @@ def test_each_demo_suite_has_a_mover_stand_beside_the_route_on_each_side(seed: i
 
 
 def test_the_stress_preset_alternates_the_side_over_its_mover_rooms() -> None:
-    suite = generate(SuiteRequest(preset_space("stress"), "systematic", 8, 0), Path("unused"))
+    suite = generate(SuiteRequest(preset_space("stress"), "systematic", 10, 0), Path("unused"))
     movers = [p for p in suite.pairs if p.params.stressor != "gap"]
-    assert [p.params.stressor for p in movers] == ["emerge", "crossing", "oncoming"] * 2
-    assert [_passing_side(p) for p in movers] == ["left", "right"] * 3
+    assert [p.params.stressor for p in movers] == ["emerge", "crossing", "standing",
+                                                   "oncoming"] * 2
+    assert [_passing_side(p) for p in movers] == ["left", "right"] * 4
 
 
 def _mover_times(room_text: str, name: str) -> list[tuple[str, float]]:
@@ -349,14 +351,14 @@ def _run(mission: Path, out: Path, controller: str = "reference") -> dict[str, o
 
 def _stress_suite(folder: Path) -> dict[str, Path]:
     """The stress preset's first systematic rows at seed 0: what `rei demo` runs (emerge,
-    crossing, gap) and the oncoming corridor."""
-    suite = generate(SuiteRequest(preset_space("stress"), "systematic", 4, 0), folder)
+    crossing, gap, standing) and the oncoming corridor."""
+    suite = generate(SuiteRequest(preset_space("stress"), "systematic", 5, 0), folder)
     write_suite(suite, folder, coverage_report(suite))
     return {p.params.stressor: folder / p.mission_file for p in suite.pairs}
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("kind", ["emerge", "crossing", "oncoming"])
+@pytest.mark.parametrize("kind", ["emerge", "crossing", "oncoming", "standing"])
 def test_the_encounter_happens_and_the_reference_navigator_passes(tmp_path: Path,
                                                                   kind: str) -> None:
     mission = _stress_suite(tmp_path / "suite")[kind]
@@ -392,6 +394,7 @@ def test_an_unknown_stressor_is_refused_naming_the_option(tmp_path: Path,
     assert status == 2
     err = capsys.readouterr().err
     assert ("--stressor: expected one of none, emerge, oncoming, crossing, gap, doorway, "
+            "standing, "
             "found 'emerj'") in err
     assert "did you mean 'emerge'" in err
     assert not (tmp_path / "out").exists()
@@ -411,3 +414,33 @@ def test_every_stressor_fits_the_other_presets_rooms(tmp_path: Path, preset: str
         problems = (workspace.check(tmp_path / pair.room_file)
                     + workspace.check(tmp_path / pair.mission_file))
         assert [str(d) for d in problems] == []
+
+
+def test_the_standing_person_blocks_the_only_way_on_and_gives_way_to_nobody() -> None:
+    from rei.generators.rooms.geometry import is_connected
+    from rei.generators.rooms.stressors import STAND_FOR
+
+    suite = generate(_request("standing", 3), Path("unused"))
+    for pair in suite.pairs:
+        stress = pair.plan.stressor
+        assert stress is not None and stress.mover is not None
+        mover = stress.mover
+        assert mover.behaviour == "scripted" and mover.name == "standing_person"
+        door = mover.vertices[0][0]
+        # it stands on its first tile, in the door, until STAND_FOR after the planned arrival
+        go = max(t for c, t in mover.vertices if c == door)
+        assert go == pytest.approx(stress.arrival_s + STAND_FOR, abs=0.01)
+        floors = set(pair.plan.floors)
+        assert door in floors and is_connected(floors)
+        assert not is_connected(floors - {door})  # the door is the only way on
+
+
+@pytest.mark.slow
+def test_the_reference_waits_for_the_standing_person_through_its_whole_ladder(
+        tmp_path: Path) -> None:
+    mission = _stress_suite(tmp_path / "suite")["standing"]
+    summary = _run(mission, tmp_path / "run")
+    assert summary["verdict"] == "pass"
+    behaviours = set(summary["measurements"]["behaviours"])  # type: ignore[index]
+    assert {"wait_for_person", "recovery.replan", "recovery.replan_reduced", "recovery.backup",
+            "recovery.spin", "recovery.wait", "back_up", "rotate_in_place"} <= behaviours
