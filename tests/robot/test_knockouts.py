@@ -24,7 +24,7 @@ from bench.knockouts.recovery import AbortsRecovery
 from rei.runtime.errors import RunError
 from rei.runtime.messages import LaserScan, NavState
 from rei.runtime.robot import check_controller, load_controller
-from rei.runtime.robot.behaviours import doing_message
+from rei.runtime.robot.behaviours import doing_message, reported
 from rei.runtime.robot.conformance import checker_context
 from rei.runtime.robot.contract import (
     STOP,
@@ -38,6 +38,7 @@ from rei.runtime.robot.contract import (
     checked_command,
     checked_feedback,
 )
+from rei.runtime.robot.navigator.reference import ReferenceNavigator
 from rei.runtime.robot.teleop import TeleopController
 from tests.conftest import EXAMPLES, REPO
 
@@ -386,6 +387,45 @@ def test_recovery_on_a_navigator_that_reports_nothing_is_that_navigator() -> Non
     knockout, _ = wrapped("recovery_1")
     assert drive(knockout, 40) == [inner_command(k) for k in range(40)]
     assert isinstance(knockout, AbortsRecovery)
+
+
+BOXED_IN = LaserScan(-math.pi, 2 * math.pi / 90, 0.12, 3.5, np.full(90, 0.3))
+"""The checker's laser seeing points all round the robot 0.3 m from its centre: it can neither
+drive on nor turn out, and the reference recovers round after round before it aborts."""
+
+
+def boxed_in(controller: knockouts.Wrapper | ReferenceNavigator) -> tuple[
+        list[VelocityCommand], list[tuple[str, ...]], GoalFeedback]:
+    """Commands, reported behaviours and the last feedback of a goal 2.5 m east, boxed in."""
+    controller.reset(checker_context())
+    controller.send_goal(NavGoal("east", 3.5, 2.0, None, 0.3, 200.0))
+    commands, doing = [], []
+    for k in range(600):
+        t = k / 10
+        commands.append(controller.step(Observation(t, (1.0, 2.0, 0.0), (0.0, 0.0), BOXED_IN,
+                                                    t)))
+        feedback = controller.feedback()
+        doing.append(reported(feedback.message))
+        if feedback.state != NavState.ACTIVE:
+            break
+    return commands, doing, feedback
+
+
+@pytest.mark.parametrize("at_round", [1, 2, 3])
+def test_recovery_around_the_reference_aborts_where_that_round_of_its_own_starts(
+        at_round: int) -> None:
+    """The knock-out reads the reference's own reports: it ends the goal on the step the
+    reference starts its at_round-th round, after the same commands until then."""
+    reference, said, end = boxed_in(ReferenceNavigator())
+    recovering = [any(n.startswith("recovery.") for n in d) for d in said]
+    starts = [k for k, r in enumerate(recovering) if r and not (k and recovering[k - 1])]
+    assert end.state == NavState.ABORTED and len(starts) > at_round
+    commands, _, feedback = boxed_in(make(f"recovery_{at_round}", ReferenceNavigator()))
+    start = starts[at_round - 1]
+    assert feedback.state == NavState.ABORTED
+    assert f"recovery round {at_round}" in feedback.message
+    assert len(commands) == start + 1 < len(reference)
+    assert commands[:start] == reference[:start] and commands[start] == STOP
 
 
 # -- a real run -----------------------------------------------------------------------------
