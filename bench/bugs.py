@@ -77,6 +77,7 @@ from bench.knockouts import (  # noqa: E402
 )
 from bench.knockouts import make as make_knockout  # noqa: E402
 from rei.runtime.campaigns import LocalEngine, RunRecord, plan_campaign, run_campaign  # noqa: E402
+from rei.runtime.commands.demo import DEMO_ROOMS  # noqa: E402
 from rei.runtime.robot import load_controller  # noqa: E402
 
 REFERENCE = "reference"
@@ -573,7 +574,8 @@ def main() -> int:
                         help="only these defects (the reference always runs)")
     parser.add_argument("--quick", action="store_true",
                         help="smoke test: first seed, 2 rooms, one run per mission")
-    parser.add_argument("--count", type=int, default=8, help="rooms per suite (demo: 8)")
+    parser.add_argument("--count", type=int, default=DEMO_ROOMS,
+                        help=f"rooms per suite (default {DEMO_ROOMS}, as rei demo's)")
     parser.add_argument("--repeat", type=int, default=2, help="runs per mission (demo: 2)")
     parser.add_argument("--preset", choices=("small", "medium", "large"), default="small",
                         help="room class of the suite (demo: small)")
