@@ -35,6 +35,7 @@ from rei.runtime.observation.model.geometry import FootprintSet
 from rei.runtime.observation.model.hazard import HazardSensor
 from rei.runtime.observation.model.laser_clearance import BeamEdges, clearance
 from rei.runtime.observation.model.pushes import PUSH_CONTACT, PushTracker
+from rei.runtime.observation.model.situations import SituationLog
 
 FAR_AWAY = 1e3
 """Distances and laser readings of the baseline before the first sample: nothing is near,
@@ -146,6 +147,8 @@ class RuntimeModel:
         self._idle_since = 0.0
         """When the last task ended (the settle period's start, while ``_idle``)."""
         self.commands = CommandTracker()
+        self.situations = SituationLog(header)
+        """The situations the run met (summary.json's ``situations``)."""
         self.task_failures = np.zeros(0, dtype=np.int64)
         roles = [o.role for o in header.objects]
         self.humans = float(roles.count("human"))
@@ -246,6 +249,7 @@ class RuntimeModel:
             if self.hazards.indices:
                 self.hazard_clearance = self.hazards.clearance(scan, s.robot_pose, s.poses,
                                                                distance)
+        self.situations.observe(s, distance, self.hazard_clearance)
         ox, oy, _ = s.belief.odom
         linear, angular = s.belief.cmd
         rates = self.commands.observe(s.time, s.belief.cmd)

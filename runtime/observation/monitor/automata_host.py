@@ -263,6 +263,7 @@ class AutomataHost:
             "path_length": m.path_length,
             "pushed": {"seconds": m.pushed_time, "top_speed": m.pushed_top_speed},
             "settle_travel": m.idle_travel,
+            "situations": m.situations.to_json(),
             "efficiency": [{"task": name, "shortest": None if math.isinf(e.shortest)
                             else e.shortest, "path_ratio": e.path_ratio,
                             "time_ratio": e.time_ratio, "goal_spin": e.spin}

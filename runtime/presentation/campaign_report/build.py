@@ -13,7 +13,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from rei.generators.output import write_atomic
-from rei.runtime.campaigns.coverage import COVERAGE_JSON, behaviour_coverage, coverage_json
+from rei.runtime.campaigns.coverage import (
+    COVERAGE_JSON,
+    behaviour_coverage,
+    coverage_json,
+    situation_coverage,
+)
 from rei.runtime.campaigns.failure_clusters import CLUSTERS_JSON, clusters, clusters_json, failures
 from rei.runtime.campaigns.folder_reader import load_campaign
 from rei.runtime.campaigns.plan import RunSpec
@@ -41,7 +46,8 @@ class ReportOutcome:
     def describe(self) -> str:
         lines = [f"{len(self.records)} of {self.planned} runs recorded, "
                  f"{len(self.records) - len(self.failed)} passed, {len(self.failed)} failed"]
-        lines.append(behaviour_coverage(self.records).line()
+        lines.append(behaviour_coverage(self.records).line())
+        lines.append(situation_coverage(self.records).line()
                      + f" (coverage: {self.root / COVERAGE_JSON})")
         lines.append(f"results: {self.root / 'results.parquet'} (and results.csv)")
         lines.append(f"junit:   {self.junit}")
@@ -65,7 +71,7 @@ def build_report(root: Path, *, html: bool = True) -> ReportOutcome:
                      root)
     write_atomic(root / CLUSTERS_JSON,
                  (json.dumps(clusters_json(found), indent=2, sort_keys=True) + "\n").encode())
-    write_atomic(root / COVERAGE_JSON, coverage_json(behaviour_coverage(data.records)))
+    write_atomic(root / COVERAGE_JSON, coverage_json(data.records))
     page = None
     if html:
         from rei.runtime.presentation.campaign_report.html import (  # noqa: PLC0415  (matplotlib is slow)

@@ -25,7 +25,7 @@ from urllib.parse import quote
 
 import jinja2
 
-from rei.runtime.campaigns.coverage import behaviour_coverage
+from rei.runtime.campaigns.coverage import behaviour_coverage, situation_coverage
 from rei.runtime.campaigns.failure_clusters import Cluster, clusters, failures
 from rei.runtime.campaigns.folder_reader import CampaignData
 from rei.runtime.campaigns.run_records import RunRecord, verdict_reason
@@ -163,7 +163,7 @@ def render_html(data: CampaignData, rerun: dict[str, str],
     css = resources.files("rei.runtime.presentation").joinpath("templates/report.css").read_text(
         encoding="utf-8")
     mission_count = len(runs_of)
-    coverage = behaviour_coverage(records)
+    coverage, situations = behaviour_coverage(records), situation_coverage(records)
     return _environment().get_template("report.html.j2").render(
         title=f"REI campaign: {mission_count} mission{'s' if mission_count != 1 else ''} × "
               f"{data.plan.repeat} repeat{'s' if data.plan.repeat != 1 else ''}",
@@ -187,6 +187,7 @@ def render_html(data: CampaignData, rerun: dict[str, str],
         success_tables=[success_table(missions, "Mission"), group_success_table(records)],
         summary_tables=tables, signal_table=signal_counts(records),
         coverage=coverage, coverage_table=coverage_table(coverage),
+        situations=situations, situation_table=coverage_table(situations),
         utility_plot=plots.utility_over_time(data),
         signal_plot=plots.signal_distribution(records),
         descriptor_plot=plots.success_by_descriptor(records),

@@ -131,8 +131,10 @@ def group_success(records: Sequence[RunRecord]) -> list[SuccessRate]:
 
 
 def coverage_table(coverage: Coverage) -> Table:
-    """Behaviour coverage: one row per behaviour, the runs that exercised it and how much."""
+    """A coverage: one row per behaviour (or situation), the runs it occurred in and how
+    much."""
     rows = tuple((r.name, r.meaning, r.runs, r.episodes, round(r.seconds, 1))
                  for r in coverage.rows)
-    return Table("Behaviours exercised", ("Behaviour", "Meaning", "Runs", "Episodes",
-                                          "Seconds"), rows)
+    return Table(f"{coverage.what.capitalize()} per campaign",
+                 (coverage.what[:-1].capitalize(), "Meaning", "Runs", "Episodes", "Seconds"),
+                 rows)
