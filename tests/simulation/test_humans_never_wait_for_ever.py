@@ -384,10 +384,19 @@ def test_a_human_on_the_line_of_a_crawling_robot_keeps_to_one_side(
                              "tests.robot.test_turn_commitment:Creeping")
     monkeypatch.setattr(paths, "Reactions",
                         lambda: Reactions(social=SocialForce(dodge_memory=0.0)))
+    # Creeping predates the velocity smoother too: its commands break COMMAND_ACCELERATION
+    # wherever it brakes hard, whoever walks; what the walker's dithering adds is the weave,
+    # left and right in turn (SMOOTH_MOTION while driving, COMMAND_CHATTER tick by tick).
+    unsmoothed = {"COMMAND_ACCELERATION"}
     old, _ = run_into(scene, tmp_path / "old", creeping, seed=seed)
-    assert {v.requirement for v in old.verdicts if v.status == "fail"} == {"SMOOTH_MOTION"}
+    failed = {v.requirement for v in old.verdicts if v.status == "fail"}
+    assert failed & {"SMOOTH_MOTION", "COMMAND_CHATTER"}, failed
+    assert failed <= {"SMOOTH_MOTION", "COMMAND_CHATTER"} | unsmoothed, failed
     monkeypatch.setattr(paths, "Reactions", Reactions)
-    for name, navigator in (("new", creeping), ("reference", "reference")):
+    for name, navigator, allowed in (("new", creeping, unsmoothed),
+                                     ("reference", "reference", set())):
         new, _ = run_into(scene, tmp_path / name, navigator, seed=seed)
-        assert new.passed, (name, [v for v in new.verdicts if v.status != "pass"])
+        failed = {v.requirement for v in new.verdicts if v.status == "fail"}
+        assert failed <= allowed, (name, [v for v in new.verdicts if v.status != "pass"])
+        assert not [v for v in new.verdicts if v.status == "inconclusive"], name
         assert new.measurements["tasks_succeeded"] == 4
