@@ -5,7 +5,7 @@ recovery), rotates in place, backs up, re-plans around what its map does not sho
 waits for people, squeezes through passages a few centimetres wider than itself, turns to a
 goal's heading, keeps to a mission's speed limit and reacts to what appears close. A test suite
 in which a behaviour never runs cannot find a defect in it, so every run counts the behaviours
-it exercised (``BehaviourLog``) and a campaign reports which never ran (behaviour coverage).
+it exercised (``EpisodeLog``) and a campaign reports which never ran (behaviour coverage).
 
 Two sources, both through the public controller protocol only:
 
@@ -84,16 +84,17 @@ class _Tally:
     first: float = math.inf
 
 
-class BehaviourLog:
-    """The behaviours of one run, tick by tick: how often each began (an episode is a run of
-    consecutive ticks), for how many seconds, and when first."""
+class EpisodeLog:
+    """Names that hold, tick by tick, through one run (the behaviours it exercised; the
+    situations it met, rei.runtime.observation.model.situations): how often each began (an
+    episode is a run of consecutive ticks), for how many seconds, and when first."""
 
     def __init__(self) -> None:
         self._tallies: dict[str, _Tally] = {}
         self._running: frozenset[str] = frozenset()
         self._last: float | None = None
 
-    def tick(self, time: float, names: tuple[str, ...] | list[str]) -> None:
+    def tick(self, time: float, names: tuple[str, ...] | list[str] | set[str]) -> None:
         """The behaviours running at ``time`` (ticks come in time order)."""
         now = frozenset(names)
         # A tick names what the step that ended at it did: the period since the last tick.
@@ -114,5 +115,5 @@ class BehaviourLog:
                 for name, t in sorted(self._tallies.items())}
 
 
-__all__ = ["BEHAVIOURS", "DOING", "OBSERVED", "SPEED_LIMIT_SHARE", "BehaviourLog",
+__all__ = ["BEHAVIOURS", "DOING", "OBSERVED", "SPEED_LIMIT_SHARE", "EpisodeLog",
            "doing_message", "observed", "reported"]

@@ -5,7 +5,7 @@ from __future__ import annotations
 from rei.runtime.robot.behaviours import (
     BEHAVIOURS,
     OBSERVED,
-    BehaviourLog,
+    EpisodeLog,
     doing_message,
     observed,
     reported,
@@ -34,7 +34,7 @@ def test_commands_show_rotating_in_place_and_backing_up() -> None:
 
 
 def test_the_log_counts_episodes_seconds_and_the_first_time() -> None:
-    log = BehaviourLog()
+    log = EpisodeLog()
     ticks = [(0.0, ()), (0.1, ("rotate_in_place",)), (0.2, ("rotate_in_place",)),
              (0.3, ("rotate_in_place", "goal_heading")), (0.4, ()),
              (0.5, ("rotate_in_place",)), (0.6, ())]
@@ -44,4 +44,4 @@ def test_the_log_counts_episodes_seconds_and_the_first_time() -> None:
         "goal_heading": {"episodes": 1, "seconds": 0.1, "first": 0.3},
         "rotate_in_place": {"episodes": 2, "seconds": 0.4, "first": 0.1},
     }
-    assert BehaviourLog().to_json() == {}
+    assert EpisodeLog().to_json() == {}

@@ -16,11 +16,11 @@ of a trace counts the same. This module must never import the simulator.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from rei.runtime.messages import Sample, StreamHeader
+from rei.runtime.robot.behaviours import EpisodeLog
 
 SITUATIONS: dict[str, str] = {
     "person_crossing_ahead": "a person walking across the robot's way within 2 m ahead",
@@ -56,13 +56,6 @@ APPEARS_FROM = 1.5
 """m: the sample before saw no hazard nearer than this (it appeared, it did not approach)."""
 
 
-@dataclass
-class _Tally:
-    episodes: int = 0
-    seconds: float = 0.0
-    first: float = math.inf
-
-
 class SituationLog:
     """The situations of one run, sample by sample (``observe``), and its JSON."""
 
@@ -76,10 +69,8 @@ class SituationLog:
         self._width = float(size_y) if size_y else 2.0 * float(getattr(fp, "radius", 0.2))
         facts = header.mission_facts
         self._goals = {g.name: g for g in facts.goals} if facts is not None else {}
-        self._tallies: dict[str, _Tally] = {}
-        self._holding: set[str] = set()
+        self._log = EpisodeLog()
         self._standing_since: float | None = None
-        self._last_time: float | None = None
         self._last_hazard = math.inf
 
     def observe(self, s: Sample, distance: np.ndarray, hazard_clearance: float) -> None:
@@ -124,23 +115,11 @@ class SituationLog:
         if hazard_clearance < APPEARS_WITHIN and self._last_hazard > APPEARS_FROM:
             now.add("hazard_appears_close")
         self._last_hazard = hazard_clearance
-        self._tick(s.time, now)
-
-    def _tick(self, time: float, now: set[str]) -> None:
-        dt = 0.0 if self._last_time is None else max(0.0, time - self._last_time)
-        for name in now - self._holding:
-            tally = self._tallies.setdefault(name, _Tally())
-            tally.episodes += 1
-            tally.first = min(tally.first, time)
-        for name in now:
-            self._tallies[name].seconds += dt
-        self._holding, self._last_time = now, time
+        self._log.tick(s.time, now)
 
     def to_json(self) -> dict[str, dict[str, float | int]]:
         """``{name: {"episodes", "seconds", "first"}}`` of the situations that occurred."""
-        return {name: {"episodes": t.episodes, "seconds": round(t.seconds, 3),
-                       "first": round(t.first, 3)}
-                for name, t in sorted(self._tallies.items())}
+        return self._log.to_json()
 
 
 __all__ = ["SITUATIONS", "SituationLog"]

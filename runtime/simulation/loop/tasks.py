@@ -22,7 +22,7 @@ from typing import Protocol
 
 from rei.generators.concrete import ConcreteMission
 from rei.runtime.messages import MissionEvent, MissionStatus, NavState, Pose
-from rei.runtime.robot.behaviours import SPEED_LIMIT_SHARE, BehaviourLog, observed, reported
+from rei.runtime.robot.behaviours import SPEED_LIMIT_SHARE, EpisodeLog, observed, reported
 from rei.runtime.simulation.loop.board import Board
 from rei.runtime.simulation.loop.scheduler import Clock
 from rei.runtime.simulation.mission import MissionExecutor
@@ -54,7 +54,7 @@ class MissionRun:
         self.executor = MissionExecutor(spec.mission.tasks(), spec.mission.settle)
         self.path_length = 0.0
         self.timed_out = False
-        self.behaviours = BehaviourLog()
+        self.behaviours = EpisodeLog()
         """The behaviours the run exercised (summary.json's ``behaviours``)."""
         self._last = spec.start_pose
         self._seq = 0
