@@ -11,7 +11,7 @@ import numpy as np
 from rei.catalogue import Cylinder
 from rei.runtime.messages import GoalFacts, MissionEvent, MissionFacts, ObservedObject, Sample
 from rei.runtime.observation.model.runtime_model import RuntimeModel
-from rei.runtime.observation.model.situations import SITUATIONS, STANDING_FOR
+from rei.runtime.observation.model.situations import SITUATIONS, STANDING_FOR, SituationLog
 from tests.observation.streams import drive, human, straight, wall
 
 DT = 0.1
@@ -92,3 +92,15 @@ def test_every_situation_has_a_meaning_and_the_log_is_deterministic() -> None:
     header, samples = drive([human("p", 0.9, 0.0)], [(0.0, 0.0, 0.0)] * 80)
     assert situations(header, samples) == situations(header, samples)
     assert math.isfinite(situations(header, samples)["person_standing_on_route"]["seconds"])
+
+
+def test_a_hazard_first_seen_close_appears_one_seen_walking_up_does_not() -> None:
+    header, samples = drive([], [(0.0, 0.0, 0.0)] * 4)
+    appears = SituationLog(header)
+    for s, seen in zip(samples, (1e3, 1e3, 1.6, 1.2), strict=True):  # nothing, then 1.6 m
+        appears.observe(s, np.zeros(0), seen)
+    assert appears.to_json()["hazard_appears_close"]["first"] == samples[2].time
+    walks_up = SituationLog(header)
+    for s, seen in zip(samples, (1e3, 2.9, 2.2, 1.6), strict=True):  # seen from 2.9 m on
+        walks_up.observe(s, np.zeros(0), seen)
+    assert "hazard_appears_close" not in walks_up.to_json()

@@ -20,6 +20,7 @@ import math
 import numpy as np
 
 from rei.runtime.messages import Sample, StreamHeader
+from rei.runtime.observation.model.hazard import LOOK_WITHIN
 from rei.runtime.robot.behaviours import EpisodeLog
 
 SITUATIONS: dict[str, str] = {
@@ -29,8 +30,8 @@ SITUATIONS: dict[str, str] = {
                       "spare (a passage narrower than twice its width)",
     "goal_behind": "a goal more than 120° off the robot's heading when its task starts",
     "unmapped_obstacle": "an object the map does not show (a cart) within 1 m of the robot",
-    "hazard_appears_close": "a person or moving object first seen by the laser within 1 m "
-                            "ahead",
+    "hazard_appears_close": "a person or moving object first seen by the laser within 2 m "
+                            "ahead (nothing seen there the sample before)",
 }
 """Every situation counted, with what it means (the coverage table's rows, in order)."""
 
@@ -50,10 +51,13 @@ PASSAGE_MOVING = 0.05
 """m/s the robot must drive at for a passage to count (being pushed past one is not)."""
 GOAL_BEHIND = math.radians(120.0)
 UNMAPPED_REACH = 1.0
-APPEARS_WITHIN = 1.0
-"""m of hazard clearance (footprint to the seeing beam's end) that is close."""
-APPEARS_FROM = 1.5
-"""m: the sample before saw no hazard nearer than this (it appeared, it did not approach)."""
+APPEARS_WITHIN = 2.0
+"""m of hazard clearance (footprint to the seeing beam's end) within which a hazard first seen
+appeared close: at the Waffle's top speed, under 8 s away, where a person stepping out from
+behind a corner or through a door is first seen (1.4-1.7 m in the demo's stress rooms)."""
+APPEARS_FROM = LOOK_WITHIN
+"""m: the sample before saw no hazard within this (the monitor looks no farther), so the
+hazard appeared, it did not walk up from afar."""
 
 
 class SituationLog:
@@ -112,7 +116,7 @@ class SituationLog:
                 off = abs(math.remainder(math.atan2(goal.y - y, goal.x - x) - yaw, math.tau))
                 if off > GOAL_BEHIND and math.hypot(goal.x - x, goal.y - y) > goal.tolerance:
                     now.add("goal_behind")
-        if hazard_clearance < APPEARS_WITHIN and self._last_hazard > APPEARS_FROM:
+        if hazard_clearance < APPEARS_WITHIN and self._last_hazard >= APPEARS_FROM:
             now.add("hazard_appears_close")
         self._last_hazard = hazard_clearance
         self._log.tick(s.time, now)
