@@ -98,12 +98,12 @@ CART_LEAD = 1.2
 CART_CLEARANCE = 0.2
 """m the cart keeps from the robot at its top speed (footprint to footprint, at least)."""
 CORRIDOR_LENGTH = 3
+"""Tiles of the one-tile corridor."""
 STAND_FOR = 20.0
 """s the standing person stays in the corridor after the robot's planned arrival there: longer
 than a navigator's patience for one recovery (the reference starts its ladder after about 1 s
 without an admissible motion and aborts after 30 s without progress), shorter than a goal's
 timeout; what a person finishing a phone call in a passage takes."""
-"""Tiles of the one-tile corridor."""
 DOORWAY_AHEAD = 0.2
 """m before level with the doorway a robot at its top speed is when the stepping person first
 comes within REACTION_TIME's react_zone (1.05 m) of its footprint: the person is then about
@@ -607,9 +607,9 @@ def time_layout(layout: StressorLayout, route: Sequence[Cell], params: RoomParam
     meeting = arrival - mover.lead / nominal
     walk = route_lengths(mover.vertices)
     speed = params.speed
-    go = meeting - walk[mover.anchor] / speed
-    if layout.kind == "standing":
-        go = arrival + STAND_FOR  # it stands from the start until then
+    # The standing person stands from the start until STAND_FOR past the robot's arrival.
+    go = arrival + STAND_FOR if layout.kind == "standing" \
+        else meeting - walk[mover.anchor] / speed
     if mover.role == "dynamic":
         # A scripted cart must have left the robot's lane before the robot, at its top
         # speed and on the straightest way, could be there.

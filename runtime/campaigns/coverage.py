@@ -120,11 +120,10 @@ def _coverage(records: Sequence[RunRecord], what: str, known: dict[str, str],
     return Coverage(what, known, rows, len(records), unmeasured)
 
 
-def coverage_json(records: Sequence[RunRecord]) -> bytes:
+def coverage_json(behaviours: Coverage, situations: Coverage) -> bytes:
     """coverage.json's bytes: both coverages (sorted keys: the same records, the same bytes)."""
     data = {"format": "rei-coverage", "version": 1,
-            "behaviours": behaviour_coverage(records).to_json(),
-            "situations": situation_coverage(records).to_json()}
+            "behaviours": behaviours.to_json(), "situations": situations.to_json()}
     return (json.dumps(data, indent=1, sort_keys=True) + "\n").encode()
 
 

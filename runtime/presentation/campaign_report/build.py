@@ -15,6 +15,7 @@ from pathlib import Path
 from rei.generators.output import write_atomic
 from rei.runtime.campaigns.coverage import (
     COVERAGE_JSON,
+    Coverage,
     behaviour_coverage,
     coverage_json,
     situation_coverage,
@@ -34,6 +35,8 @@ class ReportOutcome:
     records: tuple[RunRecord, ...]
     html: Path | None
     junit: Path
+    behaviours: Coverage
+    situations: Coverage
 
     @property
     def failed(self) -> tuple[RunRecord, ...]:
@@ -46,9 +49,8 @@ class ReportOutcome:
     def describe(self) -> str:
         lines = [f"{len(self.records)} of {self.planned} runs recorded, "
                  f"{len(self.records) - len(self.failed)} passed, {len(self.failed)} failed"]
-        lines.append(behaviour_coverage(self.records).line())
-        lines.append(situation_coverage(self.records).line()
-                     + f" (coverage: {self.root / COVERAGE_JSON})")
+        lines.append(self.behaviours.line())
+        lines.append(self.situations.line() + f" (coverage: {self.root / COVERAGE_JSON})")
         lines.append(f"results: {self.root / 'results.parquet'} (and results.csv)")
         lines.append(f"junit:   {self.junit}")
         if self.html is not None:
@@ -71,7 +73,8 @@ def build_report(root: Path, *, html: bool = True) -> ReportOutcome:
                      root)
     write_atomic(root / CLUSTERS_JSON,
                  (json.dumps(clusters_json(found), indent=2, sort_keys=True) + "\n").encode())
-    write_atomic(root / COVERAGE_JSON, coverage_json(data.records))
+    behaviours, situations = behaviour_coverage(data.records), situation_coverage(data.records)
+    write_atomic(root / COVERAGE_JSON, coverage_json(behaviours, situations))
     page = None
     if html:
         from rei.runtime.presentation.campaign_report.html import (  # noqa: PLC0415  (matplotlib is slow)
@@ -79,5 +82,7 @@ def build_report(root: Path, *, html: bool = True) -> ReportOutcome:
         )
 
         page = root / "report.html"
-        write_atomic(page, render_html(data, rerun, found).encode("utf-8"))
-    return ReportOutcome(root, len(data.plan.runs), data.records, page, junit)
+        write_atomic(page, render_html(data, rerun, behaviours, situations, found)
+                     .encode("utf-8"))
+    return ReportOutcome(root, len(data.plan.runs), data.records, page, junit, behaviours,
+                         situations)

@@ -25,7 +25,7 @@ from urllib.parse import quote
 
 import jinja2
 
-from rei.runtime.campaigns.coverage import behaviour_coverage, situation_coverage
+from rei.runtime.campaigns.coverage import Coverage
 from rei.runtime.campaigns.failure_clusters import Cluster, clusters, failures
 from rei.runtime.campaigns.folder_reader import CampaignData
 from rei.runtime.campaigns.run_records import RunRecord, verdict_reason
@@ -122,9 +122,10 @@ class MissionSection:
     """With --pair-static: 'fails with people only', 'fails in the static room too', ..."""
 
 
-def render_html(data: CampaignData, rerun: dict[str, str],
-                found: list[Cluster] | None = None) -> str:
-    """The page; ``found``: the clusters (worked out here when not given)."""
+def render_html(data: CampaignData, rerun: dict[str, str], coverage: Coverage,
+                situations: Coverage, found: list[Cluster] | None = None) -> str:
+    """The page; ``coverage`` and ``situations``: the campaign's behaviour and situation
+    coverage; ``found``: the clusters (worked out here when not given)."""
     records = list(data.records)
     failed = [r for r in records if not r.passed]
     missions = mission_success(records)
@@ -163,7 +164,6 @@ def render_html(data: CampaignData, rerun: dict[str, str],
     css = resources.files("rei.runtime.presentation").joinpath("templates/report.css").read_text(
         encoding="utf-8")
     mission_count = len(runs_of)
-    coverage, situations = behaviour_coverage(records), situation_coverage(records)
     return _environment().get_template("report.html.j2").render(
         title=f"REI campaign: {mission_count} mission{'s' if mission_count != 1 else ''} × "
               f"{data.plan.repeat} repeat{'s' if data.plan.repeat != 1 else ''}",

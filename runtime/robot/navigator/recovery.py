@@ -82,7 +82,17 @@ def motion_is_safe(points: np.ndarray, half: tuple[float, float], v: float, w: f
         return True
     # Steps fine enough that the footprint moves at most ~1 cm (or 0.02 rad) between them.
     steps = max(2, int(math.ceil(max(abs(v) * horizon / 0.01, abs(w) * horizon / 0.02))))
-    gaps = footprint_gaps(points, half, arc_poses(v, w, horizon, steps))
+    return poses_keep_clear(points, half, arc_poses(v, w, horizon, steps), margin)
+
+
+def poses_keep_clear(points: np.ndarray, half: tuple[float, float], poses: np.ndarray,
+                     margin: float) -> bool:
+    """Whether the footprint (half sizes ``half``) at each of ``poses`` (S, 3; robot frame
+    now, the first the robot's own) keeps ``margin`` from every point (N, 2); a point already
+    nearer than ``margin`` must not come any nearer, so a motion away from it stays possible."""
+    if not len(points):
+        return True
+    gaps = footprint_gaps(points, half, poses)
     floor = np.minimum(gaps[0], margin) - 1e-4
     return bool((gaps.min(axis=0) >= floor).all())
 

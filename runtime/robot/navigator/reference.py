@@ -481,16 +481,15 @@ class ReferenceNavigator(LocalPlanner):
         blocked: set[tuple[int, int]] = set(zip(ii[keep].tolist(), jj[keep].tolist(),
                                                 strict=True))
         path = self._plan(xy, goal, blocked, reduced)
-        # Around an obstacle the map does not show: what the laser sees includes such one.
-        around = bool(blocked) and bool(len(points)) and bool(
-            self._unmapped(points, self._pose).any())
+        around = path is not None and bool(blocked)
         if path is None and blocked:
             # What the laser sees shuts every way: the map alone may still have one (a
             # person about to move on); keep to it rather than to the stale path.
-            path, around = self._plan(xy, goal, None, reduced), False
+            path = self._plan(xy, goal, None, reduced)
         if path is None:
             return False
-        if around:
+        if around and self._unmapped(points, self._pose).any():
+            # round what the laser sees, of which the map does not show everything
             self._doing.append("replan_unmapped")
         self._path, self._index, self._tail = path, 0, None
         # A new path is measured afresh: a longer detour is not a loss of progress, but

@@ -25,7 +25,7 @@ import numpy as np
 
 from rei.catalogue.model import DriveSpec
 from rei.runtime.robot.contract import STOP, ControllerContext, VelocityCommand
-from rei.runtime.robot.navigator.recovery import footprint_gaps
+from rei.runtime.robot.navigator.recovery import poses_keep_clear
 
 BRAKE_STEP = 0.02
 """Seconds between the poses of a braking path (the footprint moves ~5 mm, 0.04 rad)."""
@@ -95,13 +95,10 @@ class VelocitySmoother:
 def clear_to_brake(smoother: VelocitySmoother, command: VelocityCommand, points: np.ndarray,
                    half: tuple[float, float], margin: float) -> bool:
     """Whether ``command``'s braking path (``VelocitySmoother.braking_poses``) keeps the
-    footprint (half sizes ``half``) ``margin`` from every laser point (robot frame); a point
-    already nearer than that must not come any nearer, so a motion away stays possible."""
-    if not len(points):
-        return True
-    gaps = footprint_gaps(points, half, smoother.braking_poses(command))
-    floor = np.minimum(gaps[0], margin) - 1e-4
-    return bool((gaps.min(axis=0) >= floor).all())
+    footprint (half sizes ``half``) ``margin`` from every laser point (robot frame), as a
+    recovery motion must (``recovery.poses_keep_clear``)."""
+    return not len(points) or poses_keep_clear(points, half, smoother.braking_poses(command),
+                                               margin)
 
 
 def smooth_safely(smoother: VelocitySmoother, command: VelocityCommand, time: float,
