@@ -223,6 +223,16 @@ def catchers(campaigns: list[CampaignOutcome]) -> Counter[str]:
     return Counter(c for camp in campaigns for r in camp.runs for c in r.catchers)
 
 
+def caught_runs(camp: CampaignOutcome, baseline: CampaignOutcome | None) -> list[RunOutcome]:
+    """The runs of ``camp`` that fail where its baseline campaign (same seed; None: not run)
+    passed the same mission, repeat and seed: the detections (a failure both share is the
+    suite's)."""
+    if baseline is None:
+        return []
+    passed = {r.run_id for r in baseline.runs if r.passed}
+    return [r for r in camp.runs if not r.passed and r.run_id in passed]
+
+
 def summarise(navs: list[Navigator], results: dict[str, list[CampaignOutcome]],
               seeds: list[int], baseline: str = REFERENCE) -> dict[str, Any]:
     """Per navigator and overall figures. Runs are paired with the reference's run of the same
@@ -233,12 +243,11 @@ def summarise(navs: list[Navigator], results: dict[str, list[CampaignOutcome]],
     ref_camps = results[baseline]
     ref_wall = {c.seed: c.wall for c in ref_camps}
     ref_sim = {c.seed: c.simulated for c in ref_camps}
-    ref_passed = {(c.seed, r.run_id) for c in ref_camps for r in c.runs if r.passed}
+    ref_of = {c.seed: c for c in ref_camps}
     rows: list[dict[str, Any]] = []
     for nav in navs:
         camps = results[nav.name]
-        new = [[r for r in c.runs if not r.passed and (c.seed, r.run_id) in ref_passed]
-               for c in camps]
+        new = [caught_runs(c, ref_of.get(c.seed)) for c in camps]
         caught = Counter(k for runs in new for r in runs for k in r.catchers)
         named = sorted(k for k in caught if not k.startswith((TASK, INCONCLUSIVE)))
         ratios = [c.wall / ref_wall[c.seed] for c in camps if ref_wall.get(c.seed)]
@@ -383,8 +392,7 @@ def chosen_families(names: list[str]) -> list[Family]:
 
 def caught_on(camp: CampaignOutcome, baseline: CampaignOutcome) -> bool:
     """Whether ``camp`` fails a run its baseline campaign (same seed) passed."""
-    passed = {r.run_id for r in baseline.runs if r.passed}
-    return any(not r.passed and r.run_id in passed for r in camp.runs)
+    return bool(caught_runs(camp, baseline))
 
 
 def same_as_baseline(camps: list[CampaignOutcome], base: list[CampaignOutcome]) -> bool:
